@@ -1,0 +1,37 @@
+"""The errors rik raises on bad input. The CLI prints them as one line and exits with code 2."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+
+class RikError(Exception):
+    """Base of every error caused by a user's input; its message is one line that says what to fix."""
+
+
+class CatalogError(RikError):
+    """A catalog file is malformed or an entry breaks a rule.
+
+    The message names the file (with line when known), the entry and the field at fault.
+    """
+
+    def __init__(self, file: str, entry: str | None, field: str | None, problem: str, line: int | None = None):
+        self.file, self.entry, self.field, self.problem, self.line = file, entry, field, problem, line
+        where = f"{file}:{line}" if line else file
+        parts = [where]
+        if entry:
+            parts.append(f"entry {entry}")
+        if field:
+            parts.append(f"field '{field}'")
+        super().__init__(", ".join(parts) + f": {problem}")
+
+
+class UnknownIdError(RikError, LookupError):
+    """An id asked for is not in the catalog; the message suggests the closest ids."""
+
+    def __init__(self, kind: str, wanted: str, known: Iterable[str]):
+        self.kind, self.wanted = kind, wanted
+        close = difflib.get_close_matches(wanted, list(known), n=3, cutoff=0.6)
+        hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+        super().__init__(f"no {kind} '{wanted}' in the catalog{hint}")

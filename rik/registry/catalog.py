@@ -1,0 +1,104 @@
+"""The validated catalog: every entry by id, where it came from, and queries over it."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+
+from rik.errors import UnknownIdError
+from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, HandleType, JointType, ResistancePreset
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Where an entry was defined."""
+
+    file: str
+    """Path as shown in messages."""
+    builtin: bool
+    """True for rik's own data, False for a user overlay."""
+
+
+@dataclass(frozen=True)
+class Catalog:
+    """Handles, designs, base units, presets and finishes, each keyed by id and sorted by id."""
+
+    designs: Mapping[str, HandleDesign]
+    handles: Mapping[str, Handle]
+    base_units: Mapping[str, BaseUnit]
+    presets: Mapping[str, ResistancePreset]
+    finishes: Mapping[str, Finish]
+    origins: Mapping[tuple[str, str], Origin] = field(default_factory=dict)
+    """(section, id) -> where the entry was defined."""
+    fingerprint: str = ""
+    """sha256 of the catalog's source files and of the schema code that validated them."""
+
+    # ---- lookups with suggestions -------------------------------------------------------------------------
+    def handle(self, handle_id: str) -> Handle:
+        """The handle with this id; :class:`UnknownIdError` suggests close ids."""
+        return _get(self.handles, handle_id, "handle")
+
+    def design(self, design_id: str) -> HandleDesign:
+        return _get(self.designs, design_id, "design")
+
+    def base_unit(self, base_id: str) -> BaseUnit:
+        return _get(self.base_units, base_id, "base unit")
+
+    def preset(self, preset_id: str) -> ResistancePreset:
+        return _get(self.presets, preset_id, "preset")
+
+    def finish(self, finish_id: str) -> Finish:
+        return _get(self.finishes, finish_id, "finish")
+
+    def lookup(self, any_id: str) -> tuple[str, object]:
+        """Find an id in any section; returns (section, entry). Suggests ids from every section on a miss."""
+        for section in ("handles", "designs", "base_units", "presets", "finishes"):
+            entries: Mapping[str, object] = getattr(self, section)
+            if any_id in entries:
+                return section, entries[any_id]
+        raise UnknownIdError("entry", any_id, self.all_ids())
+
+    def all_ids(self) -> list[str]:
+        return [*self.handles, *self.designs, *self.base_units, *self.presets, *self.finishes]
+
+    # ---- derived facts --------------------------------------------------------------------------------------
+    def handle_type(self, handle: Handle) -> HandleType:
+        """The type of a handle, from its design."""
+        return self.designs[handle.design].type
+
+    def handles_of(self, design_id: str) -> list[Handle]:
+        return [h for h in self.handles.values() if h.design == design_id]
+
+    def joint_types(self, base: BaseUnit) -> list[JointType]:
+        """Distinct joint types of a base unit's fronts, in front order."""
+        return list(dict.fromkeys(front.joint.type for front in base.fronts))
+
+    # ---- queries ----------------------------------------------------------------------------------------------
+    def find_handles(self, type: HandleType | str | None = None, design: str | None = None,
+                     min_length: float | None = None, max_length: float | None = None) -> list[Handle]:
+        """Handles by type, design id and overall length range (m, inclusive), sorted by id."""
+        if design is not None:
+            self.design(design)  # unknown design: an error with suggestions, not an empty list
+        return [h for h in self.handles.values()
+                if (type is None or self.handle_type(h) == type)
+                and (design is None or h.design == design)
+                and (min_length is None or h.geometry.length >= min_length)
+                and (max_length is None or h.geometry.length <= max_length)]
+
+    def find_designs(self, type: HandleType | str | None = None) -> list[HandleDesign]:
+        return [d for d in self.designs.values() if type is None or d.type == type]
+
+    def find_base_units(self, joint: JointType | str | None = None) -> list[BaseUnit]:
+        """Base units with at least one front on a joint of this type."""
+        return [b for b in self.base_units.values() if joint is None or joint in self.joint_types(b)]
+
+
+def _get[T](entries: Mapping[str, T], wanted: str, kind: str) -> T:
+    try:
+        return entries[wanted]
+    except KeyError:
+        raise UnknownIdError(kind, wanted, entries) from None
+
+
+def sorted_by_id[T](items: Iterable[tuple[str, T]]) -> dict[str, T]:
+    return dict(sorted(items))

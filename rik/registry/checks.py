@@ -1,0 +1,173 @@
+"""Rules that span entries or fields: unique ids, references, per-type handle rules, base-unit geometry.
+
+Each check raises :class:`rik.errors.CatalogError` through the offending entry, naming file, entry and field.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+from pydantic import BaseModel
+
+from rik.errors import UnknownIdError
+from rik.registry.geometry import cross, dot, site_axes, sub
+from rik.registry.sources import RawEntry, display_path
+from rik.schemas import BaseUnit, Front, Handle, HandleDesign, HandleType, JointType
+
+TOL = 1e-6
+"""Geometric tolerance, m."""
+
+Parsed = Sequence[tuple[RawEntry, BaseModel]]
+
+
+def check_unique_ids(parsed: Parsed, noun: str) -> None:
+    """No id twice in a section; an overlay may not redefine a built-in id."""
+    first: dict[str, RawEntry] = {}
+    for entry, model in parsed:
+        ident = model.id  # type: ignore[attr-defined]
+        if ident in first:
+            before = first[ident]
+            if before.builtin and not entry.builtin:
+                raise entry.error("id", f"redefines the built-in {noun} '{ident}' ({display_path(before.file)}); "
+                                        "an overlay may only add new ids: choose another id")
+            raise entry.error("id", f"duplicate {noun} id, first defined in {display_path(before.file)} "
+                                    f"as {before.label}")
+        first[ident] = entry
+
+
+def _ref(entry: RawEntry, field: str, wanted: str, known: Mapping[str, object], noun: str) -> None:
+    if wanted not in known:
+        raise entry.error(field, str(UnknownIdError(noun, wanted, known)))
+
+
+def check_design(entry: RawEntry, design: HandleDesign, handle_count: int) -> None:
+    if not design.id.startswith(f"{design.type.value}/"):
+        raise entry.error("id", f"a {design.type.value} design's id must start with '{design.type.value}/'")
+    if handle_count == 0:
+        raise entry.error("id", "design has no handles; add a handle that uses it or remove it")
+
+
+def check_handle(entry: RawEntry, handle: Handle, designs: Mapping[str, HandleDesign],
+                 finishes: Mapping[str, object]) -> None:
+    _ref(entry, "design", handle.design, designs, "design")
+    _ref(entry, "finish", handle.finish, finishes, "finish")
+    if handle.id != f"{handle.design}-{handle.size}":
+        raise entry.error("id", f"a handle's id is '<design>-<size>': expected '{handle.design}-{handle.size}'")
+    kind = designs[handle.design].type
+    g, mount = handle.geometry, handle.mount
+    expected_mount = {HandleType.knob: ("single_screw",), HandleType.two_point: ("two_screw",)}.get(
+        kind, ("two_screw", "edge_clip", "inset"))
+    if mount.kind not in expected_mount:
+        raise entry.error("mount.kind", f"a {kind.value} handle mounts with {' or '.join(expected_mount)}, "
+                                        f"got '{mount.kind}'")
+    if (mount.edge is None) == (mount.kind == "edge_clip"):
+        raise entry.error("mount.edge", "an edge_clip mount needs the edge it is made for (top or side)"
+                          if mount.edge is None else "only edge_clip mounts name an edge")
+    if mount.kind == "two_screw":
+        if g.hole_spacing is None:
+            raise entry.error("geometry.hole_spacing", "a two-screw handle needs its hole spacing (m)")
+        if g.hole_spacing >= g.length:
+            raise entry.error("geometry.hole_spacing", f"hole spacing {g.hole_spacing} m must be less than the "
+                                                       f"overall length {g.length} m")
+    elif g.hole_spacing is not None:
+        raise entry.error("geometry.hole_spacing", f"only two-screw handles have a hole spacing ({mount.kind} mount)")
+    if kind is not HandleType.knob and g.clearance is None:
+        raise entry.error("geometry.clearance", f"a {kind.value} handle needs its finger clearance (depth, width)")
+    if g.clearance is not None:
+        if mount.kind != "inset" and g.clearance.depth >= g.projection:
+            raise entry.error("geometry.clearance.depth", f"clearance depth {g.clearance.depth} m must be less "
+                                                          f"than the projection {g.projection} m")
+        if g.clearance.width > g.length + TOL:
+            raise entry.error("geometry.clearance.width", f"clearance width {g.clearance.width} m exceeds the "
+                                                          f"overall length {g.length} m")
+        if g.hole_spacing is not None and g.clearance.width >= g.hole_spacing:
+            raise entry.error("geometry.clearance.width", f"the opening between the screws ({g.clearance.width} m)"
+                                                          f" must be less than the hole spacing {g.hole_spacing} m")
+
+
+def check_base_unit(entry: RawEntry, base: BaseUnit, finishes: Mapping[str, object],
+                    presets: Mapping[str, object]) -> None:
+    _ref(entry, "carcass.finish", base.carcass.finish, finishes, "finish")
+    _ref(entry, "default_preset", base.default_preset, presets, "preset")
+    seen: set[str] = set()
+    for i, front in enumerate(base.fronts):
+        where = f"fronts.{i}"
+        if front.id in seen:
+            raise entry.error(f"{where}.id", f"duplicate front id '{front.id}' in this base unit")
+        seen.add(front.id)
+        _ref(entry, f"{where}.finish", front.finish, finishes, "finish")
+        _check_front(entry, where, base, front)
+        for j, other in enumerate(base.fronts[:i]):
+            if _overlap(front, other):
+                raise entry.error(f"{where}.center", f"front '{front.id}' overlaps front '{other.id}' "
+                                                     f"(fronts.{j}) in the front view")
+
+
+def _check_front(entry: RawEntry, where: str, base: BaseUnit, front: Front) -> None:
+    c = base.carcass
+    w, h, t = front.size
+    cx, cy, cz = front.center
+    if abs(cx) + w / 2 > c.width / 2 + TOL or cz - h / 2 < -TOL or cz + h / 2 > c.height + TOL:
+        raise entry.error(f"{where}.center", f"front '{front.id}' ({w} x {h} m at x={cx}, z={cz}) reaches outside "
+                                             f"the carcass outline ({c.width} x {c.height} m)")
+    if cy - t / 2 < -TOL:
+        raise entry.error(f"{where}.center", f"front '{front.id}' cuts into the carcass: its back face must be at "
+                                             f"y >= 0, got y = {cy - t / 2:.4f}")
+    joint = front.joint
+    wanted = JointType.slide if front.kind == "drawer" else JointType.hinge
+    if joint.type is not wanted:
+        raise entry.error(f"{where}.joint.type", f"a {front.kind} moves on a {wanted.value} joint")
+    if joint.type is JointType.slide:
+        if dot(joint.axis, (0.0, 1.0, 0.0)) < 0.9:
+            raise entry.error(f"{where}.joint.axis", f"a drawer slides out of the front (+y); axis {joint.axis} "
+                                                     "opens inward or sideways")
+        if joint.range[1] > c.depth + TOL:
+            raise entry.error(f"{where}.joint.range", f"travel {joint.range[1]} m exceeds the carcass depth "
+                                                      f"{c.depth} m")
+    else:
+        if abs(joint.axis[1]) > 0.1:
+            raise entry.error(f"{where}.joint.axis", "a hinge axis must lie in the plane of the front (y ~ 0)")
+        upright = abs(joint.axis[2]) > 0.9
+        if (front.kind == "door") != upright:
+            raise entry.error(f"{where}.joint.axis", "a door hinges about a vertical axis" if front.kind == "door"
+                              else "a flap hinges about a horizontal axis")
+        swing = cross(joint.axis, sub(front.center, joint.anchor))
+        if swing[1] <= TOL:
+            raise entry.error(f"{where}.joint.axis", f"opening about axis {joint.axis} swings front "
+                                                     f"'{front.id}' into the carcass; reverse the axis")
+    if front.drawer_box is not None:
+        box = front.drawer_box
+        if front.kind != "drawer":
+            raise entry.error(f"{where}.drawer_box", "only drawers have a drawer box")
+        inner = c.width - 2 * c.panel_thickness
+        if box.width > inner + TOL or box.depth > c.depth - c.panel_thickness + TOL:
+            raise entry.error(f"{where}.drawer_box", f"the box ({box.width} x {box.depth} m) does not fit inside "
+                                                     f"the carcass ({inner} m wide inside, {c.depth} m deep)")
+    _check_mount(entry, where, front)
+
+
+def _check_mount(entry: RawEntry, where: str, front: Front) -> None:
+    site = front.mount
+    ax, ay, az = site_axes(site.quat)
+    if dot(az, (0.0, 1.0, 0.0)) < 0.999:
+        raise entry.error(f"{where}.mount.quat", "the mount site's z axis must point out of the front (+y)")
+    face_y = front.center[1] + front.size[2] / 2
+    if abs(site.pos[1] - face_y) > 1e-4:
+        raise entry.error(f"{where}.mount.pos", f"the mount site must lie on the front's outer face y = {face_y:.4f}"
+                                                f", got y = {site.pos[1]}")
+    w, h, _ = front.size
+    sx, sy = site.size
+    for u in (-0.5, 0.5):
+        for v in (-0.5, 0.5):
+            px = site.pos[0] + u * sx * ax[0] + v * sy * ay[0]
+            pz = site.pos[2] + u * sx * ax[2] + v * sy * ay[2]
+            if abs(px - front.center[0]) > w / 2 + TOL or abs(pz - front.center[2]) > h / 2 + TOL:
+                raise entry.error(f"{where}.mount.size", f"the mount rectangle ({sx} x {sy} m) reaches past the "
+                                                         f"edge of front '{front.id}' ({w} x {h} m)")
+
+
+def _overlap(a: Front, b: Front) -> bool:
+    """True when two fronts overlap in the front view (x-z) by more than the tolerance."""
+    dx = (a.size[0] + b.size[0]) / 2 - abs(a.center[0] - b.center[0])
+    dz = (a.size[1] + b.size[1]) / 2 - abs(a.center[2] - b.center[2])
+    return dx > TOL and dz > TOL

@@ -1,0 +1,73 @@
+"""Turning raw entries into schema models, with pydantic's complaints rewritten as one-line catalog errors."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from rik.registry.sources import RawEntry
+from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
+
+#: Schema model and singular noun of each section.
+SECTION_MODELS: dict[str, tuple[type[BaseModel], str]] = {
+    "finishes": (Finish, "finish"),
+    "presets": (ResistancePreset, "preset"),
+    "designs": (HandleDesign, "design"),
+    "handles": (Handle, "handle"),
+    "base_units": (BaseUnit, "base unit"),
+}
+
+
+def parse_entry(entry: RawEntry) -> BaseModel:
+    """Validate one raw entry against its section's model; raises :class:`rik.errors.CatalogError`."""
+    model, _ = SECTION_MODELS[entry.section]
+    try:
+        return model.model_validate(entry.data)
+    except ValidationError as exc:
+        errors = exc.errors(include_url=False)
+        first = errors[0]
+        field = ".".join(str(p) for p in first["loc"])
+        more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''} in this entry)" \
+            if len(errors) > 1 else ""
+        raise entry.error(field or None, _describe(model, first) + more) from None
+
+
+def _describe(model: type[BaseModel], error: Any) -> str:
+    """A short, specific sentence for one pydantic error."""
+    kind, msg = error["type"], error["msg"].removeprefix("Value error, ")
+    if kind == "missing":
+        return "required field is missing"
+    if kind == "extra_forbidden":
+        allowed = _fields_at(model, error["loc"][:-1])
+        return "unknown field" + (f"; valid fields: {', '.join(allowed)}" if allowed else "")
+    value = error.get("input")
+    if isinstance(value, (str, int, float, bool)) and kind not in ("union_tag_invalid",):
+        return f"{msg[0].lower()}{msg[1:]} (got {value!r})"
+    return msg[0].lower() + msg[1:]
+
+
+def _fields_at(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
+    """Field names of the (nested) model found at ``loc``, or [] when it cannot be followed."""
+    current: Any = model
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        fields = getattr(current, "model_fields", None)
+        if fields is None or part not in fields:
+            return []
+        current = _model_of(fields[part].annotation)
+        if current is None:
+            return []
+    return list(getattr(current, "model_fields", {}))
+
+
+def _model_of(annotation: Any) -> type[BaseModel] | None:
+    """The BaseModel class inside an annotation such as ``X``, ``X | None`` or ``tuple[X, ...]``."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()):
+        found = _model_of(arg)
+        if found is not None:
+            return found
+    return None

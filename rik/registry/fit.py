@@ -1,0 +1,26 @@
+"""Does a handle fit a front? Footprint of a handle against a front's allowed mount rectangle."""
+
+from __future__ import annotations
+
+from rik.schemas import Front, Handle
+
+#: Rotations (degrees about the site's z axis) a handle may be mounted at: along the site's x, or across it.
+ROTATIONS = (0, 90)
+
+
+def footprint(handle: Handle, rotation: int) -> tuple[float, float]:
+    """Extents (m) of the handle along the site's x and y when mounted at ``rotation`` degrees."""
+    g = handle.geometry
+    return (g.length, g.width) if rotation % 180 == 0 else (g.width, g.length)
+
+
+def fits(handle: Handle, front: Front, rotation: int) -> bool:
+    """True when the handle's footprint lies within the front's mount rectangle at this rotation."""
+    ex, ey = footprint(handle, rotation)
+    sx, sy = front.mount.size
+    return ex <= sx + 1e-9 and ey <= sy + 1e-9
+
+
+def fitting_rotations(handle: Handle, front: Front) -> tuple[int, ...]:
+    """Rotations (of :data:`ROTATIONS`) at which the handle fits the front."""
+    return tuple(r for r in ROTATIONS if fits(handle, front, r))

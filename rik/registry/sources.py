@@ -1,0 +1,132 @@
+"""Reading catalog YAML files into raw entries, with errors that name the file, line, entry and field."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from rik import CATALOG_SCHEMA
+from rik.errors import CatalogError
+
+#: Top-level sections a catalog file may hold, each a list of entries.
+SECTIONS = ("finishes", "presets", "designs", "handles", "base_units")
+
+BUILTIN_DIR = Path(__file__).parent / "data"
+
+try:  # libyaml is several times faster; PyYAML's wheels ship it
+    _Loader: type = yaml.CSafeLoader
+except AttributeError:  # pragma: no cover - only on builds without libyaml
+    _Loader = yaml.SafeLoader
+
+
+@dataclass(frozen=True)
+class RawEntry:
+    """One entry of a section, as read, with where it came from."""
+
+    section: str
+    index: int
+    data: Any
+    file: Path
+    builtin: bool
+
+    @property
+    def label(self) -> str:
+        """``handles[3] 'knob/mushroom-30'``: how messages name the entry."""
+        ident = self.data.get("id") if isinstance(self.data, dict) else None
+        return f"{self.section}[{self.index}]" + (f" '{ident}'" if isinstance(ident, str) else "")
+
+    def error(self, field: str | None, problem: str) -> CatalogError:
+        """A :class:`CatalogError` for this entry; ``field`` is a dotted path (``fronts.0.joint.range``)."""
+        loc = tuple(int(p) if p.isdigit() else p for p in field.split(".")) if field else ()
+        return CatalogError(display_path(self.file), self.label, field, problem,
+                            line_of(self.file, (self.section, self.index, *loc)))
+
+
+def display_path(path: Path) -> str:
+    """The path as a user would type it: relative to the working directory when below it."""
+    try:
+        return os.path.relpath(path) if Path(path).resolve().is_relative_to(Path.cwd()) else str(path)
+    except ValueError:  # pragma: no cover - another drive on Windows
+        return str(path)
+
+
+def catalog_files(path: Path) -> list[Path]:
+    """The YAML files of a catalog: the file itself, or every ``*.yaml``/``*.yml`` below a directory, sorted."""
+    if path.is_dir():
+        return sorted(p for p in path.rglob("*") if p.suffix in (".yaml", ".yml") and p.is_file())
+    if path.is_file():
+        return [path]
+    raise CatalogError(display_path(path), None, None, "no such catalog file or directory")
+
+
+def read_file(path: Path, builtin: bool) -> list[RawEntry]:
+    """Parse one catalog file into raw entries; raises :class:`CatalogError` on malformed YAML or layout."""
+    shown = display_path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CatalogError(shown, None, None, f"cannot read the file ({exc.__class__.__name__}: {exc})") from None
+    try:
+        doc = yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        line = mark.line + 1 if mark is not None else None
+        where = f" (column {mark.column + 1})" if mark is not None else ""
+        raise CatalogError(shown, None, None, f"malformed YAML: {problem}{where}", line) from None
+    if doc is None:
+        return []
+    if not isinstance(doc, dict):
+        raise CatalogError(shown, None, None, f"a catalog file must be a mapping of sections {', '.join(SECTIONS)}")
+    schema = doc.get("schema", CATALOG_SCHEMA)
+    if schema != CATALOG_SCHEMA:
+        raise CatalogError(shown, None, "schema", f"catalog schema {schema!r} is not supported; this rik reads "
+                           f"schema {CATALOG_SCHEMA}", line_of(path, ("schema",)))
+    entries: list[RawEntry] = []
+    for section, items in doc.items():
+        if section == "schema":
+            continue
+        if section not in SECTIONS:
+            raise CatalogError(shown, None, str(section), f"unknown section; valid sections: {', '.join(SECTIONS)}",
+                               line_of(path, (section,)))
+        if items is None:
+            continue
+        if not isinstance(items, list):
+            raise CatalogError(shown, None, section, "a section must be a list of entries", line_of(path, (section,)))
+        for index, item in enumerate(items):
+            entry = RawEntry(section, index, item, path, builtin)
+            if not isinstance(item, dict):
+                raise entry.error(None, "an entry must be a mapping of fields")
+            entries.append(entry)
+    return entries
+
+
+def line_of(path: Path, loc: tuple[Any, ...]) -> int | None:
+    """1-based line of the deepest node along ``loc`` (section, index, field, ...) in a YAML file.
+
+    Only called when reporting an error, so the file is parsed again here rather than on every load.
+    """
+    try:
+        node = yaml.compose(path.read_text(encoding="utf-8"), Loader=_Loader)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return None
+    if node is None:
+        return None
+    line = node.start_mark.line + 1
+    for key in loc:
+        child = None
+        if isinstance(node, yaml.MappingNode):
+            child = next((v for k, v in node.value if getattr(k, "value", None) == str(key)), None)
+            if child is None and not isinstance(key, int):
+                key_node = next((k for k, _ in node.value if getattr(k, "value", None) == str(key)), None)
+                child = key_node
+        elif isinstance(node, yaml.SequenceNode) and isinstance(key, int) and 0 <= key < len(node.value):
+            child = node.value[key]
+        if child is None:
+            break
+        node, line = child, child.start_mark.line + 1
+    return line

@@ -1,0 +1,14 @@
+"""Typed, frozen models of everything in the catalog. Importing this package imports pydantic only."""
+
+from rik.schemas.base_units import BaseUnit, Carcass, DrawerBox, Front, MountSite
+from rik.schemas.common import Provenance
+from rik.schemas.finishes import Finish
+from rik.schemas.generators import GeneratorSpec
+from rik.schemas.handles import Clearance, DesignProvenance, Handle, HandleDesign, HandleGeometry, HandleType, Mount
+from rik.schemas.joints import JointResistance, JointSpec, JointType, ResistancePreset, Spring
+
+__all__ = [
+    "BaseUnit", "Carcass", "Clearance", "DesignProvenance", "DrawerBox", "Finish", "Front", "GeneratorSpec",
+    "Handle", "HandleDesign", "HandleGeometry", "HandleType", "JointResistance", "JointSpec", "JointType",
+    "Mount", "MountSite", "Provenance", "ResistancePreset", "Spring",
+]

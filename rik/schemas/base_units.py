@@ -1,0 +1,88 @@
+"""Base units: carcasses with moving fronts (drawers, doors, flaps), each front with its joint and mount site.
+
+Frame of a base unit: origin at the bottom edge of the carcass's front plane, centred left-right; +x to the
+right as seen from the front, +y out of the front towards the user, +z up. The carcass fills
+x in [-width/2, width/2], y in [-depth, 0], z in [0, height]; fronts sit in front of it (y > 0).
+All lengths in metres.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field
+
+from rik.schemas.common import CatalogId, Frozen, Length, NonNegLength, Quat, Vec3
+from rik.schemas.joints import JointSpec
+
+
+class Carcass(Frozen):
+    """The fixed box of a base unit."""
+
+    width: Length
+    height: Length
+    depth: Length
+    panel_thickness: Length
+    """Thickness of sides, top and bottom, m."""
+    finish: CatalogId
+    """Id of the carcass's finish."""
+
+
+class MountSite(Frozen):
+    """Where a handle may go on a front: a frame on the front's outer face and an allowed rectangle.
+
+    The site frame has +z out of the front and x along the front's width (horizontal on upright fronts).
+    """
+
+    pos: Vec3
+    """Centre of the allowed rectangle on the front's outer surface, base-unit frame, front closed (m)."""
+    quat: Quat = (0.7071067811865476, -0.7071067811865476, 0.0, 0.0)
+    """Rotation from the base-unit frame to the site frame (w, x, y, z). The default turns +z to +y (out of
+    an upright front) with x unchanged."""
+    size: tuple[Length, Length]
+    """Extents of the allowed rectangle along the site's x and y, m; a handle's whole footprint must lie in it."""
+
+
+class DrawerBox(Frozen):
+    """The box behind a drawer front that travels with it."""
+
+    width: Length
+    height: Length
+    depth: Length
+    wall_thickness: Length
+
+
+class Front(Frozen):
+    """A moving front: a drawer front, a door or a flap, with its joint and its handle mount site."""
+
+    id: CatalogId
+    """Unique within the base unit, for example ``drawer-1`` or ``door``."""
+    kind: Literal["drawer", "door", "flap"]
+    size: tuple[Length, Length, Length]
+    """Panel width (x), height (z) and thickness (y), m."""
+    center: Vec3
+    """Centre of the front panel with the front closed, base-unit frame, m."""
+    joint: JointSpec
+    mount: MountSite
+    drawer_box: DrawerBox | None = None
+    """For drawers: the box behind the front."""
+    finish: CatalogId
+
+
+class BaseUnit(Frozen):
+    """A piece of furniture that handles are paired with."""
+
+    id: CatalogId
+    """``<category>/<name>``, for example ``drawer/chest-80``."""
+    name: str = Field(min_length=1)
+    description: str = ""
+    install: Literal["floor", "wall"]
+    """Stands on the floor, or hangs on a wall."""
+    install_height: NonNegLength = 0.0
+    """Height of the carcass's bottom above the floor, m."""
+    carcass: Carcass
+    fronts: tuple[Front, ...] = Field(min_length=1)
+    default_preset: CatalogId = "normal"
+    """Resistance preset used when none is asked for."""
+    licence: str = Field(default="CC-BY-4.0", pattern=r"^[A-Za-z0-9.\-+]+$")
+    """SPDX licence identifier."""

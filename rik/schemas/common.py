@@ -1,0 +1,40 @@
+"""Building blocks shared by the schemas: the frozen base model, SI quantities, provenance."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field
+
+#: A strictly positive length in metres.
+Length = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+#: A length in metres that may be zero.
+NonNegLength = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+#: A strictly positive mass in kilograms.
+Mass = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+#: A finite real number (any unit; the field's doc says which).
+Real = Annotated[float, Field(allow_inf_nan=False)]
+#: A point or vector in metres (x, y, z).
+Vec3 = tuple[Real, Real, Real]
+#: A unit quaternion (w, x, y, z), MuJoCo's order.
+Quat = tuple[Real, Real, Real, Real]
+#: A fraction in [0, 1].
+Unit = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
+#: A catalog id: lower-case words joined by '-', '_', '.', grouped by '/' (for example ``two_point/bow-128``).
+CatalogId = Annotated[str, Field(pattern=r"^[a-z0-9][a-z0-9_.\-]*(/[a-z0-9][a-z0-9_.\-]*)*$", max_length=120)]
+
+
+class Frozen(BaseModel):
+    """Base of every catalog model: immutable, unknown fields rejected, schema built on first use."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", defer_build=True, use_attribute_docstrings=True)
+
+
+class Provenance(StrEnum):
+    """Where a physical value comes from."""
+
+    paper = "paper"  #: stated in the Real-IKEA paper
+    literature = "literature"  #: a published or manufacturer figure
+    assumed = "assumed"  #: an engineering assumption, written down in the entry's notes
+    measured = "measured"  #: fitted to measured data (``rik sysid``)
