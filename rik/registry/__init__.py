@@ -1,7 +1,31 @@
-"""The catalog registry: rik's data files, their loading and validation, queries, and CATALOG.md."""
+"""The catalog registry: rik's data files, their loading and validation, queries, and CATALOG.md.
 
-from rik.registry.catalog import Catalog, Origin
-from rik.registry.fit import fits, fitting_rotations, footprint
-from rik.registry.load import build_catalog, load_catalog
+``load_catalog()`` gives typed models; ``catalog_index()`` a cached plain-data view for fast listing.
+This package's own import is cheap: the schema classes load with ``load_catalog``.
+"""
 
-__all__ = ["Catalog", "Origin", "build_catalog", "fits", "fitting_rotations", "footprint", "load_catalog"]
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+    from rik.registry.index import CatalogIndex
+
+__all__ = ["Catalog", "CatalogIndex", "catalog_index", "load_catalog"]
+
+
+def __getattr__(name: str) -> Any:
+    if name in ("load_catalog", "build_catalog"):
+        from rik.registry import load
+
+        return getattr(load, name)
+    if name in ("catalog_index", "CatalogIndex"):
+        from rik.registry import index
+
+        return getattr(index, name)
+    if name == "Catalog":
+        from rik.registry.catalog import Catalog
+
+        return Catalog
+    raise AttributeError(f"module 'rik.registry' has no attribute {name!r}")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from rik.errors import UnknownIdError
@@ -21,7 +21,8 @@ class Origin:
 
 @dataclass(frozen=True)
 class Catalog:
-    """Handles, designs, base units, presets and finishes, each keyed by id and sorted by id."""
+    """Handles, designs, base units, presets and finishes, each keyed by id, in definition order
+    (built-in files in path order, then overlays)."""
 
     designs: Mapping[str, HandleDesign]
     handles: Mapping[str, Handle]
@@ -30,8 +31,6 @@ class Catalog:
     finishes: Mapping[str, Finish]
     origins: Mapping[tuple[str, str], Origin] = field(default_factory=dict)
     """(section, id) -> where the entry was defined."""
-    fingerprint: str = ""
-    """sha256 of the catalog's source files and of the schema code that validated them."""
 
     # ---- lookups with suggestions -------------------------------------------------------------------------
     def handle(self, handle_id: str) -> Handle:
@@ -73,32 +72,9 @@ class Catalog:
         """Distinct joint types of a base unit's fronts, in front order."""
         return list(dict.fromkeys(front.joint.type for front in base.fronts))
 
-    # ---- queries ----------------------------------------------------------------------------------------------
-    def find_handles(self, type: HandleType | str | None = None, design: str | None = None,
-                     min_length: float | None = None, max_length: float | None = None) -> list[Handle]:
-        """Handles by type, design id and overall length range (m, inclusive), sorted by id."""
-        if design is not None:
-            self.design(design)  # unknown design: an error with suggestions, not an empty list
-        return [h for h in self.handles.values()
-                if (type is None or self.handle_type(h) == type)
-                and (design is None or h.design == design)
-                and (min_length is None or h.geometry.length >= min_length)
-                and (max_length is None or h.geometry.length <= max_length)]
-
-    def find_designs(self, type: HandleType | str | None = None) -> list[HandleDesign]:
-        return [d for d in self.designs.values() if type is None or d.type == type]
-
-    def find_base_units(self, joint: JointType | str | None = None) -> list[BaseUnit]:
-        """Base units with at least one front on a joint of this type."""
-        return [b for b in self.base_units.values() if joint is None or joint in self.joint_types(b)]
-
 
 def _get[T](entries: Mapping[str, T], wanted: str, kind: str) -> T:
     try:
         return entries[wanted]
     except KeyError:
         raise UnknownIdError(kind, wanted, entries) from None
-
-
-def sorted_by_id[T](items: Iterable[tuple[str, T]]) -> dict[str, T]:
-    return dict(sorted(items))

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
-
-import yaml
 
 from rik import CATALOG_SCHEMA
 from rik.errors import CatalogError
@@ -17,10 +16,11 @@ SECTIONS = ("finishes", "presets", "designs", "handles", "base_units")
 
 BUILTIN_DIR = Path(__file__).parent / "data"
 
-try:  # libyaml is several times faster; PyYAML's wheels ship it
-    _Loader: type = yaml.CSafeLoader
-except AttributeError:  # pragma: no cover - only on builds without libyaml
-    _Loader = yaml.SafeLoader
+def _yaml() -> tuple[Any, type]:
+    """PyYAML and its fastest safe loader (libyaml's, which PyYAML's wheels ship)."""
+    import yaml
+
+    return yaml, getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 @dataclass(frozen=True)
@@ -65,13 +65,14 @@ def catalog_files(path: Path) -> list[Path]:
 
 def read_file(path: Path, builtin: bool) -> list[RawEntry]:
     """Parse one catalog file into raw entries; raises :class:`CatalogError` on malformed YAML or layout."""
+    yaml, loader = _yaml()
     shown = display_path(path)
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise CatalogError(shown, None, None, f"cannot read the file ({exc.__class__.__name__}: {exc})") from None
     try:
-        doc = yaml.load(text, Loader=_Loader)
+        doc = yaml.load(text, Loader=loader)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
@@ -110,8 +111,9 @@ def line_of(path: Path, loc: tuple[Any, ...]) -> int | None:
 
     Only called when reporting an error, so the file is parsed again here rather than on every load.
     """
+    yaml, loader = _yaml()
     try:
-        node = yaml.compose(path.read_text(encoding="utf-8"), Loader=_Loader)
+        node = yaml.compose(path.read_text(encoding="utf-8"), Loader=loader)
     except (OSError, UnicodeDecodeError, yaml.YAMLError):
         return None
     if node is None:
@@ -130,3 +132,22 @@ def line_of(path: Path, loc: tuple[Any, ...]) -> int | None:
             break
         node, line = child, child.start_mark.line + 1
     return line
+
+
+#: Separator of several overlay paths in ``RIK_CATALOG`` (``:`` on POSIX).
+OVERLAY_SEPARATOR = os.pathsep
+
+
+def overlay_paths_from_env() -> list[Path]:
+    """Overlay paths named by ``RIK_CATALOG`` (several joined by ``:``)."""
+    value = os.environ.get("RIK_CATALOG", "")
+    return [Path(p).expanduser() for p in value.split(OVERLAY_SEPARATOR) if p.strip()]
+
+
+def catalog_sources(overlays: Iterable[Path] | None = None) -> list[tuple[Path, bool]]:
+    """Every catalog file as (path, builtin): rik's data, then ``overlays`` (``None``: from ``RIK_CATALOG``)."""
+    overlays = overlay_paths_from_env() if overlays is None else list(overlays)
+    files = [(p, True) for p in catalog_files(BUILTIN_DIR)]
+    for path in overlays:
+        files += [(p, False) for p in catalog_files(Path(path))]
+    return files

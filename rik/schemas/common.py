@@ -28,7 +28,7 @@ CatalogId = Annotated[str, Field(pattern=r"^[a-z0-9][a-z0-9_.\-]*(/[a-z0-9][a-z0
 class Frozen(BaseModel):
     """Base of every catalog model: immutable, unknown fields rejected, schema built on first use."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid", defer_build=True, use_attribute_docstrings=True)
+    model_config = ConfigDict(frozen=True, extra="forbid", defer_build=True)
 
 
 class Provenance(StrEnum):

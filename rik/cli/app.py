@@ -1,0 +1,48 @@
+"""The ``rik`` command: one typer app; each command group lives in its own module."""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+
+from rik.cli import catalog
+from rik.cli.common import CatalogOption, overlays
+from rik.errors import RikError
+
+app = typer.Typer(
+    name="rik",
+    help="rik (Real-IKEA kit): articulated furniture for contact-rich robot manipulation.",
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    add_completion=False,
+)
+app.add_typer(catalog.app, name="catalog")
+
+
+@app.command()
+def demo(catalog_paths: CatalogOption = None) -> None:
+    """The main job on built-in defaults. For now: validate the catalog and print its summary."""
+    from rik.cli.catalog import print_summary
+    from rik.registry.index import catalog_index
+    from rik.registry.stats import catalog_stats
+
+    print_summary(catalog_stats(catalog_index(overlays(catalog_paths))))
+
+
+@app.callback()
+def _root(version: bool = typer.Option(False, "--version", help="Print rik's version and exit.")) -> None:
+    if version:
+        from rik import __version__
+
+        print(f"rik {__version__}")
+        raise typer.Exit()
+
+
+def main() -> None:
+    """Entry point: bad input becomes one line on stderr and exit code 2, never a traceback."""
+    try:
+        app()
+    except RikError as exc:
+        print(f"rik: error: {exc}", file=sys.stderr)
+        sys.exit(2)

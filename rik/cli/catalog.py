@@ -1,0 +1,201 @@
+"""``rik catalog``: browse handles, designs, base units, presets and finishes; generate CATALOG.md.
+
+Only parsing and printing here; the registry does the work. Nothing heavy is imported: this group must
+start as fast as a plain pydantic program.
+"""
+
+from __future__ import annotations
+
+import sys
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from rik.cli.common import CatalogOption, OutputFormat, console, overlays, print_json
+from rik.errors import RikError
+
+app = typer.Typer(help="Browse the catalog of handles, base units and resistance presets.", no_args_is_help=True)
+
+
+class Kind(StrEnum):
+    handles = "handles"
+    designs = "designs"
+    bases = "bases"
+    presets = "presets"
+    finishes = "finishes"
+
+
+class HandleTypeOpt(StrEnum):
+    knob = "knob"
+    two_point = "two_point"
+    finger_pull = "finger_pull"
+
+
+class JointOpt(StrEnum):
+    slide = "slide"
+    hinge = "hinge"
+
+
+@app.command("list")
+def list_entries(
+    kind: Annotated[Kind, typer.Option("--kind", "-k", help="What to list.")] = Kind.handles,
+    type: Annotated[HandleTypeOpt | None, typer.Option("--type", "-t", help="Handle type (handles, designs).")] = None,
+    design: Annotated[str | None, typer.Option(help="Design id, for example two_point/bow (handles).")] = None,
+    joint: Annotated[JointOpt | None, typer.Option(help="Joint type of a front (bases).")] = None,
+    min_length: Annotated[float | None, typer.Option(help="Minimum overall handle length, m.")] = None,
+    max_length: Annotated[float | None, typer.Option(help="Maximum overall handle length, m.")] = None,
+    format: Annotated[OutputFormat, typer.Option("--format", "-f", help="table for people; json or csv "
+                                                 "(SI units) for scripts.")] = OutputFormat.table,
+    catalog: CatalogOption = None,
+) -> None:
+    """List catalog entries, filtered."""
+    from rik.registry.index import catalog_index
+    from rik.registry.views import KINDS
+
+    section = KINDS[kind.value]
+    _check_filters(section, type=type, design=design, joint=joint, min_length=min_length, max_length=max_length)
+    rows = catalog_index(overlays(catalog)).select(
+        section, type=type and type.value, design=design, joint=joint and joint.value,
+        min_length=min_length, max_length=max_length)
+    if format is OutputFormat.json:
+        print_json(rows)
+    elif format is OutputFormat.csv:
+        _print_csv(rows)
+    else:
+        _print_table(section, rows, title=f"{len(rows)} {kind.value}")
+
+
+def _check_filters(section: str, **given: Any) -> None:
+    """Reject filters that do not apply to the kind listed (rather than silently ignoring them)."""
+    applies = {"handles": {"type", "design", "min_length", "max_length"}, "designs": {"type"},
+               "base_units": {"joint"}}.get(section, set())
+    for name, value in given.items():
+        if value is not None and name not in applies:
+            option = "--" + name.replace("_", "-")
+            kinds = [k for k, names in (("handles", {"type", "design", "min_length", "max_length"}),
+                                         ("designs", {"type"}), ("bases", {"joint"})) if name in names]
+            raise RikError(f"{option} filters {' and '.join(kinds)}, not {section.replace('base_units', 'bases')}")
+
+
+@app.command()
+def show(
+    entry_id: Annotated[str, typer.Argument(metavar="ID", help="Any catalog id: handle, design, base unit, "
+                                                                "preset or finish.")],
+    format: Annotated[OutputFormat, typer.Option("--format", "-f", help="table (readable) or json.")] =
+        OutputFormat.table,
+    catalog: CatalogOption = None,
+) -> None:
+    """Show one entry in full."""
+    from rik.registry.index import catalog_index
+
+    index = catalog_index(overlays(catalog))
+    section, entry = index.lookup(entry_id)
+    if format is OutputFormat.json:
+        print_json(entry)
+        return
+    if format is OutputFormat.csv:
+        _print_csv([entry])
+        return
+    from rich.tree import Tree
+
+    tree = Tree(f"[bold]{entry['id']}[/]  [dim]({section.removesuffix('s').replace('_', ' ')})[/]")
+    _add_branches(tree, {k: v for k, v in entry.items() if k != "id"})
+    if section == "designs":
+        tree.add("handles: " + ", ".join(h["id"] for h in index.select("handles", design=entry["id"])))
+    console().print(tree)
+    print("Lengths in m, masses in kg, angles in rad (SI).")
+
+
+def _add_branches(tree: Any, data: dict[str, Any]) -> None:
+    from rich.markup import escape
+
+    for key, value in data.items():
+        if isinstance(value, dict):
+            _add_branches(tree.add(f"[cyan]{key}[/]"), value)
+        elif isinstance(value, list) and value and isinstance(value[0], dict):
+            branch = tree.add(f"[cyan]{key}[/]")
+            for item in value:
+                _add_branches(branch.add(f"[bold]{item.get('id', '')}[/]"), {k: v for k, v in item.items() if k != "id"})
+        else:
+            tree.add(f"[cyan]{key}[/]: {escape(str(value))}")
+
+
+@app.command()
+def stats(catalog: CatalogOption = None,
+          format: Annotated[OutputFormat, typer.Option("--format", "-f")] = OutputFormat.table) -> None:
+    """Counts per handle type, base units per joint, presets, and how many pairings fit."""
+    from rik.registry.index import catalog_index
+    from rik.registry.stats import catalog_stats
+
+    numbers = catalog_stats(catalog_index(overlays(catalog)))
+    if format is OutputFormat.json:
+        print_json(numbers)
+    else:
+        print_summary(numbers)
+
+
+def print_summary(numbers: dict[str, Any]) -> None:
+    """The catalog summary as people read it (also the demo's output)."""
+    from rich.table import Table
+
+    table = Table(title=f"rik catalog: {numbers['handles']} handles in {numbers['designs']} designs")
+    for col in ("handle type", "designs", "handles"):
+        table.add_column(col, justify="left" if col == "handle type" else "right")
+    for name, row in numbers["by_type"].items():
+        table.add_row(name, str(row["designs"]), str(row["handles"]))
+    out = console()
+    out.print(table)
+    fronts = ", ".join(f"{n} {k}{'s' if n > 1 else ''}" for k, n in numbers["fronts_by_kind"].items())
+    joints = ", ".join(f"{n} with {j} joints" for j, n in numbers["base_units_by_joint"].items())
+    out.print(f"base units: {numbers['base_units']} ({joints}); fronts: {fronts}")
+    out.print(f"resistance presets: {', '.join(numbers['presets'])}; finishes: {numbers['finishes']}")
+    out.print(f"pairings that fit: {numbers['pairings']['fit']} of {numbers['pairings']['total']} "
+                  "(base units x handles)")
+    if numbers["overlay_entries"]:
+        out.print(f"entries from user catalogs: {numbers['overlay_entries']}")
+
+
+
+
+@app.command()
+def doc(
+    out: Annotated[Path, typer.Option(help="Where to write the page.")] = Path("CATALOG.md"),
+    check: Annotated[bool, typer.Option("--check", help="Write nothing; exit 1 if the page is out of date.")] = False,
+) -> None:
+    """Generate CATALOG.md from the built-in catalog (user catalogs are not included)."""
+    from rik.registry.doc import render_catalog_md, write_atomic
+    from rik.registry.index import catalog_index
+
+    text = render_catalog_md(catalog_index([]), out.parent)
+    if check:
+        current = out.read_text(encoding="utf-8") if out.is_file() else None
+        if current != text:
+            state = "missing" if current is None else "out of date"
+            print(f"{out} is {state}; run `rik catalog doc` and commit it", file=sys.stderr)
+            raise typer.Exit(1)
+        print(f"{out} is up to date")
+        return
+    write_atomic(out, text)
+    print(f"wrote {out}")
+
+
+def _print_table(section: str, rows: list[dict[str, Any]], title: str) -> None:
+    from rik.registry.views import format_columns, table
+
+    headers, cells = table(section, rows)
+    print(format_columns(headers, cells))
+    print(f"{title}; lengths in mm (use --format json or csv for SI values)")
+
+
+def _print_csv(rows: list[dict[str, Any]]) -> None:
+    import csv
+
+    from rik.registry.views import flatten
+
+    flat = [flatten(r) for r in rows]
+    fields = list(dict.fromkeys(k for r in flat for k in r))
+    writer = csv.DictWriter(sys.stdout, fieldnames=fields, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(flat)

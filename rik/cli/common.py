@@ -1,0 +1,47 @@
+"""Pieces every command group shares: the ``--catalog`` option and output helpers."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+CatalogOption = Annotated[
+    list[Path] | None,
+    typer.Option("--catalog", envvar="RIK_CATALOG", show_envvar=True,
+                 help="A user catalog (YAML file or directory) to add to the built-in one; repeatable. "
+                      "RIK_CATALOG takes several paths joined by ':'."),
+]
+
+
+class OutputFormat(StrEnum):
+    table = "table"
+    json = "json"
+    csv = "csv"
+
+
+def overlays(paths: list[Path] | None) -> list[Path]:
+    """The overlay paths a command was given (``--catalog`` or ``RIK_CATALOG``)."""
+    return list(paths or [])
+
+
+def print_json(data: object) -> None:
+    """JSON to stdout: indented, keys in schema order, UTF-8 (stable for scripts)."""
+    import json
+    import sys
+
+    sys.stdout.write(json.dumps(data, indent=2, ensure_ascii=False) + "\n")
+
+
+def console() -> Any:
+    """A rich console for data: no automatic highlighting or emoji codes (cells are data, and the regex
+    highlighter costs more than the rest of a listing); when output is not a terminal, wide enough that tables
+    are not folded."""
+    import sys
+
+    from rich.console import Console
+
+    width = None if sys.stdout.isatty() else 240
+    return Console(highlight=False, emoji=False, width=width)

@@ -1,0 +1,31 @@
+"""Counts that summarise a catalog: what ``rik catalog stats`` and the README's demo print."""
+
+from __future__ import annotations
+
+from collections import Counter
+from typing import Any
+
+from rik.registry.index import CatalogIndex
+
+HANDLE_TYPES = ("knob", "two_point", "finger_pull")
+
+
+def catalog_stats(index: CatalogIndex) -> dict[str, Any]:
+    """Counts per handle type, base units per joint type and front kind, presets, finishes, fitting pairings."""
+    handles, designs = index.entries("handles"), index.entries("designs")
+    bases = index.entries("base_units")
+    fronts = [f for b in bases for f in b["fronts"]]
+    return {
+        "handles": len(handles),
+        "designs": len(designs),
+        "by_type": {t: {"designs": sum(d["type"] == t for d in designs), "handles": sum(h["type"] == t for h in handles)}
+                    for t in HANDLE_TYPES},
+        "base_units": len(bases),
+        "fronts": len(fronts),
+        "fronts_by_kind": dict(Counter(f["kind"] for f in fronts)),
+        "base_units_by_joint": {j: sum(j in b["joint_types"] for b in bases) for j in ("slide", "hinge")},
+        "presets": [p["id"] for p in index.entries("presets")],
+        "finishes": len(index.entries("finishes")),
+        "pairings": dict(index.pairings),
+        "overlay_entries": sum(e["origin"] == "overlay" for s in index.sections.values() for e in s),
+    }

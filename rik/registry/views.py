@@ -1,0 +1,140 @@
+"""Tabular views of catalog entries: the columns that ``rik catalog list`` and CATALOG.md show per kind.
+
+Values are formatted for people (lengths in mm); JSON and CSV output use the raw SI entries instead.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+Row = dict[str, Any]
+
+#: CLI names of the kinds and the catalog section each shows.
+KINDS = {"handles": "handles", "designs": "designs", "bases": "base_units", "presets": "presets",
+         "finishes": "finishes"}
+
+
+def mm(value: float | None) -> str:
+    """A length in metres shown in millimetres ('' when absent)."""
+    return "" if value is None else f"{value * 1000:.4g}"
+
+
+def _clearance(row: Row) -> str:
+    c = row["geometry"].get("clearance")
+    return "" if c is None else f"{mm(c['depth'])} x {mm(c['width'])}"
+
+
+def _fronts(row: Row) -> str:
+    kinds = [f["kind"] for f in row["fronts"]]
+    return ", ".join(f"{kinds.count(k)} {k}{'s' if kinds.count(k) > 1 else ''}" for k in dict.fromkeys(kinds))
+
+
+def _resistance(row: Row, joint: str) -> str:
+    r = row[joint]
+    return f"{r['damping']:g} / {r['frictionloss']:g}"
+
+
+def _generator(row: Row) -> str:
+    gen = dict(row["generator"])
+    name = gen.pop("name")
+    first = next(iter(gen.values()), None)
+    return f"{name} ({first})" if isinstance(first, str) else name
+
+
+#: Columns per kind: (header, cell function).
+COLUMNS: dict[str, list[tuple[str, Callable[[Row], str]]]] = {
+    "handles": [
+        ("id", lambda r: r["id"]),
+        ("type", lambda r: r["type"]),
+        ("length mm", lambda r: mm(r["geometry"]["length"])),
+        ("width mm", lambda r: mm(r["geometry"]["width"])),
+        ("projection mm", lambda r: mm(r["geometry"]["projection"])),
+        ("grip Ø mm", lambda r: mm(r["geometry"]["grip_diameter"])),
+        ("holes c-c mm", lambda r: mm(r["geometry"].get("hole_spacing"))),
+        ("clearance mm (depth x width)", _clearance),
+        ("mount", lambda r: r["mount"]["kind"] + (f" ({r['mount']['edge']})" if r["mount"].get("edge") else "")),
+        ("finish", lambda r: r["finish"]),
+        ("mass g", lambda r: f"{r['mass'] * 1000:.0f}"),
+    ],
+    "designs": [
+        ("id", lambda r: r["id"]),
+        ("type", lambda r: r["type"]),
+        ("subtype", lambda r: r["subtype"]),
+        ("name", lambda r: r["name"]),
+        ("generator", _generator),
+        ("handles", lambda r: str(r["handle_count"])),
+    ],
+    "base_units": [
+        ("id", lambda r: r["id"]),
+        ("name", lambda r: r["name"]),
+        ("fronts", _fronts),
+        ("joints", lambda r: ", ".join(r["joint_types"])),
+        ("carcass mm (w x h x d)", lambda r: " x ".join(mm(r["carcass"][k]) for k in ("width", "height", "depth"))),
+        ("install", lambda r: r["install"] + (f" at {mm(r['install_height'])} mm" if r["install_height"] else "")),
+    ],
+    "presets": [
+        ("id", lambda r: r["id"]),
+        ("name", lambda r: r["name"]),
+        ("slide damping N·s/m / friction N", lambda r: _resistance(r, "slide")),
+        ("hinge damping N·m·s/rad / friction N·m", lambda r: _resistance(r, "hinge")),
+        ("provenance (slide, hinge)", lambda r: f"{r['slide']['provenance']}, {r['hinge']['provenance']}"),
+    ],
+    "finishes": [
+        ("id", lambda r: r["id"]),
+        ("name", lambda r: r["name"]),
+        ("kind", lambda r: r["kind"]),
+        ("colour (sRGB)", lambda r: "#" + "".join(f"{round(c * 255):02x}" for c in r["base_color"])),
+        ("metallic", lambda r: f"{r['metallic']:g}"),
+        ("roughness", lambda r: f"{r['roughness']:g}"),
+        ("pattern", lambda r: r["pattern"]),
+    ],
+}
+
+
+def table(section: str, rows: list[Row]) -> tuple[list[str], list[list[str]]]:
+    """Headers and formatted cells of ``rows`` of a section."""
+    columns = COLUMNS[section]
+    return [h for h, _ in columns], [[cell(r) for _, cell in columns] for r in rows]
+
+
+def flatten(row: Row, prefix: str = "") -> dict[str, Any]:
+    """Nested dicts as dotted keys (``geometry.length``); lists of scalars joined by spaces; others as JSON."""
+    import json
+
+    flat: dict[str, Any] = {}
+    for key, value in row.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            flat.update(flatten(value, f"{name}."))
+        elif isinstance(value, list) and all(isinstance(v, (int, float, str)) for v in value):
+            flat[name] = " ".join(str(v) for v in value)
+        elif isinstance(value, list):
+            flat[name] = json.dumps(value, separators=(",", ":"))
+        else:
+            flat[name] = "" if value is None else value
+    return flat
+
+
+def format_columns(headers: list[str], rows: list[list[str]], gap: int = 2) -> str:
+    """Rows as plain aligned text columns (as ``kubectl get`` prints): a header, a rule, one line per row.
+
+    Columns whose cells are all numbers (or empty) are right-aligned. No colours or box characters, so the
+    output greps, pipes and diffs cleanly.
+    """
+
+    def numeric(cell: str) -> bool:
+        try:
+            float(cell)
+        except ValueError:
+            return cell == ""
+        return True
+
+    widths = [max([len(h), *(len(r[i]) for r in rows)]) for i, h in enumerate(headers)]
+    right = [bool(rows) and all(numeric(r[i]) for r in rows) for i in range(len(headers))]
+
+    def line(cells: list[str]) -> str:
+        parts = [c.rjust(w) if r else c.ljust(w) for c, w, r in zip(cells, widths, right)]
+        return (" " * gap).join(parts).rstrip()
+
+    return "\n".join([line(headers), line(["-" * w for w in widths]), *(line(r) for r in rows)])
