@@ -32,6 +32,6 @@ class UnknownIdError(RikError, LookupError):
 
     def __init__(self, kind: str, wanted: str, known: Iterable[str]):
         self.kind, self.wanted = kind, wanted
-        close = difflib.get_close_matches(wanted, list(known), n=3, cutoff=0.6)
+        close = difflib.get_close_matches(wanted, list(known), n=3, cutoff=0.8)
         hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
         super().__init__(f"no {kind} '{wanted}' in the catalog{hint}")

@@ -117,7 +117,8 @@ def _add_branches(tree: Any, data: dict[str, Any]) -> None:
         elif isinstance(value, list) and value and isinstance(value[0], dict):
             branch = tree.add(f"[cyan]{key}[/]")
             for item in value:
-                _add_branches(branch.add(f"[bold]{item.get('id', '')}[/]"), {k: v for k, v in item.items() if k != "id"})
+                rest = {k: v for k, v in item.items() if k != "id"}
+                _add_branches(branch.add(f"[bold]{item.get('id', '')}[/]"), rest)
         else:
             tree.add(f"[cyan]{key}[/]: {escape(str(value))}")
 

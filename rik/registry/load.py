@@ -16,6 +16,7 @@ from rik.registry.catalog import Catalog, Origin
 from rik.registry.entries import SECTION_MODELS, parse_entry
 from rik.registry.sources import RawEntry, catalog_sources, read_file
 
+
 def load_catalog(overlays: Iterable[Path] | None = None) -> Catalog:
     """The built-in catalog plus ``overlays`` (YAML files or directories; ``None``: those of ``RIK_CATALOG``).
 

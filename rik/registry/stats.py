@@ -18,8 +18,8 @@ def catalog_stats(index: CatalogIndex) -> dict[str, Any]:
     return {
         "handles": len(handles),
         "designs": len(designs),
-        "by_type": {t: {"designs": sum(d["type"] == t for d in designs), "handles": sum(h["type"] == t for h in handles)}
-                    for t in HANDLE_TYPES},
+        "by_type": {t: {"designs": sum(d["type"] == t for d in designs),
+                        "handles": sum(h["type"] == t for h in handles)} for t in HANDLE_TYPES},
         "base_units": len(bases),
         "fronts": len(fronts),
         "fronts_by_kind": dict(Counter(f["kind"] for f in fronts)),

@@ -134,7 +134,7 @@ def format_columns(headers: list[str], rows: list[list[str]], gap: int = 2) -> s
     right = [bool(rows) and all(numeric(r[i]) for r in rows) for i in range(len(headers))]
 
     def line(cells: list[str]) -> str:
-        parts = [c.rjust(w) if r else c.ljust(w) for c, w, r in zip(cells, widths, right)]
+        parts = [c.rjust(w) if r else c.ljust(w) for c, w, r in zip(cells, widths, right, strict=True)]
         return (" " * gap).join(parts).rstrip()
 
     return "\n".join([line(headers), line(["-" * w for w in widths]), *(line(r) for r in rows)])

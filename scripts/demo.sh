@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# README command 1: set everything up, then run rik's main job on its built-in defaults.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+bash "$root/scripts/setup.sh"
+export PATH="$HOME/.local/bin:$PATH"
+cd "$root" && uv run --locked rik demo

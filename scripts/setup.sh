@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Install everything rik needs on a fresh Debian/Ubuntu machine: the Debian packages it uses, uv (if
+# missing), Python 3.12 and the locked environment (uv.lock). Safe to run again. Source it or run it.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+# Debian packages, one per line in scripts/apt-packages.txt (none may be needed yet).
+mapfile -t apt_pkgs < <(grep -v '^\s*#' "$root/scripts/apt-packages.txt" | grep -v '^\s*$' || true)
+if ((${#apt_pkgs[@]})) && command -v dpkg-query >/dev/null; then
+  missing=()
+  for p in "${apt_pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done
+  if ((${#missing[@]})); then
+    sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    echo "setup: installing Debian packages: ${missing[*]}"
+    $sudo apt-get update -qq && $sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
+  fi
+fi
+
+# uv: from PyPI into the user's ~/.local (no download from elsewhere needed).
+export PATH="$HOME/.local/bin:$PATH"
+if ! uv --version >/dev/null 2>&1; then
+  echo "setup: installing uv from PyPI"
+  py=""; for c in python3.12 python3 python; do if "$c" -c "import sys; assert sys.version_info >= (3, 8)" 2>/dev/null; then py="$c"; break; fi; done
+  [ -n "$py" ] || { echo "setup: error: no Python 3 found to install uv with" >&2; exit 1; }
+  "$py" -m pip install --quiet --user --disable-pip-version-check uv 2>/dev/null \
+    || "$py" -m pip install --quiet --user --disable-pip-version-check --break-system-packages uv
+fi
+
+# The locked environment, with bytecode compiled (start-up time of `rik` depends on it). uv uses a
+# Python 3.12 found on the machine and downloads one only if none is.
+cd "$root"
+uv sync --locked --compile-bytecode --quiet

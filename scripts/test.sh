@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# README command 2: set everything up (a no-op when done), then run the test suite. Extra arguments go to pytest.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+bash "$root/scripts/setup.sh"
+export PATH="$HOME/.local/bin:$PATH"
+cd "$root" && uv run --locked pytest "$@"

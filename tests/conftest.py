@@ -1,0 +1,46 @@
+"""Shared fixtures: an isolated cache per test session, and a way to run the real CLI in-process."""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Keep the catalog index cache out of the user's home and free of other runs' state."""
+    mp = pytest.MonkeyPatch()
+    mp.setenv("RIK_CACHE", str(tmp_path_factory.mktemp("rik-cache")))
+    mp.delenv("RIK_CATALOG", raising=False)
+    yield
+    mp.undo()
+
+
+@dataclass
+class Result:
+    code: int
+    out: str
+    err: str
+
+
+@pytest.fixture
+def rik(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch):
+    """Run ``rik ARGS...`` through its real entry point; returns exit code, stdout and stderr."""
+    from rik.cli.app import main
+
+    def run(*args: str) -> Result:
+        monkeypatch.setattr(sys, "argv", ["rik", *args])
+        code = 0
+        try:
+            main()
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+        captured = capsys.readouterr()
+        return Result(code, captured.out, captured.err)
+
+    return run

@@ -1,0 +1,115 @@
+"""`rik catalog` as a user and a script see it."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import subprocess
+import sys
+
+from conftest import REPO
+
+
+def test_list_handles_json_lists_83(rik) -> None:
+    result = rik("catalog", "list", "--kind", "handles", "--format", "json")
+    assert result.code == 0
+    handles = json.loads(result.out)
+    assert len(handles) == 83
+    assert {"id", "design", "type", "geometry", "mount", "mass", "finish"} <= set(handles[0])
+
+
+def test_list_counts_per_kind(rik) -> None:
+    counts = {k: len(json.loads(rik("catalog", "list", "--kind", k, "-f", "json").out))
+              for k in ("designs", "bases", "presets", "finishes")}
+    assert counts["designs"] == 47 and counts["bases"] == 13 and counts["presets"] >= 3
+
+
+def test_type_filter_lists_only_knobs(rik) -> None:
+    knobs = json.loads(rik("catalog", "list", "--type", "knob", "--format", "json").out)
+    assert len(knobs) == 30 and {h["type"] for h in knobs} == {"knob"}
+    table = rik("catalog", "list", "--type", "knob").out
+    assert "knob/mushroom-30" in table and "two_point/" not in table
+
+
+def test_length_and_design_filters(rik) -> None:
+    rows = json.loads(rik("catalog", "list", "--min-length", "0.3", "-f", "json").out)
+    assert rows and all(r["geometry"]["length"] >= 0.3 for r in rows)
+    bows = json.loads(rik("catalog", "list", "--design", "two_point/bow", "-f", "json").out)
+    assert [r["id"] for r in bows] == ["two_point/bow-64", "two_point/bow-96", "two_point/bow-128"]
+
+
+def test_joint_filter_on_bases(rik) -> None:
+    slides = json.loads(rik("catalog", "list", "--kind", "bases", "--joint", "slide", "-f", "json").out)
+    assert slides and all("slide" in b["joint_types"] for b in slides)
+
+
+def test_csv_has_one_row_per_handle_in_si_units(rik) -> None:
+    rows = list(csv.DictReader(io.StringIO(rik("catalog", "list", "--format", "csv").out)))
+    assert len(rows) == 83
+    bow = next(r for r in rows if r["id"] == "two_point/bow-128")
+    assert float(bow["geometry.hole_spacing"]) == 0.128
+
+
+def test_json_output_is_stable(rik) -> None:
+    first = rik("catalog", "list", "--kind", "bases", "-f", "json").out
+    assert first == rik("catalog", "list", "--kind", "bases", "-f", "json").out
+
+
+def test_show_any_kind(rik) -> None:
+    for entry_id in ("two_point/bow-128", "two_point/bow", "drawer/chest-80", "normal", "metal/stainless"):
+        result = rik("catalog", "show", entry_id)
+        assert result.code == 0 and entry_id in result.out
+    shown = json.loads(rik("catalog", "show", "two_point/bow-128", "--format", "json").out)
+    assert shown["geometry"]["clearance"] == {"depth": 0.02, "width": 0.116}
+
+
+def test_show_unknown_id_suggests(rik) -> None:
+    result = rik("catalog", "show", "two_point/bow-12")
+    assert result.code == 2
+    assert result.err.strip() == ("rik: error: no entry 'two_point/bow-12' in the catalog; did you mean "
+                                  "'two_point/bow-128' or 'two_point/bow' or 'two_point/bow-96'?")
+
+
+def test_unknown_design_filter_suggests(rik) -> None:
+    result = rik("catalog", "list", "--design", "two_point/bo")
+    assert result.code == 2 and "did you mean 'two_point/bow'" in result.err
+
+
+def test_filter_that_does_not_apply_is_an_error(rik) -> None:
+    result = rik("catalog", "list", "--kind", "bases", "--type", "knob")
+    assert result.code == 2
+    assert result.err.strip() == "rik: error: --type filters handles and designs, not bases"
+
+
+def test_stats_and_demo(rik) -> None:
+    numbers = json.loads(rik("catalog", "stats", "--format", "json").out)
+    assert numbers["pairings"] == {"total": 1079, "fit": 1079}
+    assert numbers["by_type"]["two_point"] == {"designs": 17, "handles": 34}
+    demo = rik("demo")
+    assert demo.code == 0 and "1079 of 1079" in demo.out
+
+
+def test_catalog_commands_import_nothing_heavy(tmp_path) -> None:
+    """`rik catalog` must not import simulators, renderers or learning libraries; warm, not even the schemas."""
+    probe = (
+        "import sys, io, contextlib\n"
+        "from rik.cli.app import main\n"
+        "for args in (['catalog','list','--type','knob'], ['catalog','list','--type','knob'], ['catalog','stats']):\n"
+        "    sys.argv = ['rik', *args]\n"
+        "    with contextlib.redirect_stdout(io.StringIO()):\n"
+        "        try: main()\n"
+        "        except SystemExit: pass\n"
+        "    if args == ['catalog','list','--type','knob']: first = set(sys.modules)\n"
+        "print(' '.join(sorted(sys.modules)))\n"
+    )
+    env = {"RIK_CACHE": str(tmp_path), "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
+    cold = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True,
+                          cwd=REPO)
+    modules = set(cold.stdout.split())
+    for heavy in ("mujoco", "coacd", "torch", "lerobot", "mitsuba", "trimesh", "numpy"):
+        assert heavy not in modules, f"rik catalog imported {heavy}"
+    warm = subprocess.run([sys.executable, "-c", probe.replace("['catalog','list','--type','knob'], "
+                                                               "['catalog','list','--type','knob'], ", "")],
+                          env=env, capture_output=True, text=True, check=True, cwd=REPO)
+    assert "rik.schemas" not in warm.stdout.split(), "a warm `rik catalog` should read the index, not validate"
