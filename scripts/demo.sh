@@ -2,6 +2,5 @@
 # README command 1: set everything up, then run rik's main job on its built-in defaults.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-bash "$root/scripts/setup.sh"
-export PATH="$HOME/.local/bin:$PATH"
+source "$root/scripts/setup.sh"
 cd "$root" && uv run --locked rik demo

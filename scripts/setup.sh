@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install everything rik needs on a fresh Debian/Ubuntu machine: the Debian packages it uses, uv (if
-# missing), Python 3.12 and the locked environment (uv.lock). Safe to run again. Source it or run it.
+# missing), Python 3.12 and the locked environment (uv.lock). Safe to run again. Sourced by demo.sh and
+# test.sh, so its exports (PATH, UV_SYSTEM_CERTS) reach their `uv run`.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
@@ -16,8 +17,10 @@ if ((${#apt_pkgs[@]})) && command -v dpkg-query >/dev/null; then
   fi
 fi
 
-# uv: from PyPI into the user's ~/.local (no download from elsewhere needed).
+# uv: from PyPI into the user's ~/.local (no download from elsewhere needed). uv trusts the system's
+# certificate store (as pip and curl do), so it works behind proxies whose CA the system trusts.
 export PATH="$HOME/.local/bin:$PATH"
+export UV_SYSTEM_CERTS="${UV_SYSTEM_CERTS:-1}"
 if ! uv --version >/dev/null 2>&1; then
   echo "setup: installing uv from PyPI"
   py=""; for c in python3.12 python3 python; do if "$c" -c "import sys; assert sys.version_info >= (3, 8)" 2>/dev/null; then py="$c"; break; fi; done

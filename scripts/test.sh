@@ -2,6 +2,5 @@
 # README command 2: set everything up (a no-op when done), then run the test suite. Extra arguments go to pytest.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-bash "$root/scripts/setup.sh"
-export PATH="$HOME/.local/bin:$PATH"
+source "$root/scripts/setup.sh"
 cd "$root" && uv run --locked pytest "$@"
