@@ -55,7 +55,7 @@ def list_entries(
     from rik.registry.views import KINDS
 
     section = KINDS[kind.value]
-    _check_filters(section, type=type, design=design, joint=joint, min_length=min_length, max_length=max_length)
+    _check_filters(kind.value, type=type, design=design, joint=joint, min_length=min_length, max_length=max_length)
     rows = catalog_index(overlays(catalog)).select(
         section, type=type and type.value, design=design, joint=joint and joint.value,
         min_length=min_length, max_length=max_length)
@@ -67,16 +67,17 @@ def list_entries(
         _print_table(section, rows, title=f"{len(rows)} {kind.value}")
 
 
-def _check_filters(section: str, **given: Any) -> None:
+#: Which kinds (CLI names) each filter applies to.
+FILTER_KINDS = {"type": ("handles", "designs"), "design": ("handles",), "joint": ("bases",),
+                "min_length": ("handles",), "max_length": ("handles",)}
+
+
+def _check_filters(kind: str, **given: Any) -> None:
     """Reject filters that do not apply to the kind listed (rather than silently ignoring them)."""
-    applies = {"handles": {"type", "design", "min_length", "max_length"}, "designs": {"type"},
-               "base_units": {"joint"}}.get(section, set())
     for name, value in given.items():
-        if value is not None and name not in applies:
+        if value is not None and kind not in FILTER_KINDS[name]:
             option = "--" + name.replace("_", "-")
-            kinds = [k for k, names in (("handles", {"type", "design", "min_length", "max_length"}),
-                                         ("designs", {"type"}), ("bases", {"joint"})) if name in names]
-            raise RikError(f"{option} filters {' and '.join(kinds)}, not {section.replace('base_units', 'bases')}")
+            raise RikError(f"{option} filters {' and '.join(FILTER_KINDS[name])}, not {kind}")
 
 
 @app.command()
