@@ -101,7 +101,9 @@ def show(
         return
     from rich.tree import Tree
 
-    tree = Tree(f"[bold]{entry['id']}[/]  [dim]({section.removesuffix('s').replace('_', ' ')})[/]")
+    from rik.registry.sources import NOUNS
+
+    tree = Tree(f"[bold]{entry['id']}[/]  [dim]({NOUNS[section]})[/]")
     _add_branches(tree, {k: v for k, v in entry.items() if k != "id"})
     if section == "designs":
         tree.add("handles: " + ", ".join(h["id"] for h in index.select("handles", design=entry["id"])))

@@ -49,17 +49,6 @@ class Catalog:
     def finish(self, finish_id: str) -> Finish:
         return _get(self.finishes, finish_id, "finish")
 
-    def lookup(self, any_id: str) -> tuple[str, object]:
-        """Find an id in any section; returns (section, entry). Suggests ids from every section on a miss."""
-        for section in ("handles", "designs", "base_units", "presets", "finishes"):
-            entries: Mapping[str, object] = getattr(self, section)
-            if any_id in entries:
-                return section, entries[any_id]
-        raise UnknownIdError("entry", any_id, self.all_ids())
-
-    def all_ids(self) -> list[str]:
-        return [*self.handles, *self.designs, *self.base_units, *self.presets, *self.finishes]
-
     # ---- derived facts --------------------------------------------------------------------------------------
     def handle_type(self, handle: Handle) -> HandleType:
         """The type of a handle, from its design."""

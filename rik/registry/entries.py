@@ -9,19 +9,19 @@ from pydantic import BaseModel, ValidationError
 from rik.registry.sources import RawEntry
 from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
 
-#: Schema model and singular noun of each section.
-SECTION_MODELS: dict[str, tuple[type[BaseModel], str]] = {
-    "finishes": (Finish, "finish"),
-    "presets": (ResistancePreset, "preset"),
-    "designs": (HandleDesign, "design"),
-    "handles": (Handle, "handle"),
-    "base_units": (BaseUnit, "base unit"),
+#: Schema model of each section.
+SECTION_MODELS: dict[str, type[BaseModel]] = {
+    "finishes": Finish,
+    "presets": ResistancePreset,
+    "designs": HandleDesign,
+    "handles": Handle,
+    "base_units": BaseUnit,
 }
 
 
 def parse_entry(entry: RawEntry) -> BaseModel:
     """Validate one raw entry against its section's model; raises :class:`rik.errors.CatalogError`."""
-    model, _ = SECTION_MODELS[entry.section]
+    model = SECTION_MODELS[entry.section]
     try:
         return model.model_validate(entry.data)
     except ValidationError as exc:

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import rik
 from rik.errors import UnknownIdError
 from rik.paths import cache_dir
-from rik.registry.sources import SECTIONS, catalog_sources
+from rik.registry.sources import NOUNS, SECTIONS, catalog_sources
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -48,8 +48,7 @@ class CatalogIndex:
         for entry in self.sections[section]:
             if entry["id"] == entry_id:
                 return entry
-        noun = section.removesuffix("s").replace("_", " ") if section != "finishes" else "finish"
-        raise UnknownIdError(noun, entry_id, [e["id"] for e in self.sections[section]])
+        raise UnknownIdError(NOUNS[section], entry_id, [e["id"] for e in self.sections[section]])
 
     def lookup(self, entry_id: str) -> tuple[str, dict[str, Any]]:
         """Find an id in any section: (section, entry)."""

@@ -14,7 +14,7 @@ from pydantic import BaseModel
 from rik.registry import checks
 from rik.registry.catalog import Catalog, Origin
 from rik.registry.entries import SECTION_MODELS, parse_entry
-from rik.registry.sources import RawEntry, catalog_sources, read_file
+from rik.registry.sources import NOUNS, RawEntry, catalog_sources, read_file
 
 
 def load_catalog(overlays: Iterable[Path] | None = None) -> Catalog:
@@ -32,7 +32,7 @@ def build_catalog(entries: Sequence[RawEntry]) -> Catalog:
     for entry in entries:
         parsed[entry.section].append((entry, parse_entry(entry)))
     for section, items in parsed.items():
-        checks.check_unique_ids(items, SECTION_MODELS[section][1])
+        checks.check_unique_ids(items, NOUNS[section])
     by_id = {s: {m.id: m for _, m in items} for s, items in parsed.items()}  # type: ignore[attr-defined]
     designs, finishes, presets = by_id["designs"], by_id["finishes"], by_id["presets"]
     for entry, handle in parsed["handles"]:

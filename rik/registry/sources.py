@@ -13,6 +13,9 @@ from rik.errors import CatalogError
 
 #: Top-level sections a catalog file may hold, each a list of entries.
 SECTIONS = ("finishes", "presets", "designs", "handles", "base_units")
+#: How messages name one entry of each section.
+NOUNS = {"finishes": "finish", "presets": "preset", "designs": "design", "handles": "handle",
+         "base_units": "base unit"}
 
 BUILTIN_DIR = Path(__file__).parent / "data"
 
