@@ -6,7 +6,7 @@ import sys
 
 import typer
 
-from rik.cli import catalog
+from rik.cli import assets, catalog
 from rik.cli.common import CatalogOption, overlays
 from rik.errors import RikError
 
@@ -18,6 +18,7 @@ app = typer.Typer(
     add_completion=False,
 )
 app.add_typer(catalog.app, name="catalog")
+app.add_typer(assets.app, name="assets")
 
 
 @app.command()

@@ -1,0 +1,289 @@
+"""Build assets: visual mesh and collision of every rigid part of a handle or a base unit, cached by content.
+
+A handle is one rigid part (``handle``) decomposed with CoACD; a base unit has one part per rigid body
+(``carcass`` and each front) whose collision is its panels (see :mod:`rik.assets.base_units`). Every part also
+keeps the single convex hull that prior data sets use, as the baseline of the fidelity metric.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rik.assets.cache import AssetCache, CorruptEntry, content_key, library_versions, source_digest
+from rik.assets.decompose import Hulls, coacd_params
+from rik.errors import RikError, UnknownIdError
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from rik.registry.catalog import Catalog
+
+DEFAULT_SEED = 0
+ASSETS_DIR = Path(__file__).parent
+
+
+@dataclass
+class RigidPart:
+    """One rigid body's geometry: visual mesh, convex collision parts and the single-hull baseline (m)."""
+
+    name: str
+    role: str
+    """``handle``, ``carcass`` or the front's kind (``drawer``, ``door``, ``flap``)."""
+    finish: str
+    method: str
+    """How the collision was made: ``coacd`` or ``exact`` (the part is a union of convex panels)."""
+    visual: trimesh.Trimesh
+    hulls: Hulls
+    baseline: Hulls
+
+
+@dataclass
+class Asset:
+    """A built handle or base unit."""
+
+    id: str
+    kind: str
+    """``handle`` or ``base_unit``."""
+    category: str
+    """Handle type (``knob``, ``two_point``, ``finger_pull``) or ``base_unit``."""
+    key: str
+    parts: list[RigidPart]
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def part(self, name: str) -> RigidPart:
+        return next(p for p in self.parts if p.name == name)
+
+
+@dataclass(frozen=True)
+class BuildResult:
+    """What one build did (small, picklable: sent back from worker processes)."""
+
+    id: str
+    kind: str
+    key: str
+    status: str
+    """``cached``, ``built`` or ``rebuilt`` (the cached entry failed its hash check)."""
+    seconds: float
+    hulls: int
+    collision_vertices: int
+    note: str = ""
+
+
+# ---- identities ---------------------------------------------------------------------------------------------------
+def _generator_sources() -> list[Path]:
+    return [ASSETS_DIR / "meshkit.py", ASSETS_DIR / "base_units.py", *sorted((ASSETS_DIR / "handles").glob("*.py"))]
+
+
+def asset_kind(catalog: Catalog, asset_id: str) -> str:
+    """``handle`` or ``base_unit``; unknown ids raise with close matches from both sections."""
+    if asset_id in catalog.handles:
+        return "handle"
+    if asset_id in catalog.base_units:
+        return "base_unit"
+    raise UnknownIdError("handle or base unit", asset_id, [*catalog.handles, *catalog.base_units])
+
+
+def asset_identity(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) -> dict[str, Any]:
+    """Everything that decides an asset's files: the catalog entry, generator code, CoACD parameters, seed and
+    library versions. Its :func:`content_key` addresses the cache."""
+    kind = asset_kind(catalog, asset_id)
+    ident: dict[str, Any] = {"kind": kind, "seed": seed, "versions": library_versions(),
+                             "code": source_digest(_generator_sources())}
+    if kind == "handle":
+        handle = catalog.handles[asset_id]
+        design = catalog.designs[handle.design]
+        category = design.type.value
+        ident |= {"entry": handle.model_dump(mode="json", exclude={"licence", "mass"}),
+                  "design": design.generator.model_dump(mode="json"),
+                  "coacd": coacd_params(category, seed).__dict__}
+    else:
+        unit = catalog.base_units[asset_id]
+        ident |= {"entry": unit.model_dump(mode="json", include={"carcass", "fronts"})}
+    return ident
+
+
+def asset_key(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) -> str:
+    return content_key(asset_identity(catalog, asset_id, seed))
+
+
+# ---- generation -----------------------------------------------------------------------------------------------
+def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) -> tuple[str, list[RigidPart]]:
+    """Generate and decompose every rigid part (no cache). Returns (category, parts)."""
+    from rik.assets.decompose import convex_hull_baseline, decompose
+
+    if asset_kind(catalog, asset_id) == "handle":
+        from rik.assets.handles import generate_handle
+
+        handle = catalog.handles[asset_id]
+        design = catalog.designs[handle.design]
+        category = design.type.value
+        mesh = generate_handle(handle, design)
+        hulls = decompose(mesh, coacd_params(category, seed))
+        return category, [RigidPart("handle", "handle", handle.finish, "coacd", mesh, hulls,
+                                    convex_hull_baseline(mesh))]
+    from rik.assets.base_units import base_unit_plan, part_mesh
+    from rik.assets.decompose import convex_hull_baseline as baseline
+
+    parts = []
+    for plan in base_unit_plan(catalog.base_units[asset_id]):
+        mesh = part_mesh(plan)
+        hulls = [_box_hull(p.mesh()) for p in plan.panels]
+        parts.append(RigidPart(plan.name, plan.role, plan.finish, "exact", mesh, hulls, baseline(mesh)))
+    return "base_unit", parts
+
+
+def _box_hull(mesh: trimesh.Trimesh) -> tuple[Any, Any]:
+    import numpy as np
+
+    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)
+
+
+# ---- (de)serialisation -------------------------------------------------------------------------------------------
+def _arrays(parts: Sequence[RigidPart]) -> dict[str, Any]:
+    import numpy as np
+
+    out: dict[str, Any] = {}
+    for i, part in enumerate(parts):
+        out[f"p{i}_visual_v"] = np.asarray(part.visual.vertices, dtype=np.float64)
+        out[f"p{i}_visual_f"] = np.asarray(part.visual.faces, dtype=np.int64)
+        for j, (v, f) in enumerate(part.hulls):
+            out[f"p{i}_hull{j}_v"], out[f"p{i}_hull{j}_f"] = v, f
+        (bv, bf), = part.baseline
+        out[f"p{i}_base_v"], out[f"p{i}_base_f"] = bv, bf
+    return out
+
+
+def load_asset(cache: AssetCache, key: str) -> Asset | None:
+    """The asset stored under ``key``, or ``None`` if absent (raises CorruptEntry if damaged)."""
+    import numpy as np
+    import trimesh
+
+    entry = cache.get(key)
+    if entry is None:
+        return None
+    try:
+        with np.load(entry.payload) as data:
+            parts = []
+            for i, p in enumerate(entry.meta["parts"]):
+                visual = trimesh.Trimesh(data[f"p{i}_visual_v"], data[f"p{i}_visual_f"], process=False)
+                hulls = [(data[f"p{i}_hull{j}_v"], data[f"p{i}_hull{j}_f"]) for j in range(p["hulls"])]
+                baseline = [(data[f"p{i}_base_v"], data[f"p{i}_base_f"])]
+                parts.append(RigidPart(p["name"], p["role"], p["finish"], p["method"], visual, hulls, baseline))
+    except (KeyError, ValueError, OSError) as exc:
+        import shutil
+
+        shutil.rmtree(entry.path, ignore_errors=True)
+        raise CorruptEntry(f"cache entry {entry.path} is unreadable ({exc}); it was removed") from None
+    m = entry.meta
+    return Asset(m["id"], m["kind"], m["category"], key, parts, m)
+
+
+def build_asset(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED,
+                cache: AssetCache | None = None) -> tuple[Asset, BuildResult]:
+    """The asset for ``asset_id`` from the cache, or generated, decomposed and stored."""
+    cache = cache or AssetCache()
+    t0 = time.perf_counter()
+    key = asset_key(catalog, asset_id, seed)
+    status, note = "cached", ""
+    try:
+        asset = load_asset(cache, key)
+    except CorruptEntry as exc:
+        asset, status, note = None, "rebuilt", str(exc)
+    if asset is None:
+        status = "built" if status == "cached" else status
+        category, parts = generate_parts(catalog, asset_id, seed)
+        meta = {"id": asset_id, "kind": asset_kind(catalog, asset_id), "category": category, "seed": seed,
+                "build_seconds": round(time.perf_counter() - t0, 3),
+                "parts": [{"name": p.name, "role": p.role, "finish": p.finish, "method": p.method,
+                           "hulls": len(p.hulls), "collision_vertices": sum(len(v) for v, _ in p.hulls),
+                           "visual_vertices": len(p.visual.vertices), "visual_faces": len(p.visual.faces)}
+                          for p in parts]}
+        cache.put(key, _arrays(parts), meta)
+        asset = load_asset(cache, key)
+        assert asset is not None
+    result = BuildResult(asset_id, asset.kind, key, status, time.perf_counter() - t0,
+                         sum(len(p.hulls) for p in asset.parts),
+                         sum(len(v) for p in asset.parts for v, _ in p.hulls), note)
+    return asset, result
+
+
+# ---- many at once ------------------------------------------------------------------------------------------------
+def resolve_ids(catalog: Catalog, ids: Iterable[str], everything: bool) -> list[str]:
+    """The asset ids to build: all handles then all base units with ``everything``, else ``ids`` checked."""
+    wanted = list(ids)
+    if everything:
+        return [*catalog.handles, *catalog.base_units]
+    if not wanted:
+        raise RikError("name at least one handle or base unit id, or pass --all")
+    for asset_id in wanted:
+        asset_kind(catalog, asset_id)
+    return list(dict.fromkeys(wanted))
+
+
+_WORKER_CATALOG: Catalog | None = None
+
+
+def _init_worker(overlays: list[Path]) -> None:
+    global _WORKER_CATALOG
+    from rik.registry.load import load_catalog
+
+    _WORKER_CATALOG = load_catalog(overlays)
+
+
+def _build_in_worker(asset_id: str, seed: int, cache_root: str) -> BuildResult:
+    assert _WORKER_CATALOG is not None
+    return build_asset(_WORKER_CATALOG, asset_id, seed, AssetCache(Path(cache_root)))[1]
+
+
+def build_assets(catalog: Catalog, ids: Sequence[str], *, overlays: Sequence[Path] = (), seed: int = DEFAULT_SEED,
+                 workers: int = 1, cache: AssetCache | None = None,
+                 on_result: Callable[[BuildResult], None] | None = None) -> list[BuildResult]:
+    """Build every id; cache hits are answered in this process, misses go to ``workers`` processes.
+
+    ``on_result`` is called once per id as it finishes (for progress bars). Results come back in ``ids`` order.
+    """
+    cache = cache or AssetCache()
+    done: dict[str, BuildResult] = {}
+
+    corrupt: dict[str, str] = {}
+
+    def finish(result: BuildResult) -> None:
+        if result.id in corrupt:
+            from dataclasses import replace
+
+            result = replace(result, status="rebuilt", note=corrupt[result.id])
+        done[result.id] = result
+        if on_result:
+            on_result(result)
+
+    misses = []
+    for asset_id in ids:
+        t0 = time.perf_counter()
+        key = asset_key(catalog, asset_id, seed)
+        try:
+            entry = cache.get(key)
+        except CorruptEntry as exc:
+            entry, corrupt[asset_id] = None, str(exc)
+        if entry is None:
+            misses.append(asset_id)
+            continue
+        m = entry.meta
+        finish(BuildResult(asset_id, m["kind"], key, "cached", time.perf_counter() - t0,
+                           sum(p["hulls"] for p in m["parts"]), sum(p["collision_vertices"] for p in m["parts"])))
+    if misses and workers > 1:
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+        from multiprocessing import get_context
+
+        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_init_worker,
+                                 initargs=(list(overlays),)) as pool:
+            futures = [pool.submit(_build_in_worker, i, seed, str(cache.root)) for i in misses]
+            for future in as_completed(futures):
+                finish(future.result())
+    else:
+        for asset_id in misses:
+            finish(build_asset(catalog, asset_id, seed, cache)[1])
+    return [done[i] for i in ids]

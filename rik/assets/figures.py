@@ -1,0 +1,113 @@
+"""Pictures of assets: a shaded thumbnail of a handle and the collision-error heatmaps of paper Figure 5.
+
+Drawn with matplotlib's Agg backend (headless, deterministic); written atomically as PNG.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import numpy as np
+    import trimesh
+
+    from rik.assets.fidelity import Fidelity, FidelitySamples
+
+VIEW = {"elev": 28.0, "azim": -62.0}
+"""Camera of every picture: from above-front-left, so loops and lips show."""
+HEAT_POINTS = 6000
+"""Points drawn per heatmap panel (a random subset of the samples)."""
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: Path, dpi: int) -> None:
+    import os
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    fig.savefig(tmp, dpi=dpi, format="png", metadata={"Software": None})
+    _pyplot().close(fig)
+    os.replace(tmp, path)
+
+
+def _frame(ax, points: np.ndarray) -> None:
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre, half = (lo + hi) / 2, max(float((hi - lo).max()) / 2, 1e-3)
+    for setter, c in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), centre, strict=True):
+        setter(c - half, c + half)
+    ax.set_box_aspect((1, 1, 1))
+    ax.view_init(**VIEW)
+    ax.set_axis_off()
+
+
+def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    import numpy as np
+
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def _linear_to_srgb(c: np.ndarray) -> np.ndarray:
+    import numpy as np
+
+    c = np.clip(c, 0, 1)
+    return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
+
+
+def thumbnail(mesh: trimesh.Trimesh, base_color: tuple[float, float, float], metallic: float, path: Path,
+              size_px: int = 160) -> None:
+    """A small shaded picture of ``mesh`` in its finish's colour (two lights, Lambert plus a metallic sheen)."""
+    import numpy as np
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    plt = _pyplot()
+    fig = plt.figure(figsize=(size_px / 80, size_px / 80))
+    ax = fig.add_axes((0, 0, 1, 1), projection="3d")
+    normals = mesh.face_normals
+    lights = np.array([[-0.4, -0.6, 0.7], [0.6, -0.2, 0.4]])
+    lights /= np.linalg.norm(lights, axis=1, keepdims=True)
+    lambert = np.clip(normals @ lights.T, 0, None) @ np.array([0.75, 0.35])
+    sheen = metallic * np.clip(normals @ np.array([0.0, -0.3, 0.95]), 0, None) ** 12
+    base = _srgb_to_linear(np.asarray(base_color, dtype=float))
+    colour = _linear_to_srgb(base[None, :] * (0.18 + lambert[:, None]) + 0.5 * sheen[:, None])
+    ax.add_collection3d(Poly3DCollection(mesh.triangles, facecolors=colour, edgecolors="none", linewidths=0))
+    _frame(ax, mesh.vertices)
+    _save(fig, path, dpi=80)
+
+
+def heatmap(samples: FidelitySamples, fidelity: Fidelity, title: str, path: Path, seed: int = 0) -> None:
+    """Three panels like paper Figure 5: H_P->Q (visual points coloured by their distance to the CoACD shell),
+    H_Q->P (shell points coloured by their distance to the visual surface) and H_Q'->P (the convex-hull
+    baseline), on one colour scale in millimetres."""
+    import numpy as np
+
+    plt = _pyplot()
+    rng = np.random.default_rng(seed)
+    panels = [
+        ("$H_{P\\to Q}$ CoACD", samples.p, samples.p_to_q, fidelity.p_to_q.mean),
+        ("$H_{Q\\to P}$ CoACD", samples.q, samples.q_to_p, fidelity.q_to_p.mean),
+        ("$H_{Q'\\to P}$ convex hull", samples.baseline_q, samples.baseline_q_to_p, fidelity.baseline_q_to_p.mean),
+    ]
+    vmax = max(2.0, float(np.percentile(samples.baseline_q_to_p, 95)) * 1e3)
+    fig = plt.figure(figsize=(9.0, 3.3))
+    everything = np.concatenate([samples.p, samples.baseline_q])
+    scatter = None
+    for i, (name, points, dist, mean) in enumerate(panels):
+        ax = fig.add_subplot(1, 3, i + 1, projection="3d")
+        pick = rng.choice(len(points), size=min(HEAT_POINTS, len(points)), replace=False)
+        scatter = ax.scatter(*points[pick].T, c=dist[pick] * 1e3, cmap="turbo", vmin=0, vmax=vmax, s=1.2,
+                             linewidths=0, depthshade=False)
+        _frame(ax, everything)
+        ax.set_title(f"{name}\nmean {mean:.2f} mm", fontsize=9)
+    fig.suptitle(title, fontsize=10)
+    bar = fig.colorbar(scatter, ax=fig.axes, shrink=0.7, pad=0.02)
+    bar.set_label("deviation, mm", fontsize=8)
+    _save(fig, path, dpi=90)

@@ -1,0 +1,156 @@
+"""``rik assets``: build meshes and collision, measure collision fidelity, print mesh statistics, import meshes.
+
+Only parsing and printing here; :mod:`rik.assets` does the work (heavy libraries load inside it).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from rik.cli.common import CatalogOption, OutputFormat, console, overlays, print_json
+
+app = typer.Typer(help="Meshes, CoACD collision, collision fidelity and mesh statistics of handles and base units.",
+                  no_args_is_help=True)
+
+IdsArg = Annotated[list[str] | None, typer.Argument(help="Handle or base-unit ids, e.g. two_point/bow-128.",
+                                                    show_default=False)]
+AllOpt = Annotated[bool, typer.Option("--all", help="Every handle (and, for build, every base unit).")]
+WorkersOpt = Annotated[int, typer.Option("--workers", "-j", min=1, help="Parallel processes.")]
+SeedOpt = Annotated[int, typer.Option(help="Seed of CoACD and of the surface sampling.")]
+
+
+DEFAULT_WORKERS = max(1, min(8, os.cpu_count() or 1))
+"""One process per core, at most eight."""
+
+
+def _progress() -> Any:
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                    TextColumn("{task.fields[last]}"), console=console(), transient=False)
+
+
+@app.command()
+def build(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = DEFAULT_WORKERS,
+          seed: SeedOpt = 0, catalog: CatalogOption = None) -> None:
+    """Generate visual meshes and CoACD collision into the cache ($RIK_CACHE); cached assets are not rebuilt."""
+    from rik.assets.build import build_assets, resolve_ids
+    from rik.assets.cache import AssetCache
+    from rik.registry.load import load_catalog
+
+    cat = load_catalog(overlays(catalog))
+    wanted = resolve_ids(cat, ids or [], everything)
+    cache = AssetCache()
+    notes = []
+    with _progress() as progress:
+        task = progress.add_task("assets", total=len(wanted), last="")
+
+        def advance(result: Any) -> None:
+            if result.note:
+                notes.append(result.note)
+            progress.update(task, advance=1, last=f"{result.id} ({result.status})")
+
+        results = build_assets(cat, wanted, overlays=overlays(catalog), seed=seed, workers=workers, cache=cache,
+                               on_result=advance)
+    counts = {s: sum(r.status == s for r in results) for s in ("built", "rebuilt", "cached")}
+    for note in notes:
+        console().print(f"[yellow]note:[/] {note}")
+    rebuilt = f", {counts['rebuilt']} rebuilt after a failed hash check" if counts["rebuilt"] else ""
+    console().print(f"{len(results)} assets: {counts['built']} built{rebuilt}, {counts['cached']} from the cache; "
+                    f"{sum(r.hulls for r in results)} convex parts in all. Cache: {cache.root}")
+
+
+@app.command()
+def fidelity(ids: IdsArg = None, everything: AllOpt = False,
+             out: Annotated[Path, typer.Option(help="Where fidelity.csv and the per-handle pictures go.")] = Path(
+                 "fidelity"),
+             points: Annotated[int, typer.Option(min=1000, help="Surface samples per shell.")] = 20_000,
+             workers: WorkersOpt = DEFAULT_WORKERS, seed: SeedOpt = 0,
+             format: Annotated[OutputFormat, typer.Option("--format", "-f")] = OutputFormat.table,
+             catalog: CatalogOption = None) -> None:
+    """Collision fidelity (paper 3.2): E_Q->P and E_P->Q in mm for CoACD and the convex-hull baseline.
+
+    Writes OUT/fidelity.csv (merged with rows already there), and OUT/<id>/fidelity.png (heatmaps as in the
+    paper's Figure 5) and thumbnail.png. The repository's pictures are made with --out docs/catalog."""
+    from rik.assets.report import FIDELITY_COLUMNS, fidelity_row, handle_ids, merge_csv, run_rows, summarise_fidelity
+    from rik.registry.load import load_catalog
+
+    cat = load_catalog(overlays(catalog))
+    wanted = handle_ids(cat, ids or [], everything)
+    with _progress() as progress:
+        task = progress.add_task("fidelity", total=len(wanted), last="")
+        rows = run_rows(fidelity_row, cat, wanted, workers=workers, overlays=overlays(catalog),
+                        on_row=lambda r: progress.update(task, advance=1, last=r["id"]), out=out, points=points,
+                        seed=seed)
+    merge_csv(rows, FIDELITY_COLUMNS, out / "fidelity.csv")
+    summary = summarise_fidelity(rows)
+    if format is OutputFormat.json:
+        print_json({"handles": rows, "summary": summary})
+        return
+    if format is OutputFormat.csv:
+        import csv
+        import sys
+
+        writer = csv.DictWriter(sys.stdout, fieldnames=FIDELITY_COLUMNS, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+        return
+    from rich.table import Table
+
+    table = Table(title="Collision fidelity, mm (Q: CoACD shell, Q': convex hull, P: visual surface)")
+    for col in ("handle", "hulls", "E_Q->P mean", "p95", "max", "E_P->Q mean", "E_Q'->P mean", "E_P->Q' mean",
+                "hull / CoACD"):
+        table.add_column(col, justify="left" if col == "handle" else "right")
+    for r in rows:
+        table.add_row(r["id"], str(r["hulls"]), f"{r['eqp_mean_mm']:.2f}", f"{r['eqp_p95_mm']:.2f}",
+                      f"{r['eqp_max_mm']:.2f}", f"{r['epq_mean_mm']:.2f}", f"{r['hull_eqp_mean_mm']:.2f}",
+                      f"{r['hull_epq_mean_mm']:.2f}", f"{r['hull_over_coacd']:.1f}x")
+    con = console()
+    con.print(table)
+    for name, s in summary.items():
+        con.print(f"{name}: {s['handles']} handles, mean E_Q->P {s['eqp_mean_mm']:.2f} mm (convex hull "
+                  f"{s['hull_eqp_mean_mm']:.2f} mm, {s['hull_over_coacd']:.1f}x), mean E_P->Q "
+                  f"{s['epq_mean_mm']:.2f} mm (convex hull {s['hull_epq_mean_mm']:.2f} mm)")
+    con.print(f"wrote {out / 'fidelity.csv'} and pictures under {out}/")
+
+
+@app.command()
+def stats(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = DEFAULT_WORKERS,
+          seed: SeedOpt = 0, out: Annotated[Path | None, typer.Option(help="Also write the rows as CSV here.")] = None,
+          format: Annotated[OutputFormat, typer.Option("--format", "-f")] = OutputFormat.table,
+          catalog: CatalogOption = None) -> None:
+    """Mesh statistics per handle (paper Figure 3): vertices, faces, mean edge length, mean face area."""
+    from rik.assets.report import STATS_COLUMNS, handle_ids, run_rows, stats_row, write_csv
+    from rik.registry.load import load_catalog
+
+    cat = load_catalog(overlays(catalog))
+    wanted = handle_ids(cat, ids or [], everything)
+    rows = run_rows(stats_row, cat, wanted, workers=workers, overlays=overlays(catalog), seed=seed)
+    if out is not None:
+        write_csv(rows, STATS_COLUMNS, out)
+    if format is OutputFormat.json:
+        print_json(rows)
+        return
+    if format is OutputFormat.csv:
+        import csv
+        import sys
+
+        writer = csv.DictWriter(sys.stdout, fieldnames=STATS_COLUMNS, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+        return
+    from rich.table import Table
+
+    table = Table(title="Mesh statistics of the visual meshes")
+    for col in ("handle", "vertices", "faces", "mean edge mm", "mean face area mm²", "watertight", "hulls",
+                "collision vertices"):
+        table.add_column(col, justify="left" if col == "handle" else "right")
+    for r in rows:
+        table.add_row(r["id"], str(r["vertices"]), str(r["faces"]), f"{r['mean_edge_mm']:.3f}",
+                      f"{r['mean_face_area_mm2']:.4f}", "yes" if r["watertight"] else "no", str(r["hulls"]),
+                      str(r["collision_vertices"]))
+    console().print(table)
