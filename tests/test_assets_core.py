@@ -107,7 +107,7 @@ def test_an_offset_box_deviates_by_its_offset():
     # distances are to the nearest of 200k reference samples (0.55 mm apart on this cube): a little above 1 mm
     assert 0.99 < fid.q_to_p.mean < 1.07
     assert 0.99 < fid.p_to_q.mean < 1.07
-    assert fid.q_to_p.max == pytest.approx(np.sqrt(3), abs=0.1)
+    assert np.sqrt(3) - 0.05 < fid.q_to_p.max < np.sqrt(3) + 0.3  # a corner, plus the sample spacing
     assert fid.baseline_q_to_p.mean == pytest.approx(0.0, abs=1e-6)  # a cube is its own convex hull
 
 
