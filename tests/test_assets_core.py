@@ -108,7 +108,7 @@ def test_an_offset_box_deviates_by_its_offset():
     assert 0.99 < fid.q_to_p.mean < 1.07
     assert 0.99 < fid.p_to_q.mean < 1.07
     assert np.sqrt(3) - 0.05 < fid.q_to_p.max < np.sqrt(3) + 0.3  # a corner, plus the sample spacing
-    assert fid.baseline_q_to_p.mean == pytest.approx(0.0, abs=1e-6)  # a cube is its own convex hull
+    assert fid.baseline_q_to_p.mean < 0.3  # a cube is its own hull: only the sampling floor (half a spacing)
 
 
 def _bar_pull() -> tuple[trimesh.Trimesh, HandleGeometry]:
