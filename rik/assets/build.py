@@ -96,10 +96,9 @@ def asset_identity(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
     if kind == "handle":
         handle = catalog.handles[asset_id]
         design = catalog.designs[handle.design]
-        category = design.type.value
         ident |= {"entry": handle.model_dump(mode="json", exclude={"licence", "mass"}),
-                  "design": design.generator.model_dump(mode="json"),
-                  "coacd": coacd_params(category, seed).__dict__}
+                  "design": design.generator.model_dump(mode="json"),  # an imported mesh: its sha256
+                  "coacd": coacd_params(design.type.value, seed).__dict__}
     else:
         unit = catalog.base_units[asset_id]
         ident |= {"entry": unit.model_dump(mode="json", include={"carcass", "fronts"})}
@@ -121,8 +120,14 @@ def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
         handle = catalog.handles[asset_id]
         design = catalog.designs[handle.design]
         category = design.type.value
-        mesh = generate_handle(handle, design)
-        hulls = decompose(mesh, coacd_params(category, seed))
+        if design.generator.name == "user_mesh":
+            from rik.assets.importer import read_user_mesh
+
+            defined_in = Path(catalog.origins[("designs", design.id)].file).parent
+            mesh = read_user_mesh(defined_in / design.generator.file, design.generator.sha256)
+        else:
+            mesh = generate_handle(handle, design)
+        hulls = decompose(mesh, coacd_params(category, seed))  # imports are cleaned to closed solids too
         return category, [RigidPart("handle", "handle", handle.finish, "coacd", mesh, hulls,
                                     convex_hull_baseline(mesh))]
     from rik.assets.base_units import base_unit_plan, part_mesh

@@ -16,6 +16,8 @@ if TYPE_CHECKING:
 
 VIEW = {"elev": 28.0, "azim": -62.0}
 """Camera of every picture: from above-front-left, so loops and lips show."""
+HEAT_MAX_MM = 5.0
+"""Top of the colour scale, mm: the same for every handle, so pictures compare; larger deviations saturate."""
 HEAT_POINTS = 6000
 """Points drawn per heatmap panel (a random subset of the samples)."""
 
@@ -39,12 +41,16 @@ def _save(fig, path: Path, dpi: int) -> None:
     os.replace(tmp, path)
 
 
-def _frame(ax, points: np.ndarray) -> None:
+def _frame(ax, points: np.ndarray, zoom: float = 1.0) -> None:
+    """Equal scale on all axes, the box shaped like the object (so long bars fill the picture), no axes."""
+    import numpy as np
+
     lo, hi = points.min(axis=0), points.max(axis=0)
-    centre, half = (lo + hi) / 2, max(float((hi - lo).max()) / 2, 1e-3)
-    for setter, c in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), centre, strict=True):
-        setter(c - half, c + half)
-    ax.set_box_aspect((1, 1, 1))
+    span = np.maximum(hi - lo, 0.15 * float((hi - lo).max()))  # keep flat objects from collapsing
+    centre = (lo + hi) / 2
+    for setter, c, s in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), centre, span, strict=True):
+        setter(c - s / 2, c + s / 2)
+    ax.set_box_aspect(tuple(span / span.max()), zoom=zoom)
     ax.view_init(**VIEW)
     ax.set_axis_off()
 
@@ -79,7 +85,7 @@ def thumbnail(mesh: trimesh.Trimesh, base_color: tuple[float, float, float], met
     base = _srgb_to_linear(np.asarray(base_color, dtype=float))
     colour = _linear_to_srgb(base[None, :] * (0.18 + lambert[:, None]) + 0.5 * sheen[:, None])
     ax.add_collection3d(Poly3DCollection(mesh.triangles, facecolors=colour, edgecolors="none", linewidths=0))
-    _frame(ax, mesh.vertices)
+    _frame(ax, mesh.vertices, zoom=1.05)
     _save(fig, path, dpi=80)
 
 
@@ -96,7 +102,7 @@ def heatmap(samples: FidelitySamples, fidelity: Fidelity, title: str, path: Path
         ("$H_{Q\\to P}$ CoACD", samples.q, samples.q_to_p, fidelity.q_to_p.mean),
         ("$H_{Q'\\to P}$ convex hull", samples.baseline_q, samples.baseline_q_to_p, fidelity.baseline_q_to_p.mean),
     ]
-    vmax = max(2.0, float(np.percentile(samples.baseline_q_to_p, 95)) * 1e3)
+    vmax = HEAT_MAX_MM
     fig = plt.figure(figsize=(9.0, 3.3))
     everything = np.concatenate([samples.p, samples.baseline_q])
     scatter = None
@@ -108,6 +114,6 @@ def heatmap(samples: FidelitySamples, fidelity: Fidelity, title: str, path: Path
         _frame(ax, everything)
         ax.set_title(f"{name}\nmean {mean:.2f} mm", fontsize=9)
     fig.suptitle(title, fontsize=10)
-    bar = fig.colorbar(scatter, ax=fig.axes, shrink=0.7, pad=0.02)
+    bar = fig.colorbar(scatter, ax=fig.axes, shrink=0.7, pad=0.02, extend="max")
     bar.set_label("deviation, mm", fontsize=8)
     _save(fig, path, dpi=90)

@@ -6,6 +6,7 @@ Only parsing and printing here; :mod:`rik.assets` does the work (heavy libraries
 from __future__ import annotations
 
 import os
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -154,3 +155,81 @@ def stats(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = 
                       f"{r['mean_face_area_mm2']:.4f}", "yes" if r["watertight"] else "no", str(r["hulls"]),
                       str(r["collision_vertices"]))
     console().print(table)
+
+
+class HandleTypeArg(StrEnum):
+    knob = "knob"
+    two_point = "two_point"
+    finger_pull = "finger_pull"
+
+
+class UnitsArg(StrEnum):
+    auto = "auto"
+    m = "m"
+    cm = "cm"
+    mm = "mm"
+    inch = "in"
+
+
+class AxisArg(StrEnum):
+    px, nx, py, ny, pz, nz = "+x", "-x", "+y", "-y", "+z", "-z"
+
+
+@app.command("import")
+def import_(
+    file: Annotated[Path, typer.Argument(help="Mesh file: .stl, .obj, .ply, .off, .glb or .gltf.")],
+    handle_type: Annotated[HandleTypeArg, typer.Option("--type", help="Handle type.")],
+    design_id: Annotated[str, typer.Option("--id", help="New design id, e.g. two_point/my-bar.")],
+    handle: Annotated[bool, typer.Option("--handle", help="Import a handle (the only kind for now).")] = True,
+    size: Annotated[str | None, typer.Option(help="Size label; the handle id is <id>-<size>. Default: hole "
+                                             "spacing (two-point) or length, in mm.")] = None,
+    name: Annotated[str | None, typer.Option(help="Display name of the design.")] = None,
+    finish: Annotated[str, typer.Option(help="Finish id (rik catalog list --kind finishes).")] = "metal/brushed-steel",
+    units: Annotated[UnitsArg, typer.Option(help="Units of the file; auto = metres, refusing sizes that cannot "
+                                            "be a handle.")] = UnitsArg.auto,
+    out_axis: Annotated[AxisArg, typer.Option("--out", help="The file's axis that points out of the front.")] = (
+        AxisArg.pz),
+    long_axis: Annotated[AxisArg, typer.Option("--long", help="The file's axis along the handle.")] = AxisArg.px,
+    hole_spacing: Annotated[float | None, typer.Option(help="Screw centre-to-centre, m (two-point).")] = None,
+    clearance: Annotated[tuple[float, float] | None, typer.Option(help="Finger clearance DEPTH WIDTH, m "
+                                                                  "(finger-pulls; measured for two-point).")] = None,
+    mass: Annotated[float | None, typer.Option(help="Mass, kg (default: volume x zinc density).")] = None,
+    catalog_dir: Annotated[Path, typer.Option(help="User overlay catalog to register the handle in.")] = Path(
+        "rik-catalog"),
+    seed: SeedOpt = 0,
+    catalog: CatalogOption = None,
+) -> None:
+    """Import a real handle mesh: clean it, normalise units and frame, register it in a user catalog, then
+    decompose it with CoACD and measure its collision fidelity (and the finger test for two-point handles)."""
+    from rik.assets.importer import import_handle
+    from rik.assets.report import fidelity_row
+    from rik.registry.load import load_catalog
+
+    del handle
+    size_label = size
+    if size_label is None:
+        size_label = f"{round(hole_spacing * 1000)}" if hole_spacing else "imported"
+    imported = import_handle(file, handle_type=handle_type.value, design_id=design_id, size=size_label,
+                             catalog_dir=catalog_dir, name=name, finish=finish, units=units.value,
+                             out_axis=out_axis.value, long_axis=long_axis.value, hole_spacing=hole_spacing,
+                             clearance=clearance, mass=mass)
+    con = console()
+    g = imported.geometry
+    con.print(f"registered {imported.handle_id} in {imported.yaml_path} (mesh {imported.mesh_path}): "
+              f"{g['length'] * 1e3:.1f} x {g['width'] * 1e3:.1f} mm, projection {g['projection'] * 1e3:.1f} mm"
+              + (f", clearance {g['clearance']['depth'] * 1e3:.1f} x {g['clearance']['width'] * 1e3:.1f} mm"
+                 if "clearance" in g else ""))
+    cat = load_catalog([*overlays(catalog), catalog_dir])
+    row = fidelity_row(cat, imported.handle_id, out=catalog_dir / "pictures", seed=seed)
+    con.print(f"collision: {row['hulls']} convex parts; E_Q->P mean {row['eqp_mean_mm']:.2f} mm, E_P->Q mean "
+              f"{row['epq_mean_mm']:.2f} mm (convex hull: {row['hull_eqp_mean_mm']:.2f} mm, "
+              f"{row['hull_over_coacd']:.1f}x); pictures in {catalog_dir / 'pictures'}")
+    if handle_type is HandleTypeArg.two_point:
+        from rik.assets.build import build_asset
+        from rik.assets.finger import finger_test
+
+        asset, _ = build_asset(cat, imported.handle_id, seed)
+        result = finger_test(asset.part("handle").hulls, cat.handles[imported.handle_id].geometry)
+        verdict = "passes through the loop" if result.passes else "is blocked"
+        con.print(f"finger test: a 10 mm finger {verdict} (closest {result.min_distance * 1e3:.1f} mm)")
+    con.print(f"use it with --catalog {catalog_dir} (or RIK_CATALOG={catalog_dir})")

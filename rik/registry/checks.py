@@ -45,6 +45,11 @@ def check_design(entry: RawEntry, design: HandleDesign, handle_count: int) -> No
         raise entry.error("id", f"a {design.type.value} design's id must start with '{design.type.value}/'")
     if handle_count == 0:
         raise entry.error("id", "design has no handles; add a handle that uses it or remove it")
+    if design.generator.name == "user_mesh":
+        mesh_file = entry.file.parent / design.generator.file
+        if not mesh_file.is_file():
+            raise entry.error("generator.file", f"no mesh file {display_path(mesh_file)} (paths are relative to "
+                                                "the YAML file)")
 
 
 def check_handle(entry: RawEntry, handle: Handle, designs: Mapping[str, HandleDesign],

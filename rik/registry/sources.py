@@ -58,9 +58,11 @@ def display_path(path: Path) -> str:
 
 
 def catalog_files(path: Path) -> list[Path]:
-    """The YAML files of a catalog: the file itself, or every ``*.yaml``/``*.yml`` below a directory, sorted."""
+    """The YAML files of a catalog: the file itself, or every ``*.yaml``/``*.yml`` below a directory, sorted
+    (hidden files and directories, such as an import in progress, are skipped)."""
     if path.is_dir():
-        return sorted(p for p in path.rglob("*") if p.suffix in (".yaml", ".yml") and p.is_file())
+        return sorted(p for p in path.rglob("*") if p.suffix in (".yaml", ".yml") and p.is_file()
+                      and not any(part.startswith(".") for part in p.relative_to(path).parts))
     if path.is_file():
         return [path]
     raise CatalogError(display_path(path), None, None, "no such catalog file or directory")

@@ -126,8 +126,19 @@ class RecessLip(Frozen):
     """Lip height above the face / projection."""
 
 
+class UserMesh(Frozen):
+    """Not a generator: the design's mesh is a user's file, imported with ``rik assets import``."""
+
+    name: Literal["user_mesh"]
+    file: str = Field(min_length=1)
+    """Path of the mesh file (STL, OBJ, PLY, GLB) relative to the YAML file defining the design; the mesh is in
+    metres in the mount frame."""
+    sha256: str = Field(pattern=r"^[0-9a-f]{64}$")
+    """sha256 of the file: part of the asset's cache key, and checked when the file is read."""
+
+
 GeneratorSpec = Annotated[
-    KnobLathe | KnobPrism | KnobRing | BarPull | BowPull | CupPull | EdgeProfile | TabPull | RecessLip,
+    KnobLathe | KnobPrism | KnobRing | BarPull | BowPull | CupPull | EdgeProfile | TabPull | RecessLip | UserMesh,
     Field(discriminator="name"),
 ]
 """Which generator builds a design, and its parameters."""
