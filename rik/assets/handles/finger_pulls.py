@@ -66,15 +66,29 @@ def _quad(radius: float) -> int:
 def _arc(cu: float, cv: float, r: float, a0: float, a1: float) -> list[tuple[float, float]]:
     """Points on a circular arc (centre ``(cu, cv)``, radius ``r`` m) from angle ``a0`` to ``a1`` (rad), ends
     included; angle 0 is +u, pi/2 is +v."""
-    n = segments(r, abs(a1 - a0))
-    return [(cu + r * math.cos(a), cv + r * math.sin(a)) for a in np.linspace(a0, a1, n + 1)]
+    return [(cu + r * _snap(math.cos(a)), cv + r * _snap(math.sin(a))) for a in _angles(r, a0, a1)]
+
+
+def _angles(r: float, a0: float, a1: float) -> np.ndarray:
+    """Angles from ``a0`` to ``a1`` (rad) for an arc of radius ``r`` (m), with every multiple of pi/2 in between
+    included so the arc's extreme points are exact."""
+    base = np.linspace(a0, a1, segments(r, abs(a1 - a0)) + 1)
+    lo, hi = min(a0, a1), max(a0, a1)
+    quads = [k * math.pi / 2 for k in range(math.ceil(lo / (math.pi / 2)), math.floor(hi / (math.pi / 2)) + 1)]
+    extra = [q for q in quads if np.min(np.abs(base - q)) > 1e-9]
+    return np.array(sorted([*base, *extra], reverse=a1 < a0))
+
+
+def _snap(c: float) -> float:
+    """``c`` (a cosine or sine) with round-off at the quadrant points removed, so arcs meet straight parts exactly."""
+    return 0.0 if abs(c) < 1e-12 else c
 
 
 def _ellipse_arc(cu: float, cv: float, a: float, b: float, t0: float, t1: float) -> list[tuple[float, float]]:
     """Points on an elliptic arc (centre ``(cu, cv)``, semi-axes ``a`` along u and ``b`` along v, m) from
     parameter ``t0`` to ``t1`` (rad), ends included."""
     n = segments(max(a, b), abs(t1 - t0))
-    return [(cu + a * math.cos(t), cv + b * math.sin(t)) for t in np.linspace(t0, t1, n + 1)]
+    return [(cu + a * _snap(math.cos(t)), cv + b * _snap(math.sin(t))) for t in np.linspace(t0, t1, n + 1)]
 
 
 def _opened(poly: Polygon, r: float) -> Polygon:
@@ -82,7 +96,7 @@ def _opened(poly: Polygon, r: float) -> Polygon:
     if r <= 0:
         return poly
     out = poly.buffer(-r, quad_segs=_quad(r), join_style="round").buffer(r, quad_segs=_quad(r), join_style="round")
-    return _single(out)
+    return _single(out.intersection(poly))  # clip the buffer's round-off at concave corners back to the original
 
 
 def _single(geom: shapely.Geometry) -> Polygon:
@@ -140,40 +154,48 @@ def _clearance(geometry: HandleGeometry) -> tuple[float, float]:
 # ============================================================================================ edge_profile
 
 
+def _edge_ymin_estimate(section: str, t: float, p: float, alpha: float) -> float:
+    """How far (m, negative) an edge section reaches beyond the edge before its corners are rounded."""
+    sa, ca = math.sin(alpha), math.cos(alpha)
+    if section in ("lip", "bevel"):
+        return -(p - 2 * t) * ca / sa - t
+    if section == "l_angle":
+        return min(-t, -t * sa - (p - t + t * ca) * ca / sa)
+    if section == "j_hook":
+        return -0.5 * p
+    return -(p - t)  # rounded_bead
+
+
 def _edge_layout(spec: EdgeProfile, geometry: HandleGeometry) -> dict[str, float]:
-    """Key levels of an edge profile's cross-section (m): wall ``t``, pocket depth ``depth`` (lip end at
-    y = depth), the profile's extreme ``y_min`` beyond the edge and ``y_max`` at the plate's end."""
-    t = geometry.grip_diameter
-    p = geometry.projection
+    """Key levels of an edge profile's cross-section (m): wall ``t``, flange angle ``alpha`` (rad), pocket depth
+    ``depth`` (the lip ends at y = depth), the profile's extreme ``y_min`` beyond the edge and ``y_max`` at the
+    plate's end (``y_max - y_min = width``)."""
+    w, p = geometry.width, geometry.projection
+    t = min(geometry.grip_diameter, 0.3 * p)  # leave a pocket between plate and lip
     depth, _ = _clearance(geometry)
-    alpha = math.radians(max(MIN_LIP_ANGLE_DEG, spec.lip_angle_deg))
-    t = min(t, 0.3 * p)  # leave a pocket between plate and lip
-    if spec.section in ("lip", "bevel"):
-        q_y = -(p - 2 * t) * math.cos(alpha) / math.sin(alpha)
-        y_min = q_y - t
-    elif spec.section == "l_angle":
-        sa, ca = math.sin(alpha), math.cos(alpha)
-        s = (p - t + t * ca) / sa
-        y_min = min(-t, -t * sa - s * ca)
-    elif spec.section == "j_hook":
-        y_min = -0.5 * p
-    else:  # rounded_bead
-        y_min = -(p - t)
-    y_max = geometry.width + y_min
-    # the lip must end on the plate's span: shorten the pocket if the width leaves no room (documented clamp)
-    depth = max(min(depth, y_max - t), t)
-    return {"t": t, "p": p, "alpha": alpha, "depth": depth, "y_min": y_min, "y_max": y_max}
+    alpha = math.radians(min(max(MIN_LIP_ANGLE_DEG, spec.lip_angle_deg), 90.0))
+    # a flat flange reaches far over the edge; steepen it until the plate still reaches the lip's end
+    while alpha < math.pi / 2 and w + _edge_ymin_estimate(spec.section, t, p, alpha) < depth:
+        alpha = min(alpha + math.radians(1.0), math.pi / 2)
+    depth = max(min(depth, w + _edge_ymin_estimate(spec.section, t, p, alpha)), t)
+    # the rounded corners can pull the extreme in: measure it on the built section
+    upper = _edge_polygon(spec.section, t, p, alpha, depth, depth + 2 * t)
+    y_min = upper.bounds[0]
+    return {"t": t, "p": p, "alpha": alpha, "depth": depth, "y_min": y_min, "y_max": w + y_min}
 
 
 def _edge_section(spec: EdgeProfile, geometry: HandleGeometry) -> Polygon:
     """The edge profile's cross-section in the (y, z) plane, m (see :func:`edge_profile`)."""
     lay = _edge_layout(spec, geometry)
-    t, p, alpha, depth = lay["t"], lay["p"], lay["alpha"], lay["depth"]
-    y_max = lay["y_max"]
+    return _edge_polygon(spec.section, lay["t"], lay["p"], lay["alpha"], lay["depth"], lay["y_max"])
+
+
+def _edge_polygon(section: str, t: float, p: float, alpha: float, depth: float, y_max: float) -> Polygon:
+    """Cross-section (y, z) of an edge profile with wall ``t``, projection ``p``, flange angle ``alpha`` (rad),
+    lip end at ``y = depth`` and plate end at ``y = y_max`` (m), convex corners rounded."""
     sa, ca = math.sin(alpha), math.cos(alpha)
     cap = box(-t, -EDGE_CAP_DEPTH, 0.0, t)
     round_r = 0.4 * t
-    section = spec.section
     if section in ("lip", "bevel"):
         cot = ca / sa
         q = (-(p - 2 * t) * cot, p - t)  # inner corner: pocket roof meets the lip's inner face
@@ -232,8 +254,10 @@ def edge_profile(spec: EdgeProfile, geometry: HandleGeometry, mount: Mount) -> t
       giving a bevelled top.
 
     ``lip_angle_deg`` tilts the flange of ``lip``, ``l_angle`` and ``bevel`` (90 = perpendicular; clamped to at
-    least :data:`MIN_LIP_ANGLE_DEG`); it does not apply to ``j_hook`` and ``rounded_bead``. Clamps: ``t`` at most
-    0.3 x projection; the pocket depth at most ``y_max - t`` when the width leaves no room for the full lip.
+    least :data:`MIN_LIP_ANGLE_DEG`, and steepened further, degree by degree, while the flange would reach so far over
+    the edge that the plate no longer spans the pocket); it does not apply to ``j_hook`` and ``rounded_bead``.
+    Clamps: ``t`` at most 0.3 x projection; the pocket depth at most ``y_max`` when even a perpendicular flange
+    leaves the width too short for the full lip.
     Convex corners are rounded to 0.4 t (0.45 t for the bead); the pocket's inner corners stay sharp.
     """
     section = _edge_section(spec, geometry)
@@ -259,7 +283,7 @@ def _tab_layout(spec: TabPull, geometry: HandleGeometry) -> dict[str, float]:
     # the finger region behind the standing part reaches down to y_top + depth, at most to the edge line
     depth = min(depth, -y_top)
     bend_top = y_top + depth
-    run = min(1.2 * rise, max(y_max - foot_min - bend_top, 0.5 * rise))
+    run = min(1.2 * rise, max(y_max - foot_min - bend_top, 0.5 * rise), y_max - bend_top - 0.5 * t)
     return {"t": t, "p": p, "depth": depth, "y_top": y_top, "y_max": y_max, "bend_top": bend_top,
             "bend_bottom": bend_top + run}
 
@@ -273,9 +297,10 @@ def _tab_outline(spec: TabPull, geometry: HandleGeometry, y_top: float, y_max: f
     if spec.outline == "rounded":
         return _rounded_rect(-half, y_top, half, y_max, 0.3 * min(geometry.length, w))
     # trapezoid: the free top edge keeps the full length, the foot narrows to 60 %
-    r = 1.5e-3
+    r = min(1.5e-3, 0.1 * w)
     foot = 0.6 * half
-    trap = Polygon([(-half, y_top), (half, y_top), (foot, y_max), (-foot, y_max)])
+    shoulder = y_top + 3 * r  # a short straight side keeps the full length after the corners are rounded
+    trap = Polygon([(-half, y_top), (half, y_top), (half, shoulder), (foot, y_max), (-foot, y_max), (-half, shoulder)])
     return _opened(trap, r)
 
 
@@ -296,7 +321,8 @@ def tab_pull(spec: TabPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
     z_lo, z_hi = 0.5 * t, p - 0.5 * t
     y0, y1 = lay["bend_top"], lay["bend_bottom"]
     n = max(24, segments(max(y1 - y0, p), math.pi))
-    ramp = [(y0 + (y1 - y0) * u, z_hi - (z_hi - z_lo) * 0.5 * (1 - math.cos(math.pi * u))) for u in np.linspace(0, 1, n + 1)]
+    ramp = [(y0 + (y1 - y0) * u, z_hi - (z_hi - z_lo) * 0.5 * (1 - math.cos(math.pi * u)))
+            for u in np.linspace(0, 1, n + 1)]
     centre = LineString([(lay["y_top"], z_hi), *ramp, (lay["y_max"], z_lo)])
     section = _single(centre.buffer(0.5 * t, quad_segs=_quad(0.5 * t), cap_style="flat", join_style="round"))
     half = 0.5 * geometry.length
@@ -348,10 +374,8 @@ def _roof(y_top: float, y_end: float, z_max: float, ry: float, rz: float, z_lo: 
     cy, cz = y_top + ry, z_max - rz
     pts = [(y_top, z_lo), (y_top, cz)] if cz > 0 else [(y_top, z_lo)]
     arc = _ellipse_arc(cy, cz, ry, rz, math.pi, 0.5 * math.pi)
-    if cz <= 0:  # the roof starts on the face
-        arc = [(y, max(z, z_lo)) for y, z in arc]
     pts += arc + [(y_end, z_max), (y_end, z_lo)]
-    return Polygon(pts)
+    return _single(Polygon(pts))
 
 
 def _plan(a: float, z_max: float, r: float, z_lo: float) -> Polygon:
@@ -423,11 +447,20 @@ def cup_pull(spec: CupPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
 def recess_cutout(geometry: HandleGeometry) -> tuple[Polygon, float]:
     """The routed recess a ``recess_lip`` grip needs in the front: its footprint in the (x, y) plane of the mount
     frame (a ``length`` x ``width`` rectangle with rounded corners, m) and its depth below the face (m)."""
-    depth, cw = _clearance(geometry)
-    t = geometry.grip_diameter
-    r_c = min(ROUTER_RADIUS, 0.5 * (geometry.length - cw) + t, 0.5 * geometry.width)
+    lay = _recess_layout(geometry)
     half_l, half_w = 0.5 * geometry.length, 0.5 * geometry.width
-    return _rounded_rect(-half_l, -half_w, half_l, half_w, max(r_c, 0.0)), depth + t
+    return _rounded_rect(-half_l, -half_w, half_l, half_w, lay["r_c"]), lay["depth"] + lay["t"]
+
+
+def _recess_layout(geometry: HandleGeometry) -> dict[str, float]:
+    """Key sizes of a recess grip (m): wall ``t``, cavity ``depth``, footprint corner radius ``r_c`` (small enough
+    that the pocket box fits the cavity's straight part) and the free pocket's half length ``half_w``."""
+    depth, cw = _clearance(geometry)
+    t = min(geometry.grip_diameter, 0.25 * geometry.width)
+    half_l = 0.5 * geometry.length
+    r_c = max(min(ROUTER_RADIUS, 0.5 * (geometry.length - cw), 0.5 * geometry.width), 0.0)
+    half_w = min(0.5 * cw, half_l - max(r_c, t))
+    return {"t": t, "depth": depth, "r_c": r_c, "half_w": half_w}
 
 
 def recess_lip(spec: RecessLip, geometry: HandleGeometry, mount: Mount) -> trimesh.Trimesh:
@@ -438,23 +471,24 @@ def recess_lip(spec: RecessLip, geometry: HandleGeometry, mount: Mount) -> trime
     cavity (open toward +z, ``clearance.depth`` deep) is free. Along the long edge at ``y = -width/2`` (the top
     on a drawer) a lip of thickness t stands on the tray's wall to ``z = projection``, with a hook nose
     overhanging the cavity by t whose underside is at ``lip_ratio * projection`` above the face: that is the lip
-    height fingertips hook (clamped so the nose keeps at least :data:`MIN_NOSE`). The lip runs along the straight
+    height fingertips hook (clamped to at least a quarter of the projection, and so that the nose keeps at least
+    :data:`MIN_NOSE`; the nose's top is the projection). The lip runs along the straight
     part of the edge, its ends rounded down to the face. Only this family has material at z < 0, all inside the
     footprint: the front must be cut with :func:`recess_cutout` (the combinator does it).
     """
-    t = geometry.grip_diameter
+    lay = _recess_layout(geometry)
+    t, depth, r_c = lay["t"], lay["depth"], lay["r_c"]
     p = geometry.projection
     half_l, half_w = 0.5 * geometry.length, 0.5 * geometry.width
     footprint, total_depth = recess_cutout(geometry)
-    depth = total_depth - t
-    r_c = min(ROUTER_RADIUS, 0.5 * (geometry.length - _clearance(geometry)[1]) + t, half_w)
     inner = _rounded_rect(-half_l + t, -half_w + t, half_l - t, half_w - t, max(r_c - t, 0.0))
     tray = difference(_prism(footprint, "z", -total_depth, 0.0), [_prism(inner, "z", -depth, _OVER)])
     # lip cross-section (y, z): post on the wall, nose toward the cavity; buried t/2 into the wall
     h = min(max(spec.lip_ratio * p, 0.25 * p), p - MIN_NOSE)
     y0 = -half_w
     nose = min(t, 0.5 * (geometry.width - 2 * t))
-    section = Polygon([(y0, -0.5 * t), (y0 + t, -0.5 * t), (y0 + t, h), (y0 + t + nose, h), (y0 + t + nose, p), (y0, p)])
+    y1, y2 = y0 + t, y0 + t + nose
+    section = Polygon([(y0, -0.5 * t), (y1, -0.5 * t), (y1, h), (y2, h), (y2, p), (y0, p)])
     section = _opened(section, 0.4 * min(t, p - h))
     lip_half = max(half_l - r_c, 0.5 * half_l)
     lip = _intersection([
@@ -489,9 +523,9 @@ def clearance_box(spec: EdgeProfile | TabPull | CupPull | RecessLip, geometry: H
         hw = lay["half_w"]
         return (-hw, lay["y_rim"] - lay["depth"], 0.0), (hw, lay["y_rim"], lay["z_b"])
     if isinstance(spec, RecessLip):
-        t = geometry.grip_diameter
-        hwy = 0.5 * geometry.width - t
-        return (-hw, -hwy, -depth), (hw, hwy, 0.0)
+        lay = _recess_layout(geometry)
+        hwy = 0.5 * geometry.width - lay["t"]
+        return (-lay["half_w"], -hwy, -lay["depth"]), (lay["half_w"], hwy, 0.0)
     raise ValueError(f"not a finger-pull generator: {spec!r}")
 
 
