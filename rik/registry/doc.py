@@ -1,11 +1,14 @@
 """CATALOG.md: a browsable page of the built-in catalog, generated from the registry (``rik catalog doc``).
 
 Pictures are linked when present: ``docs/catalog/<handle id with / as __>/thumbnail.png`` and
-``fidelity.png`` (written by the assets stage); absent ones show as a dash.
+``fidelity.png``, with the numbers of ``docs/catalog/fidelity.csv`` and ``docs/catalog/mesh_stats.csv``; all are
+written by the assets stage (``rik assets fidelity --all --out docs/catalog`` and
+``rik assets stats --all --out docs/catalog/mesh_stats.csv``). Absent ones show as a dash.
 """
 
 from __future__ import annotations
 
+import csv
 import math
 import os
 from pathlib import Path
@@ -18,6 +21,50 @@ from rik.registry.views import COLUMNS, Row, mm
 TYPE_TITLES = {"knob": "Knobs", "two_point": "Two-point handles", "finger_pull": "Finger-pull handles"}
 #: Where per-handle pictures live, relative to the repository root (CATALOG.md's directory).
 PICTURES_DIR = Path("docs/catalog")
+
+
+def _csv_rows(path: Path) -> dict[str, dict[str, str]]:
+    if not path.is_file():
+        return {}
+    with path.open(newline="") as fh:
+        return {row["id"]: row for row in csv.DictReader(fh)}
+
+
+def _fidelity_cell(row: dict[str, str] | None) -> str:
+    if row is None:
+        return "–"
+    return (f"CoACD {float(row['eqp_mean_mm']):.2f} ({row['hulls']} hulls), hull "
+            f"{float(row['hull_eqp_mean_mm']):.2f} ({float(row['hull_over_coacd']):.1f}x)")
+
+
+def _stats_cell(row: dict[str, str] | None) -> str:
+    if row is None:
+        return "–"
+    return (f"{row['vertices']} / {row['faces']} / {float(row['mean_edge_mm']):.2f} / "
+            f"{float(row['mean_face_area_mm2']):.3f}")
+
+
+def _fidelity_summary(rows: dict[str, dict[str, str]]) -> list[str]:
+    if not rows:
+        return []
+    out = ["## Collision fidelity", "",
+           "Paper section 3.2, measured by `rik assets fidelity`: E_Q->P is the mean distance from the collision "
+           "shell Q (the boundary of the union of the convex parts) to the visual surface P, and E_P->Q the reverse, "
+           "in mm. Q is rik's CoACD decomposition; Q' is the single convex hull that prior data sets use.", "",
+           "| handles | count | E_Q->P CoACD | E_P->Q CoACD | E_Q'->P hull | E_P->Q' hull | hull / CoACD |",
+           "|---|---:|---:|---:|---:|---:|---:|"]
+    groups: dict[str, list[dict[str, str]]] = {}
+    for row in rows.values():
+        groups.setdefault(TYPE_TITLES.get(row["type"], row["type"]), []).append(row)
+    groups["all"] = list(rows.values())
+    for name, group in groups.items():
+        def mean(col: str, g: list[dict[str, str]] = group) -> float:
+            return sum(float(r[col]) for r in g) / len(g)
+
+        out.append(f"| {name} | {len(group)} | {mean('eqp_mean_mm'):.2f} | {mean('epq_mean_mm'):.2f} | "
+                   f"{mean('hull_eqp_mean_mm'):.2f} | {mean('hull_epq_mean_mm'):.2f} | "
+                   f"{mean('hull_eqp_mean_mm') / mean('eqp_mean_mm'):.1f}x |")
+    return [*out, ""]
 
 
 def picture_dir(handle_id: str) -> Path:
@@ -55,14 +102,19 @@ def render_catalog_md(index: CatalogIndex, root: Path) -> str:
         "",
     ]
     handle_cols = [c for c in COLUMNS["handles"] if c[0] not in ("type",)]
+    fidelity = _csv_rows(root / PICTURES_DIR / "fidelity.csv")
+    mesh_stats = _csv_rows(root / PICTURES_DIR / "mesh_stats.csv")
+    out += _fidelity_summary(fidelity)
     for handle_type in HANDLE_TYPES:
         rows = [h for h in index.entries("handles") if h["type"] == handle_type]
         out += [f"## {TYPE_TITLES[handle_type]}", "",
                 f"{stats['by_type'][handle_type]['designs']} designs, {len(rows)} handles. Clearance is the "
                 "space a finger can enter (depth x width).", ""]
-        out += _md_table(["picture", "design", *[h for h, _ in handle_cols], "fidelity"],
-                         [[_picture(root, h["id"], "thumbnail"), designs[h["design"]]["name"],
-                           *[cell(h) for _, cell in handle_cols], _picture(root, h["id"], "fidelity")]
+        out += _md_table(["picture", "design", *[h for h, _ in handle_cols],
+                          "E_Q->P mean mm", "vertices / faces / edge mm / face mm²", "collision heatmaps"],
+                         [[_picture(root, h["id"], "thumbnail", 96), designs[h["design"]]["name"],
+                           *[cell(h) for _, cell in handle_cols], _fidelity_cell(fidelity.get(h["id"])),
+                           _stats_cell(mesh_stats.get(h["id"])), _picture(root, h["id"], "fidelity", 300)]
                           for h in rows])
         out.append("")
     out += ["## Base units", "",
@@ -96,9 +148,11 @@ def _md_table(headers: list[str], rows: list[list[str]]) -> list[str]:
             *["| " + " | ".join(esc(c) for c in row) + " |" for row in rows]]
 
 
-def _picture(root: Path, handle_id: str, name: str) -> str:
+def _picture(root: Path, handle_id: str, name: str, width: int) -> str:
     rel = picture_dir(handle_id) / f"{name}.png"
-    return f"![{name} of {handle_id}]({rel.as_posix()})" if (root / rel).is_file() else "–"
+    if not (root / rel).is_file():
+        return "–"
+    return f'<img src="{rel.as_posix()}" width="{width}" alt="{name} of {handle_id}">'
 
 
 def _anchor(title: str) -> str:

@@ -10,9 +10,10 @@ What every handle honours (each to well under 0.5 mm):
 * the loop ``|x| < clearance.width/2, 0 <= z <= clearance.depth`` (all y) is empty: a gripper finger goes
   through it. The section's thickness normal to the centre line is ``projection - clearance.depth`` (capped at
   ``grip_diameter`` for round and square sections), so the grip's underside lies exactly on the clearance;
-* legs and feet stand at the screws and are clamped so they never reach into the loop: a leg's or foot's size
-  along x is at most ``hole_spacing - clearance.width`` (and at most ``length - hole_spacing``, so it stays
-  inside the overall length).
+* a bar's legs and a bow's feet stand at the screws and are clamped so they never reach into the loop: a leg's
+  or foot's size along x is at most ``hole_spacing - clearance.width`` (and at most ``length - hole_spacing``,
+  so it stays inside the overall length). Where a bow's inner corner can only be rounded by reaching into the
+  loop, the loop is cut out of it (the corner is squared off along the clearance box).
 
 Where the ratios leave the catalogued width unreached (the section and the legs or feet are all narrower than
 ``geometry.width``), the legs or feet grow to the width, within the same clamps: the legs and feet are what
@@ -26,6 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import trimesh
+from manifold3d import Manifold, Mesh
 from shapely.geometry import LineString
 from shapely.geometry import box as shapely_box
 
@@ -39,6 +41,12 @@ if TYPE_CHECKING:
 _EMBED = 0.5e-3
 """How far below the front's surface (m) legs, feet and sweeps start before the final cut at z = 0, so the
 cut alone makes the flat base (no coplanar faces in the booleans)."""
+
+_SLIVER = 1e-6
+"""Largest surface movement (m) allowed when collapsing boolean slivers."""
+
+_CARVE = 2e-6
+"""How much larger (m) than the clearance box the cutter is that squares off inner corners reaching into it."""
 
 _TOL = 0.25e-3
 """Slack (m) under which a size counts as reaching its catalogued value."""
@@ -57,7 +65,9 @@ class _Section:
     Two kinds: a rounded polygon (a convex core polygon grown by a corner radius) and an ellipse.
     """
 
-    def __init__(self, core: np.ndarray | None, radius: float, ellipse: tuple[float, float] | None = None):
+    def __init__(
+        self, core: np.ndarray | None, radius: float, ellipse: tuple[float, float] | None = None, phase: float = 0.0
+    ):
         self.core = core
         self.radius = radius
         self.ellipse = ellipse
@@ -65,13 +75,19 @@ class _Section:
             a, b = ellipse
             # uniform parameter steps: the chord error is at most that of a circle of radius max(a, b)
             n = segments(max(a, b))
+            n += -n % 4  # a count divisible by 4 puts points on both axes: symmetric, exact extents
             self._phi = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
             return
         assert core is not None
         k = len(core)
         self._arcs: list[tuple[np.ndarray, np.ndarray]] = []
-        if k == 1:  # a circle
-            phi = np.linspace(0.0, 2.0 * math.pi, segments(radius), endpoint=False)
+        self._grow = 1.0
+        if k == 1:  # a circle; ``phase`` turns its points by that share of a step
+            n = segments(radius)
+            n += -n % 4  # a count divisible by 4 keeps the outline symmetric about both axes
+            phi = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False) + phase * 2.0 * math.pi / n
+            if phase == 0.5:  # edges, not points, on the axes: push them out to the radius (exact extents)
+                self._grow = 1.0 / math.cos(math.pi / n)
             self._arcs.append((core[0], phi))
             return
         for j in range(k):
@@ -100,7 +116,7 @@ class _Section:
             normal = np.column_stack([b * c, a * sn])
             normal /= np.linalg.norm(normal, axis=1, keepdims=True)
             return (np.column_stack([a * c, b * sn]) - d * normal) * s
-        r = self.radius - d
+        r = (self.radius - d) * self._grow
         parts = [centre + r * np.column_stack([np.cos(phi), np.sin(phi)]) for centre, phi in self._arcs]
         return np.vstack(parts) * s
 
@@ -111,7 +127,9 @@ class _Section:
 
 
 def _circle(radius: float) -> _Section:
-    return _Section(np.zeros((1, 2)), radius)
+    """Circle of ``radius`` (m), its points half a step off the axes (so they never line up with the points of
+    the bar or bow it is joined to, which would leave coincident vertices after the booleans)."""
+    return _Section(np.zeros((1, 2)), radius, phase=0.5)
 
 
 def _ellipse(a: float, b: float) -> _Section:
@@ -193,9 +211,11 @@ def _post(section: _Section, x: float, top: float, ease: float, scale_top: float
     """
 
     def scale(z: float) -> float:
+        """Size of the section at height ``z`` (m) relative to z = 0."""
         return 1.0 + (scale_top - 1.0) * z / top
 
     def place(pts: np.ndarray, z: float) -> np.ndarray:
+        """Section points (u, v) as 3D points of the ring at height ``z`` (m)."""
         return np.column_stack([x + pts[:, 0], pts[:, 1], np.full(len(pts), z)])
 
     rings = [place(section.ring(0.0, scale(-_EMBED)), -_EMBED)]
@@ -272,9 +292,9 @@ def _sweep_xz(path: np.ndarray, section: _Section) -> trimesh.Trimesh:
 
 def _thickness(geometry: HandleGeometry, cap: float) -> float:
     """Section thickness normal to the centre line, m: ``projection - clearance.depth`` (the grip's underside
-    on the clearance), at most ``cap``; ``cap`` alone when the handle has no clearance."""
+    on the clearance), at most ``cap``; without a clearance, ``cap`` but at most 40 % of the projection."""
     if geometry.clearance is None:
-        return cap
+        return min(cap, 0.4 * geometry.projection)
     room = geometry.projection - geometry.clearance.depth
     if room <= 0:
         raise RikError(
@@ -290,11 +310,24 @@ def _hole_spacing(geometry: HandleGeometry) -> float:
 
 
 def _cut_below(mesh: trimesh.Trimesh, geometry: HandleGeometry, extra: list[trimesh.Trimesh]) -> trimesh.Trimesh:
-    """``mesh`` with everything in z < 0 removed, and the ``extra`` cutters."""
+    """``mesh`` with everything in z < 0 removed, and the ``extra`` cutters, cleaned of boolean slivers.
+
+    The booleans can leave sliver triangles thinner than trimesh's merge tolerance, which a later clean-up
+    would drop (opening the mesh); manifold3d's own simplification collapses them first, moving no surface
+    by more than :data:`_SLIVER` and keeping the mesh closed.
+    """
     size = 4 * max(geometry.length, geometry.width, geometry.projection)
     below = trimesh.creation.box(extents=[size, size, size])
     below.apply_translation([0.0, 0.0, -size / 2])
-    return difference(mesh, [below, *extra])
+    cut = difference(mesh, [below, *extra])
+    solid = Manifold(
+        mesh=Mesh(
+            vert_properties=np.asarray(cut.vertices, dtype=np.float32),
+            tri_verts=np.asarray(cut.faces, dtype=np.uint32),
+        )
+    ).simplify(_SLIVER)
+    out = solid.to_mesh()
+    return trimesh.Trimesh(vertices=np.asarray(out.vert_properties[:, :3], dtype=np.float64), faces=out.tri_verts)
 
 
 # ---- bar pulls ------------------------------------------------------------------------------------------------------
@@ -309,8 +342,8 @@ def bar_pull(spec: BarPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
 
     * ``round`` (an ellipse if the thickness differs from the diameter), ``oval`` (an ellipse), ``square``
       (lightly rounded corners), ``flat`` (a strip with well-rounded edges), ``hexagon`` (a regular hexagon,
-      flats facing the user, corners on the sides: its across-corners size is the width, so it is
-      0.866 x width thick).
+      flats facing the user, corners on the sides: its across-corners size is the width, shrunk if need be so
+      that its across-flats size, about 0.88 of that with the rounded corners, fits the thickness).
 
     The legs (``spec.leg``: ``round`` cylinders, ``square`` posts, ``tapered`` cones narrowing to 60 % at the bar,
     ``flat`` plates as wide as the handle) stand on the screws from z = 0 into the bar's middle. Their size along
@@ -335,14 +368,16 @@ def bar_pull(spec: BarPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
     elif spec.section == "flat":
         section = _rounded_rect(w_s, t, 0.4 * t)
     else:
-        across = min(w_s, t / _SIN60)
-        section = _rounded_hexagon(across, 0.06 * across)
+        f = 0.06  # corner radius / across-corners size; across flats is then (1 - 2f) sin60 + 2f of it
+        across = min(w_s, t / ((1 - 2 * f) * _SIN60 + 2 * f))
+        section = _rounded_hexagon(across, f * across)
     sec_w, sec_t = section.extent()
     z_mid = proj - sec_t / 2
     x_end = length / 2
 
     # The bar: one loft along x, its two ends shaped by end_style.
     def place(pts: np.ndarray, x: float) -> np.ndarray:
+        """Section points (u, v) = (y, z - z_mid) as 3D points of the ring at ``x`` (m)."""
         return np.column_stack([np.full(len(pts), x), pts[:, 0], z_mid + pts[:, 1]])
 
     end: list[tuple[float, float, float]] = []  # (distance in from the end, inward offset, scale), inner first
@@ -360,6 +395,7 @@ def bar_pull(spec: BarPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
             end.append((r_e * (1 - math.sin(th)), r_e * (1 - math.cos(th)), 1.0))
 
     def ring_at(inset: float, d: float, s: float, sign: float) -> np.ndarray:
+        """The ring ``inset`` (m) in from the end on side ``sign``, shrunk by ``d`` (m), scaled by ``s`` (0: apex)."""
         x = sign * (x_end - inset)
         if s == 0.0:
             return np.array([[x, 0.0, z_mid]])
@@ -378,7 +414,9 @@ def bar_pull(spec: BarPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
         limit = min(limit, width)
         if max(sec_w, leg_d) < width - _TOL:
             leg_d = width
-    leg_d = max(min(leg_d, limit), 0.2 * grip)
+    if limit <= 0:
+        raise RikError(f"bar pull: no room for the legs (hole spacing {hs} m, clearance width, length {length} m)")
+    leg_d = min(leg_d, limit)
     if spec.leg == "round":
         leg_sec, taper = _circle(leg_d / 2), 1.0
     elif spec.leg == "tapered":
@@ -462,13 +500,15 @@ def bow_pull(spec: BowPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
     limit = min(length - hs, width)
     if geometry.clearance is not None:
         limit = min(limit, hs - geometry.clearance.width)
-    foot_d = max(min(foot_d, limit), 0.2 * grip)
+    if limit <= 0:
+        raise RikError(f"bow pull: no room for the feet (hole spacing {hs} m, clearance width, length {length} m)")
+    foot_d = min(foot_d, limit)
     if geometry.clearance is not None:
         xi, zi = geometry.clearance.width / 2, geometry.clearance.depth
     else:
-        xi, zi = xs - max(t, foot_d) / 2, proj - t
+        xi, zi = max(xs - max(t, foot_d) / 2, 0.2 * xs), proj - t  # a loop to shape the bow around
     if spec.foot == "plain":
-        has_foot = foot_d > max(t, w_s) + 0.2e-3 or (foot_d > t + 0.2e-3 and w_s > t)
+        has_foot = foot_d > min(t, w_s) + 0.2e-3  # else the bow's own end covers the pad's footprint
         foot_h = min(max(0.08 * zi, 0.8e-3), 2e-3) if has_foot else 0.0
     else:
         has_foot = True
@@ -484,6 +524,7 @@ def bow_pull(spec: BowPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
     rho_max = max(min(xl * 0.999, room_z), half_t + r_min)
 
     def corner(inner: float) -> np.ndarray:
+        """Path with circular shoulders of inner bend radius ``inner`` (m), kept within the room there is."""
         rho = min(half_t + max(inner, r_min), rho_max)
         return _mirror(_filleted([(0.0, zc), (xl, zc), (xl, -_EMBED)], [rho], half_t))
 
@@ -499,6 +540,7 @@ def bow_pull(spec: BowPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
         a = min(half_t + max(slack, r_min), rho_max)
 
         def ellipse_path(b: float) -> np.ndarray:
+            """Path with quarter-ellipse shoulders, ``a`` wide and ``b`` (m) tall."""
             n = min(segments(b * b / a + half_t, math.pi / 2), 64)
             tau = np.linspace(0.0, math.pi / 2, n + 1)
             arc = np.column_stack([xl - a + a * np.sin(tau), zc - b + b * np.cos(tau)])
@@ -527,7 +569,7 @@ def bow_pull(spec: BowPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
         z1 = (c - nx * xl) / nz
         x1 = (c - nz * zc) / nx
         rho = half_t + max(min(slack, 0.3 * t), r_min)
-        if z1 >= zc - 1e-6 or x1 >= xl - 1e-6:
+        if z1 >= zc - 1e-6 or x1 >= xl - 1e-6 or x1 < rho or z1 < rho:  # no room to lean: a plain bend
             path = corner(min(slack, 0.5 * t))
         else:
             path = _mirror(_filleted([(0.0, zc), (x1, zc), (xl, z1), (xl, -_EMBED)], [rho, rho], half_t))
@@ -543,9 +585,11 @@ def bow_pull(spec: BowPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
             ease = min(share * foot_h, 0.4 * foot_d / 2)
         parts += [_post(foot_sec, sx * xs, foot_h, ease) for sx in (-1.0, 1.0)]
     cutters = []
-    if _intrudes(path, half_t, xi, zi):
-        loop = trimesh.creation.box(extents=[2 * xi, 4 * width, zi + 0.01])
-        loop.apply_translation([0.0, 0.0, (zi - 0.01) / 2])
+    if geometry.clearance is not None and _intrudes(path, half_t, xi, zi):
+        # cut the clearance out, a hair (_CARVE) larger so its faces never coincide with the bow's inner faces
+        top = zi + _CARVE
+        loop = trimesh.creation.box(extents=[2 * (xi + _CARVE), 4 * width, top + 0.01])
+        loop.apply_translation([0.0, 0.0, (top - 0.01) / 2])
         cutters.append(loop)
     return _cut_below(union(parts), geometry, cutters)
 
