@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-
 from test_assets_core import _bar_pull
 
 

@@ -23,12 +23,16 @@ app.add_typer(assets.app, name="assets")
 
 @app.command()
 def demo(catalog_paths: CatalogOption = None) -> None:
-    """The main job on built-in defaults. For now: validate the catalog and print its summary."""
+    """The main job on built-in defaults: validate the catalog and print its summary, then build a sample of
+    assets (one handle of each type and a chest of drawers), measure their collision fidelity and run the finger
+    test on the two-point handle."""
+    from rik.cli.assets import print_demo_assets
     from rik.cli.catalog import print_summary
     from rik.registry.index import catalog_index
     from rik.registry.stats import catalog_stats
 
     print_summary(catalog_stats(catalog_index(overlays(catalog_paths))))
+    print_demo_assets(overlays(catalog_paths))
 
 
 @app.callback()
