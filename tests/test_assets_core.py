@@ -32,7 +32,7 @@ def _box(lo, hi) -> tuple[np.ndarray, np.ndarray]:
 # ---- base units ------------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("base_id", [
     "drawer/bedside-45", "drawer/chest-80", "drawer/kitchen-60", "drawer/kitchen-80", "drawer/bench-120",
-    "door/base-40-left", "door/base-60-right", "door/wall-40-left", "door/wall-60-right", "door/tall-60-left",
+    "door/base-40-right", "door/base-60-left", "door/wall-40-right", "door/wall-60-left", "door/tall-60-right",
     "door/double-80", "flap/lift-up-60", "flap/drop-down-60"])
 def test_base_unit_parts_are_solid_and_do_not_interpenetrate(catalog, base_id):
     unit = catalog.base_units[base_id]
@@ -65,17 +65,17 @@ def test_base_unit_asset_has_exact_collision(catalog):
 # ---- cache -----------------------------------------------------------------------------------------------------
 def test_second_build_is_a_cache_hit_and_a_corrupt_entry_is_rebuilt(catalog, tmp_path):
     cache = AssetCache(tmp_path / "assets")
-    first = build_assets(catalog, ["door/base-40-left", "flap/lift-up-60"], cache=cache)
+    first = build_assets(catalog, ["door/base-40-right", "flap/lift-up-60"], cache=cache)
     assert [r.status for r in first] == ["built", "built"]
-    second = build_assets(catalog, ["door/base-40-left", "flap/lift-up-60"], cache=cache)
+    second = build_assets(catalog, ["door/base-40-right", "flap/lift-up-60"], cache=cache)
     assert [r.status for r in second] == ["cached", "cached"]
     assert [r.key for r in first] == [r.key for r in second]
     payload = cache.path(first[0].key) / "asset.npz"
     payload.write_bytes(payload.read_bytes()[:-20] + b"\0" * 20)
-    third = build_assets(catalog, ["door/base-40-left"], cache=cache)
+    third = build_assets(catalog, ["door/base-40-right"], cache=cache)
     assert third[0].status == "rebuilt"
     assert "failed its sha256 check" in third[0].note and str(cache.path(first[0].key)) in third[0].note
-    assert build_assets(catalog, ["door/base-40-left"], cache=cache)[0].status == "cached"
+    assert build_assets(catalog, ["door/base-40-right"], cache=cache)[0].status == "cached"
 
 
 def test_keys_change_with_the_seed_and_are_stable(catalog):

@@ -61,8 +61,8 @@ def test_dimensions_are_those_of_real_hardware(catalog) -> None:
 def test_base_units_cover_the_joint_mechanisms(catalog) -> None:
     kinds = [(f.kind, f.joint.type, tuple(round(a) for a in f.joint.axis))
              for b in catalog.base_units.values() for f in b.fronts]
-    assert ("door", JointType.hinge, (0, 0, 1)) in kinds  # hinged left
-    assert ("door", JointType.hinge, (0, 0, -1)) in kinds  # hinged right
+    assert ("door", JointType.hinge, (0, 0, 1)) in kinds  # hinged right (axis at -x)
+    assert ("door", JointType.hinge, (0, 0, -1)) in kinds  # hinged left (axis at +x)
     assert ("flap", JointType.hinge, (1, 0, 0)) in kinds  # lift-up: axis at the top
     assert ("flap", JointType.hinge, (-1, 0, 0)) in kinds  # drop-down: axis at the bottom
     drawer_heights = {f.size[1] for b in catalog.base_units.values() for f in b.fronts if f.kind == "drawer"}
@@ -87,3 +87,15 @@ def test_hinge_presets_follow_their_written_derivation(catalog) -> None:
 def test_every_entry_has_a_licence_and_provenance(catalog) -> None:
     assert all(h.licence not in ("", "Unknown") for h in catalog.handles.values())
     assert all(d.provenance.reference for d in catalog.designs.values())
+
+
+def test_left_and_right_in_names_are_as_a_person_facing_the_front_sees_them(catalog):
+    """+x is on the left of a person facing the front (x = y cross z with y towards them): a door 'hinged left'
+    turns about an axis at +x, and of two fronts side by side the one named left is at +x."""
+    for base in catalog.base_units.values():
+        for front in base.fronts:
+            sides = [s for s in ("left", "right") if base.id.endswith(f"-{s}") or front.id.endswith(f"-{s}")]
+            for side in sides:
+                x = front.joint.anchor[0] if front.joint.type.value == "hinge" and base.id.endswith(side) \
+                    else front.center[0]
+                assert (x > 0) == (side == "left"), (base.id, front.id, x)

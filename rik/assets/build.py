@@ -101,7 +101,9 @@ def asset_identity(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
                   "coacd": coacd_params(design.type.value, seed).__dict__}
     else:
         unit = catalog.base_units[asset_id]
-        ident |= {"entry": unit.model_dump(mode="json", include={"carcass", "fronts"})}
+        ident |= {"entry": unit.model_dump(mode="json", include={"carcass", "fronts", "meshes"})}
+        if unit.meshes is not None:
+            ident["coacd"] = coacd_params("base_part", seed).__dict__
     return ident
 
 
@@ -133,12 +135,33 @@ def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
     from rik.assets.base_units import base_unit_plan, part_mesh
     from rik.assets.decompose import convex_hull_baseline as baseline
 
+    unit = catalog.base_units[asset_id]
+    if unit.meshes is not None:
+        return "base_unit", _imported_base_parts(catalog, asset_id, seed)
     parts = []
-    for plan in base_unit_plan(catalog.base_units[asset_id]):
+    for plan in base_unit_plan(unit):
         mesh = part_mesh(plan)
         hulls = [_box_hull(p.mesh()) for p in plan.panels]
         parts.append(RigidPart(plan.name, plan.role, plan.finish, "exact", mesh, hulls, baseline(mesh)))
     return "base_unit", parts
+
+
+def _imported_base_parts(catalog: Catalog, asset_id: str, seed: int) -> list[RigidPart]:
+    """The parts of an imported base unit: its mesh files, each decomposed with CoACD on its own."""
+    from rik.assets.decompose import convex_hull_baseline, decompose
+    from rik.assets.importer import read_user_mesh
+
+    unit = catalog.base_units[asset_id]
+    assert unit.meshes is not None
+    defined_in = Path(catalog.origins[("base_units", asset_id)].file).parent
+    roles = [("carcass", "carcass", unit.carcass.finish), *((f.id, f.kind, f.finish) for f in unit.fronts)]
+    parts = []
+    for name, role, finish in roles:
+        ref = unit.meshes[name]
+        mesh = read_user_mesh(defined_in / ref.file, ref.sha256)
+        parts.append(RigidPart(name, role, finish, "coacd", mesh, decompose(mesh, coacd_params("base_part", seed)),
+                               convex_hull_baseline(mesh)))
+    return parts
 
 
 def _box_hull(mesh: trimesh.Trimesh) -> tuple[Any, Any]:

@@ -84,7 +84,8 @@ def thumbnail(mesh: trimesh.Trimesh, base_color: tuple[float, float, float], met
     sheen = metallic * np.clip(normals @ np.array([0.0, -0.3, 0.95]), 0, None) ** 12
     base = _srgb_to_linear(np.asarray(base_color, dtype=float))
     colour = _linear_to_srgb(base[None, :] * (0.18 + lambert[:, None]) + 0.5 * sheen[:, None])
-    ax.add_collection3d(Poly3DCollection(mesh.triangles, facecolors=colour, edgecolors="none", linewidths=0))
+    ax.add_collection3d(Poly3DCollection(mesh.triangles, facecolors=colour, edgecolors="none", linewidths=0,
+                                        antialiased=False))
     _frame(ax, mesh.vertices, zoom=1.05)
     _save(fig, path, dpi=80)
 

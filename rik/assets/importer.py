@@ -235,3 +235,178 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return ImportedHandle(handle["id"], catalog_dir / f"{stem}.yaml", catalog_dir / mesh_rel, geometry)
+
+
+# ---- base units from a GLB with named nodes ---------------------------------------------------------------------
+def read_mapping(path: Path) -> Any:
+    """The mapping file of a base-unit import, validated; errors name the file, line and field."""
+    from pydantic import ValidationError
+
+    from rik.errors import CatalogError
+    from rik.registry.entries import describe_error
+    from rik.registry.sources import line_of
+    from rik.schemas.imports import BaseUnitMapping
+
+    shown = display_path(path)
+    try:
+        import yaml
+
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise RikError(f"{shown}: cannot read the mapping file ({exc.strerror})") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        raise CatalogError(shown, None, None, f"malformed YAML: {getattr(exc, 'problem', exc)}",
+                           mark.line + 1 if mark else None) from None
+    try:
+        return BaseUnitMapping.model_validate(data if data is not None else {})
+    except ValidationError as exc:
+        first = exc.errors(include_url=False)[0]
+        field = ".".join(str(p) for p in first["loc"])
+        raise CatalogError(shown, None, field or None, describe_error(BaseUnitMapping, first),
+                           line_of(path, tuple(first["loc"]))) from None
+
+
+def node_meshes(path: Path, nodes: dict[str, str], mapping_file: Path) -> dict[str, trimesh.Trimesh]:
+    """For each ``field -> node name``, the node's geometry and its descendants', in the file's world frame."""
+    import trimesh
+
+    shown = display_path(path)
+    if path.suffix.lower() not in (".glb", ".gltf"):
+        raise RikError(f"{shown}: a base unit is imported from a .glb or .gltf file with named nodes")
+    if not path.is_file():
+        raise RikError(f"{shown}: no such file")
+    try:
+        scene = trimesh.load(path, force="scene", process=False)
+    except Exception as exc:  # trimesh raises many types for a damaged file
+        raise RikError(f"{shown}: cannot read the file ({exc.__class__.__name__}: {exc})") from None
+    graph = scene.graph
+    parents = graph.transforms.parents
+    names = sorted(n for n in graph.nodes if n != graph.base_frame)
+    out = {}
+    for field, node in nodes.items():
+        if node not in graph.nodes:
+            raise RikError(f"{display_path(mapping_file)}, field '{field}': no node '{node}' in {shown}; its nodes "
+                           f"are: {', '.join(names)}")
+        pieces = []
+        for geom_node in graph.nodes_geometry:
+            walk = geom_node
+            while walk != node and walk in parents:
+                walk = parents[walk]
+            if walk != node:
+                continue
+            transform, geom_name = graph[geom_node]
+            mesh = scene.geometry[geom_name].copy()
+            mesh.apply_transform(transform)
+            pieces.append(mesh)
+        if not pieces:
+            raise RikError(f"{display_path(mapping_file)}, field '{field}': node '{node}' of {shown} has no mesh")
+        out[field] = trimesh.util.concatenate(pieces)
+    return out
+
+
+def _frame_rotation(up: str, front: str, shown: str) -> Any:
+    import numpy as np
+
+    u, f = np.array(AXES[up], float), np.array(AXES[front], float)
+    if abs(u @ f) > 0.5:
+        raise RikError(f"{shown}: 'up' ({up}) and 'front' ({front}) must be different axes")
+    rotation = np.eye(4)
+    rotation[:3, :3] = np.vstack([np.cross(f, u), f, u])  # rows: rik's x, y (out of the front), z (up)
+    return rotation
+
+
+def _hinge(side: str, lo: Any, hi: Any, back: float) -> tuple[list[float], list[float]]:
+    """Axis and anchor of a hinge on ``side`` of a front spanning ``lo``..``hi`` whose back face is at ``back``;
+    the axis is signed so that positive angles swing the front outward (+y)."""
+    cx, cz = float(lo[0] + hi[0]) / 2, float(lo[2] + hi[2]) / 2
+    # +x is on the left of a person facing the front (rik.schemas.base_units)
+    return {"left": ([0.0, 0.0, -1.0], [float(hi[0]), back, cz]), "right": ([0.0, 0.0, 1.0], [float(lo[0]), back, cz]),
+            "top": ([1.0, 0.0, 0.0], [cx, back, float(hi[2])]),
+            "bottom": ([-1.0, 0.0, 0.0], [cx, back, float(lo[2])])}[side]
+
+
+def import_base_unit(path: Path, mapping_path: Path, *, unit_id: str, catalog_dir: Path,
+                     licence: str = "LicenseRef-user") -> tuple[str, Path]:
+    """Read a GLB's named nodes as the rigid parts of a base unit (mapping in ``mapping_path``), normalise units
+    and frame (origin at the bottom of the carcass's front plane, centred, +y out of the front, +z up), measure the
+    carcass and fronts, and register the unit with its part meshes in ``catalog_dir``. Validated as a whole before
+    anything is moved into place."""
+    import numpy as np
+
+    from rik.registry.load import load_catalog
+
+    mapping = read_mapping(mapping_path)
+    fields = {"carcass.node": mapping.carcass.node,
+              **{f"fronts.{i}.node": f.node for i, f in enumerate(mapping.fronts)}}
+    raw = node_meshes(path, fields, mapping_path)
+    rotation = _frame_rotation(mapping.up, mapping.front, display_path(mapping_path))
+    parts: dict[str, Any] = {}
+    for field, mesh in raw.items():
+        name = "carcass" if field == "carcass.node" else mapping.fronts[int(field.split(".")[1])].id
+        mesh = clean(mesh, f"{display_path(path)} node '{fields[field]}'")
+        mesh.apply_scale(UNIT_SCALES[mapping.units])
+        mesh.apply_transform(rotation)
+        parts[name] = mesh
+    lo, hi = parts["carcass"].bounds
+    shift = np.array([-(lo[0] + hi[0]) / 2, -hi[1], -lo[2]])
+    for mesh in parts.values():
+        mesh.apply_translation(shift)
+    lo, hi = parts["carcass"].bounds
+    width, depth, height = (float(v) for v in hi - lo)
+    if not 0.1 <= max(width, depth, height) <= 4.0:
+        raise RikError(f"{display_path(path)}: the carcass is {max(width, depth, height):g} m in size after "
+                       f"'units: {mapping.units}' ({display_path(mapping_path)}); furniture is 0.1 to 4 m: check units")
+    fronts = []
+    for f in mapping.fronts:
+        flo, fhi = parts[f.id].bounds
+        t = f.panel_thickness
+        centre = [float(flo[0] + fhi[0]) / 2, float(fhi[1]) - t / 2, float(flo[2] + fhi[2]) / 2]
+        w, h = float(fhi[0] - flo[0]), float(fhi[2] - flo[2])
+        if f.joint.type == "slide":
+            axis, anchor = [0.0, 1.0, 0.0], centre
+        else:
+            if f.joint.side is None:
+                raise RikError(f"{display_path(mapping_path)}, field 'fronts.{mapping.fronts.index(f)}.joint.side': "
+                               "a hinge needs the edge it is on: left, right, top or bottom")
+            axis, anchor = _hinge(f.joint.side, flo, fhi, float(fhi[1]) - t)
+        m = f.mount_margin
+        fronts.append({"id": f.id, "kind": f.kind, "size": [round(w, 5), round(h, 5), t],
+                       "center": [round(c, 5) for c in centre],
+                       "joint": {"type": f.joint.type, "axis": axis, "anchor": [round(a, 5) for a in anchor],
+                                 "range": list(f.joint.range)},
+                       "mount": {"pos": [round(centre[0], 5), round(float(fhi[1]), 5), round(centre[2], 5)],
+                                 "size": [round(w - 2 * m, 5), round(h - 2 * m, 5)]},
+                       "finish": f.finish})
+    stem = unit_id.replace("/", "__")
+    catalog_dir.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=".import-", dir=catalog_dir))
+    try:
+        mesh_dir = Path("meshes") / stem
+        (tmp / mesh_dir).mkdir(parents=True)
+        meshes = {}
+        for name, mesh in parts.items():
+            rel = mesh_dir / f"{name}.stl"
+            mesh.export(tmp / rel, file_type="stl")
+            meshes[name] = {"file": rel.as_posix(), "sha256": mesh_sha256(tmp / rel)}
+        entry = {"id": unit_id, "name": mapping.name or f"Imported {stem}",
+                 "description": mapping.description or f"Imported from {path.name}", "install": mapping.install,
+                 "install_height": mapping.install_height,
+                 "carcass": {"width": round(width, 5), "height": round(height, 5), "depth": round(depth, 5),
+                             "panel_thickness": mapping.carcass.panel_thickness, "finish": mapping.carcass.finish},
+                 "fronts": fronts, "licence": licence, "meshes": meshes}
+        import yaml
+
+        header = "# Imported with `rik assets import --base-unit`; lengths in metres, angles in radians.\n"
+        (tmp / f"{stem}.yaml").write_text(header + yaml.safe_dump({"base_units": [entry]}, sort_keys=False))
+        for target in (catalog_dir / f"{stem}.yaml", catalog_dir / mesh_dir):
+            if target.exists():
+                raise RikError(f"{display_path(target)} already exists: base unit {unit_id} was imported before; "
+                               "choose another --id or delete the files")
+        load_catalog([catalog_dir, tmp])
+        (catalog_dir / "meshes").mkdir(exist_ok=True)
+        os.replace(tmp / mesh_dir, catalog_dir / mesh_dir)
+        os.replace(tmp / f"{stem}.yaml", catalog_dir / f"{stem}.yaml")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return unit_id, catalog_dir / f"{stem}.yaml"

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.assets.build import DEFAULT_SEED, build_asset
-from rik.assets.cache import AssetCache
+from rik.assets.cache import AssetCache, source_digest
 from rik.assets.fidelity import DEFAULT_POINTS, Deviation, Fidelity
 from rik.errors import RikError
 
@@ -75,13 +75,18 @@ def fidelity_row(catalog: Catalog, handle_id: str, *, out: Path | None = None, p
         fid = _fidelity_from_json(stored)
     if out is not None:
         pictures = picture_dir(out, handle_id)
-        if not (pictures / "fidelity.png").is_file():
+        stamp = pictures / "asset.key"  # the asset and drawing code the pictures show: redraw when either changes
+        drawn = f"{asset.key} {source_digest([Path(figures.__file__)])[:16]}"
+        current = stamp.is_file() and stamp.read_text().strip() == drawn
+        if not current or not (pictures / "fidelity.png").is_file():
             if samples is None:
                 fid, samples = measure(part.visual, part.hulls, part.baseline, points, seed)
             figures.heatmap(samples, fid, f"{handle_id}: collision deviation", pictures / "fidelity.png", seed)
-        if not (pictures / "thumbnail.png").is_file():
+        if not current or not (pictures / "thumbnail.png").is_file():
             finish = catalog.finish(part.finish)
             figures.thumbnail(part.visual, finish.base_color, finish.metallic, pictures / "thumbnail.png")
+        if not current:
+            stamp.write_text(drawn + "\n")
     return {"id": handle_id, "type": asset.category, "hulls": len(part.hulls),
             "collision_vertices": sum(len(v) for v, _ in part.hulls),
             **_deviation_cells("eqp", fid.q_to_p), **_deviation_cells("epq", fid.p_to_q),

@@ -211,9 +211,14 @@ class AxisArg(StrEnum):
 @app.command("import")
 def import_(
     file: Annotated[Path, typer.Argument(help="Mesh file: .stl, .obj, .ply, .off, .glb or .gltf.")],
-    handle_type: Annotated[HandleTypeArg, typer.Option("--type", help="Handle type.")],
-    design_id: Annotated[str, typer.Option("--id", help="New design id, e.g. two_point/my-bar.")],
-    handle: Annotated[bool, typer.Option("--handle", help="Import a handle (the only kind for now).")] = True,
+    design_id: Annotated[str, typer.Option("--id", help="New id: a design (two_point/my-bar) or, with --base-unit, "
+                                           "a base unit (drawer/my-chest).")],
+    handle_type: Annotated[HandleTypeArg | None, typer.Option("--type", help="Handle type (handles).")] = None,
+    handle: Annotated[bool, typer.Option("--handle", help="Import a handle (the default).")] = True,
+    base_unit: Annotated[bool, typer.Option("--base-unit", help="Import a base unit from a GLB with named nodes "
+                                            "(needs --parts).")] = False,
+    parts: Annotated[Path | None, typer.Option(help="YAML mapping GLB nodes to the carcass and fronts, with their "
+                                               "joints (base units; format: rik/schemas/imports.py).")] = None,
     size: Annotated[str | None, typer.Option(help="Size label; the handle id is <id>-<size>. Default: hole "
                                              "spacing (two-point) or length, in mm.")] = None,
     name: Annotated[str | None, typer.Option(help="Display name of the design.")] = None,
@@ -232,13 +237,20 @@ def import_(
     seed: SeedOpt = 0,
     catalog: CatalogOption = None,
 ) -> None:
-    """Import a real handle mesh: clean it, normalise units and frame, register it in a user catalog, then
-    decompose it with CoACD and measure its collision fidelity (and the finger test for two-point handles)."""
+    """Import a real handle mesh (or a base unit): clean it, normalise units and frame, register it in a user
+    catalog, then decompose it with CoACD and measure its collision fidelity (and the finger test for two-point
+    handles)."""
     from rik.assets.importer import import_handle
     from rik.assets.report import fidelity_row
+    from rik.errors import RikError
     from rik.registry.load import load_catalog
 
     del handle
+    if base_unit:
+        _import_base_unit(file, parts, design_id, catalog_dir, overlays(catalog), seed)
+        return
+    if handle_type is None:
+        raise RikError("--type is required for a handle: knob, two_point or finger_pull")
     size_label = size
     if size_label is None:
         size_label = f"{round(hole_spacing * 1000)}" if hole_spacing else "imported"
@@ -265,4 +277,29 @@ def import_(
         result = finger_test(asset.part("handle").hulls, cat.handles[imported.handle_id].geometry)
         verdict = "passes through the loop" if result.passes else "is blocked"
         con.print(f"finger test: a 10 mm finger {verdict} (closest {result.min_distance * 1e3:.1f} mm)")
+    con.print(f"use it with --catalog {catalog_dir} (or RIK_CATALOG={catalog_dir})")
+
+
+def _import_base_unit(file: Path, parts: Path | None, unit_id: str, catalog_dir: Path, overlay_paths: list[Path],
+                      seed: int) -> None:
+    from rik.assets.build import build_asset
+    from rik.assets.importer import import_base_unit
+    from rik.errors import RikError
+    from rik.registry.load import load_catalog
+
+    if parts is None:
+        raise RikError("--base-unit needs --parts PARTS.yaml: which node is the carcass and each front, and how "
+                       "each front moves (format: rik/schemas/imports.py)")
+    unit_id, yaml_path = import_base_unit(file, parts, unit_id=unit_id, catalog_dir=catalog_dir)
+    cat = load_catalog([*overlay_paths, catalog_dir])
+    unit = cat.base_units[unit_id]
+    con = console()
+    c = unit.carcass
+    con.print(f"registered {unit_id} in {yaml_path}: carcass {c.width * 1e3:.0f} x {c.height * 1e3:.0f} x "
+              f"{c.depth * 1e3:.0f} mm (w x h x d), fronts: "
+              + ", ".join(f"{f.id} ({f.kind}, {f.joint.type})" for f in unit.fronts))
+    with con.status("decomposing every rigid part with CoACD ..."):
+        asset, _ = build_asset(cat, unit_id, seed)
+    for p in asset.parts:
+        con.print(f"  {p.name}: {len(p.visual.faces)} triangles, {len(p.hulls)} convex parts")
     con.print(f"use it with --catalog {catalog_dir} (or RIK_CATALOG={catalog_dir})")

@@ -46,10 +46,13 @@ def check_design(entry: RawEntry, design: HandleDesign, handle_count: int) -> No
     if handle_count == 0:
         raise entry.error("id", "design has no handles; add a handle that uses it or remove it")
     if design.generator.name == "user_mesh":
-        mesh_file = entry.file.parent / design.generator.file
-        if not mesh_file.is_file():
-            raise entry.error("generator.file", f"no mesh file {display_path(mesh_file)} (paths are relative to "
-                                                "the YAML file)")
+        _mesh_file_exists(entry, "generator.file", design.generator.file)
+
+
+def _mesh_file_exists(entry: RawEntry, field: str, relative: str) -> None:
+    mesh_file = entry.file.parent / relative
+    if not mesh_file.is_file():
+        raise entry.error(field, f"no mesh file {display_path(mesh_file)} (paths are relative to the YAML file)")
 
 
 def check_handle(entry: RawEntry, handle: Handle, designs: Mapping[str, HandleDesign],
@@ -106,6 +109,13 @@ def check_base_unit(entry: RawEntry, base: BaseUnit, finishes: Mapping[str, obje
             if _overlap(front, other):
                 raise entry.error(f"{where}.center", f"front '{front.id}' overlaps front '{other.id}' "
                                                      f"(fronts.{j}) in the front view")
+    if base.meshes is not None:
+        parts = ["carcass", *(f.id for f in base.fronts)]
+        if sorted(base.meshes) != sorted(parts):
+            raise entry.error("meshes", f"needs exactly one mesh per rigid part: {', '.join(parts)} "
+                                        f"(got {', '.join(base.meshes) or 'none'})")
+        for part, mesh in base.meshes.items():
+            _mesh_file_exists(entry, f"meshes.{part}.file", mesh.file)
 
 
 def _check_front(entry: RawEntry, where: str, base: BaseUnit, front: Front) -> None:

@@ -30,10 +30,10 @@ def parse_entry(entry: RawEntry) -> BaseModel:
         field = ".".join(str(p) for p in first["loc"])
         more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''} in this entry)" \
             if len(errors) > 1 else ""
-        raise entry.error(field or None, _describe(model, first) + more) from None
+        raise entry.error(field or None, describe_error(model, first) + more) from None
 
 
-def _describe(model: type[BaseModel], error: Any) -> str:
+def describe_error(model: type[BaseModel], error: Any) -> str:
     """A short, specific sentence for one pydantic error."""
     kind, msg = error["type"], error["msg"].removeprefix("Value error, ")
     if kind == "missing":

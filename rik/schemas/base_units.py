@@ -1,7 +1,9 @@
 """Base units: carcasses with moving fronts (drawers, doors, flaps), each front with its joint and mount site.
 
 Frame of a base unit: origin at the bottom edge of the carcass's front plane, centred left-right; +x to the
-right as seen from the front, +y out of the front towards the user, +z up. The carcass fills
+left as seen by a person facing the front (x = y cross z), +y out of the front towards that person, +z up.
+"Left" and "right" in ids and names are as that person sees them: a door hinged on the left turns about
+an axis at +x. The carcass fills
 x in [-width/2, width/2], y in [-depth, 0], z in [0, height]; fronts sit in front of it (y > 0).
 All lengths in metres.
 """
@@ -12,7 +14,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from rik.schemas.common import CatalogId, Frozen, Length, NonNegLength, Quat, Vec3
+from rik.schemas.common import CatalogId, Frozen, Length, MeshFile, NonNegLength, Quat, Vec3
 from rik.schemas.joints import JointSpec
 
 
@@ -86,3 +88,7 @@ class BaseUnit(Frozen):
     """Resistance preset used when none is asked for."""
     licence: str = Field(default="CC-BY-4.0", pattern=r"^[A-Za-z0-9.\-+]+$")
     """SPDX licence identifier."""
+    meshes: dict[str, MeshFile] | None = None
+    """Imported base units (``rik assets import --base-unit``): one mesh per rigid part, keyed ``carcass`` and
+    each front's id, in the base unit's frame with the fronts closed. Absent: rik builds the parts from boards
+    with the carcass's and fronts' dimensions."""

@@ -31,6 +31,15 @@ class Frozen(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", defer_build=True)
 
 
+class MeshFile(Frozen):
+    """A user's mesh file that rik reads instead of generating geometry (written by ``rik assets import``)."""
+
+    file: str = Field(min_length=1)
+    """Path of the mesh file (STL, OBJ, PLY, GLB) relative to the YAML file that names it; metres."""
+    sha256: str = Field(pattern=r"^[0-9a-f]{64}$")
+    """sha256 of the file: part of the asset's cache key, and checked when the file is read."""
+
+
 class Provenance(StrEnum):
     """Where a physical value comes from."""
 

@@ -10,7 +10,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-from rik.schemas.common import Frozen, Unit
+from rik.schemas.common import Frozen, MeshFile, Unit
 
 Ratio = Annotated[float, Field(gt=0, le=4, allow_inf_nan=False)]
 """A positive ratio of two lengths of the same handle."""
@@ -126,15 +126,11 @@ class RecessLip(Frozen):
     """Lip height above the face / projection."""
 
 
-class UserMesh(Frozen):
-    """Not a generator: the design's mesh is a user's file, imported with ``rik assets import``."""
+class UserMesh(MeshFile):
+    """Not a generator: the design's mesh is a user's file (in the mount frame), imported with
+    ``rik assets import``."""
 
     name: Literal["user_mesh"]
-    file: str = Field(min_length=1)
-    """Path of the mesh file (STL, OBJ, PLY, GLB) relative to the YAML file defining the design; the mesh is in
-    metres in the mount frame."""
-    sha256: str = Field(pattern=r"^[0-9a-f]{64}$")
-    """sha256 of the file: part of the asset's cache key, and checked when the file is read."""
 
 
 GeneratorSpec = Annotated[
