@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-
 from test_assets_import import _files, _flat
 
 W, H, D, T = 0.40, 0.30, 0.30, 0.018  # carcass width, height, depth, board thickness (m)

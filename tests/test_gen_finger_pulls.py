@@ -3,51 +3,21 @@ sized, clear of the finger pocket and of the front, repeatable, and buildable ov
 
 from __future__ import annotations
 
-import functools
-import math
 import time
 
 import numpy as np
 import pytest
+from meshcheck import CATALOG, inside, mesh_of, parts
 
 from rik.assets.handles import finger_pulls, generate_handle
 from rik.assets.meshkit import require_solid
-from rik.registry import load_catalog
 from rik.schemas.generators import CupPull, EdgeProfile, RecessLip, TabPull
-from rik.schemas.handles import Handle, HandleDesign
+from rik.schemas.handles import Handle
 
-CATALOG = load_catalog([])
 GENERATORS = set(finger_pulls.GENERATORS)
 PULLS = [hid for hid, h in CATALOG.handles.items() if CATALOG.designs[h.design].generator.name in GENERATORS]
 TOL = 0.5e-3  # m, the contract's tolerance on extents
 THINNEST_FRONT = 0.016  # m, how far an edge clip may wrap over the edge
-
-
-def _parts(hid: str) -> tuple[Handle, HandleDesign]:
-    """The catalogued handle and its design."""
-    handle = CATALOG.handles[hid]
-    return handle, CATALOG.designs[handle.design]
-
-
-@functools.cache
-def _mesh(hid: str):
-    """The handle's mesh, built once per test session."""
-    return generate_handle(*_parts(hid))
-
-
-def _inside(mesh, points: np.ndarray) -> np.ndarray:
-    """Generalised winding number of a closed mesh at ``points`` (> 0.5: inside); exact, without ray casting."""
-    tri = mesh.vertices[mesh.faces]
-    out = np.empty(len(points))
-    for i in range(0, len(points), 64):
-        p = points[i:i + 64, None, None, :]
-        a, b, c = (tri[None, :, k, :] - p[:, :, 0, :] for k in range(3))
-        la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
-        num = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
-        den = (la * lb * lc + np.einsum("pfi,pfi->pf", a, b) * lc + np.einsum("pfi,pfi->pf", b, c) * la
-               + np.einsum("pfi,pfi->pf", c, a) * lb)
-        out[i:i + 64] = np.arctan2(num, den).sum(axis=1) / (2 * math.pi)
-    return out > 0.5
 
 
 def _grid(lo, hi, n: int = 7, inset: float = 0.1e-3) -> np.ndarray:
@@ -71,7 +41,7 @@ def _check_front_untouched(mesh, spec, geometry, mount) -> None:
         assert not np.any((v[:, 2] < -1e-6) & (v[:, 1] > 1e-6))
         front = _grid((-0.5 * geometry.length, 0.0, -THINNEST_FRONT), (0.5 * geometry.length, geometry.width, 0.0),
                       n=7, inset=0.2e-3)
-        assert not _inside(mesh, front).any()
+        assert not inside(mesh, front).any()
     elif mount.kind == "two_screw":
         assert v[:, 2].min() >= -1e-6
     else:  # inset: below the face only inside the routed footprint, and no deeper than the recess
@@ -92,7 +62,7 @@ def _check_clearance(mesh, spec, geometry, mount, exact: bool) -> None:
         depth_axis = 2 if mount.kind == "inset" else 1
         assert size[0] == pytest.approx(geometry.clearance.width, abs=1e-9)
         assert size[depth_axis] == pytest.approx(geometry.clearance.depth, abs=1e-9)
-    assert not _inside(mesh, _grid(lo, hi)).any()
+    assert not inside(mesh, _grid(lo, hi)).any()
 
 
 def test_the_catalog_has_the_finger_pulls() -> None:
@@ -102,7 +72,7 @@ def test_the_catalog_has_the_finger_pulls() -> None:
 
 @pytest.mark.parametrize("hid", PULLS)
 def test_mesh_is_a_closed_solid(hid: str) -> None:
-    mesh = _mesh(hid)
+    mesh = mesh_of(hid)
     assert mesh.is_watertight and mesh.is_winding_consistent
     assert mesh.volume > 0
     assert 100 <= len(mesh.faces) <= 40_000
@@ -110,36 +80,36 @@ def test_mesh_is_a_closed_solid(hid: str) -> None:
 
 @pytest.mark.parametrize("hid", PULLS)
 def test_extents_follow_the_catalog(hid: str) -> None:
-    _check_extents(_mesh(hid), _parts(hid)[0].geometry)
+    _check_extents(mesh_of(hid), parts(hid)[0].geometry)
 
 
 @pytest.mark.parametrize("hid", PULLS)
 def test_finger_pocket_is_free(hid: str) -> None:
-    handle, design = _parts(hid)
-    _check_clearance(_mesh(hid), design.generator, handle.geometry, handle.mount, exact=True)
+    handle, design = parts(hid)
+    _check_clearance(mesh_of(hid), design.generator, handle.geometry, handle.mount, exact=True)
 
 
 @pytest.mark.parametrize("hid", PULLS)
 def test_nothing_inside_the_front(hid: str) -> None:
-    handle, design = _parts(hid)
-    _check_front_untouched(_mesh(hid), design.generator, handle.geometry, handle.mount)
+    handle, design = parts(hid)
+    _check_front_untouched(mesh_of(hid), design.generator, handle.geometry, handle.mount)
 
 
 @pytest.mark.parametrize("hid", [h for h in PULLS if CATALOG.handles[h].mount.kind == "two_screw"])
 def test_cup_screws_go_through_the_flange(hid: str) -> None:
-    handle, _ = _parts(hid)
-    mesh, g = _mesh(hid), handle.geometry
+    handle, _ = parts(hid)
+    mesh, g = mesh_of(hid), handle.geometry
     half = 0.5 * g.hole_spacing
     t = g.grip_diameter
     holes = np.array([(s * half, 0.0, 0.5 * t) for s in (-1, 1)])
     beside = np.array([(s * (half + 3.0e-3), 0.0, 0.5 * t) for s in (-1, 1)])
-    assert not _inside(mesh, holes).any()
-    assert _inside(mesh, beside).all()
+    assert not inside(mesh, holes).any()
+    assert inside(mesh, beside).all()
 
 
 def test_same_handle_builds_byte_identical() -> None:
     for hid in ("finger_pull/edge-lip-100", "finger_pull/cup-64", "finger_pull/tab-40", "finger_pull/recess-lip-120"):
-        a, b = generate_handle(*_parts(hid)), generate_handle(*_parts(hid))
+        a, b = generate_handle(*parts(hid)), generate_handle(*parts(hid))
         assert a.vertices.tobytes() == b.vertices.tobytes()
         assert a.faces.tobytes() == b.faces.tobytes()
 

@@ -2,49 +2,20 @@
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
 import pytest
+from meshcheck import CATALOG, inside, mesh_of, parts
 
 from rik.assets.handles import generate_handle, knobs
 from rik.assets.meshkit import require_solid
-from rik.registry import load_catalog
 from rik.schemas.generators import KnobLathe, KnobPrism, KnobRing
-from rik.schemas.handles import Handle, HandleDesign
+from rik.schemas.handles import Handle
 
-CATALOG = load_catalog([])
 GENERATORS = {"knob_lathe", "knob_prism", "knob_ring"}
 KNOBS = [hid for hid, h in CATALOG.handles.items() if CATALOG.designs[h.design].generator.name in GENERATORS]
 TOL = 0.5e-3  # m, the contract's tolerance on extents
-
-
-def _parts(hid: str) -> tuple[Handle, HandleDesign]:
-    """The catalogued handle and its design."""
-    handle = CATALOG.handles[hid]
-    return handle, CATALOG.designs[handle.design]
-
-
-@functools.cache
-def _mesh(hid: str):
-    """The handle's mesh, built once per test session."""
-    return generate_handle(*_parts(hid))
-
-
-def _inside(mesh, points: np.ndarray) -> np.ndarray:
-    """Generalised winding number of a closed mesh at ``points`` (> 0.5: inside); exact, without ray casting."""
-    tri = mesh.vertices[mesh.faces]
-    out = np.empty(len(points))
-    for i in range(0, len(points), 64):
-        p = points[i:i + 64, None, None, :]
-        a, b, c = (tri[None, :, k, :] - p[:, :, 0, :] for k in range(3))
-        la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
-        num = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
-        den = (la * lb * lc + np.einsum("pfi,pfi->pf", a, b) * lc + np.einsum("pfi,pfi->pf", b, c) * la
-               + np.einsum("pfi,pfi->pf", c, a) * lb)
-        out[i:i + 64] = np.arctan2(num, den).sum(axis=1) / (2 * math.pi)
-    return out > 0.5
 
 
 def _annulus(r_in: float, r_out: float, z_lo: float, z_hi: float) -> np.ndarray:
@@ -65,7 +36,7 @@ def test_the_catalog_has_the_knobs() -> None:
 def test_knob_is_a_single_closed_solid(hid: str) -> None:
     import trimesh
 
-    mesh = _mesh(hid)
+    mesh = mesh_of(hid)
     assert mesh.is_watertight and mesh.is_winding_consistent
     assert mesh.volume > 0
     bodies = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(mesh.faces)),
@@ -76,7 +47,7 @@ def test_knob_is_a_single_closed_solid(hid: str) -> None:
 
 @pytest.mark.parametrize("hid", KNOBS)
 def test_knob_extents_match_the_catalog(hid: str) -> None:
-    mesh = _mesh(hid)
+    mesh = mesh_of(hid)
     g = CATALOG.handles[hid].geometry
     (x0, y0, z0), (x1, y1, z1) = mesh.bounds
     assert x1 - x0 == pytest.approx(g.length, abs=TOL)
@@ -84,7 +55,7 @@ def test_knob_extents_match_the_catalog(hid: str) -> None:
     assert z1 == pytest.approx(g.projection, abs=TOL)
     assert z0 >= -1e-6, "material inside the front"
     assert abs(x0 + x1) < TOL  # centred on the screw along x
-    name = _parts(hid)[1].generator.name
+    name = parts(hid)[1].generator.name
     if name == "knob_ring":
         assert y1 == pytest.approx(g.width - g.length, abs=TOL)  # boss radius above the screw, ring below
     else:
@@ -93,9 +64,9 @@ def test_knob_extents_match_the_catalog(hid: str) -> None:
 
 @pytest.mark.parametrize("hid", [h for h in KNOBS if CATALOG.handles[h].geometry.clearance is not None])
 def test_knob_clearance_is_free(hid: str) -> None:
-    handle, design = _parts(hid)
+    handle, design = parts(hid)
     spec, g = design.generator, handle.geometry
-    mesh = _mesh(hid)
+    mesh = mesh_of(hid)
     m = 0.2e-3  # stay this far from the region's boundary
     if isinstance(spec, KnobRing):
         # behind the ring: inside its outer circle, outside the boss, from the front to the ring's back
@@ -117,20 +88,20 @@ def test_knob_clearance_is_free(hid: str) -> None:
         assert z_lo <= 0.25 * g.clearance.depth  # the rose stays a small foot
         pts = _annulus(r_in + m, head_r - m, z_lo + m, g.clearance.depth - m)
     assert len(pts) >= 200
-    inside = _inside(mesh, pts)
-    assert not inside.any(), f"{inside.sum()} clearance points inside the knob, e.g. {pts[inside][0]}"
+    solid = inside(mesh, pts)
+    assert not solid.any(), f"{solid.sum()} clearance points inside the knob, e.g. {pts[solid][0]}"
     # the check would notice material: the head itself is found solid just above the clearance
     probe = np.array([[0.0, 0.0 if not isinstance(spec, KnobRing) else -g.length + 0.5 * g.grip_diameter,
                        g.projection - 0.5 * min(g.projection - g.clearance.depth, g.grip_diameter)]])
-    assert _inside(mesh, probe).all()
+    assert inside(mesh, probe).all()
 
 
 def test_same_handle_twice_gives_identical_bytes() -> None:
-    handle, design = _parts("knob/fluted-34")
+    handle, design = parts("knob/fluted-34")
     a, b = generate_handle(handle, design), generate_handle(handle, design)
     assert a.vertices.tobytes() == b.vertices.tobytes()
     assert a.faces.tobytes() == b.faces.tobytes()
-    ring = _parts("knob/ring-pull-35")
+    ring = parts("knob/ring-pull-35")
     assert generate_handle(*ring).vertices.tobytes() == generate_handle(*ring).vertices.tobytes()
 
 

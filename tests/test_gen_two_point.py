@@ -2,55 +2,21 @@
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 
 import numpy as np
 import pytest
+from meshcheck import CATALOG, inside, mesh_of, parts
 
 from rik.assets.handles import generate_handle, two_point
 from rik.assets.meshkit import require_solid
-from rik.registry import load_catalog
-from rik.schemas.handles import Handle, HandleDesign
 
-CATALOG = load_catalog([])
 GENERATORS = {"bar_pull", "bow_pull"}
 HANDLES = [hid for hid, h in CATALOG.handles.items() if CATALOG.designs[h.design].generator.name in GENERATORS]
 DESIGNS = sorted({CATALOG.handles[hid].design for hid in HANDLES})
 TOL = 0.5e-3  # m, the contract's tolerance on extents
 MARGIN = 0.05e-3  # m, how far test points stay from the clearance's boundary
-
-
-def _parts(hid: str) -> tuple[Handle, HandleDesign]:
-    """The catalogued handle and its design."""
-    handle = CATALOG.handles[hid]
-    return handle, CATALOG.designs[handle.design]
-
-
-@functools.cache
-def _mesh(hid: str):
-    """The handle's mesh, built once per test session."""
-    return generate_handle(*_parts(hid))
-
-
-def _inside(mesh, points: np.ndarray) -> np.ndarray:
-    """Generalised winding number of a closed mesh at ``points`` (> 0.5: inside); exact, without ray casting."""
-    tri = mesh.vertices[mesh.faces]
-    out = np.empty(len(points))
-    for i in range(0, len(points), 64):
-        p = points[i : i + 64, None, :]
-        a, b, c = (tri[None, :, k, :] - p for k in range(3))
-        la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
-        num = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
-        den = (
-            la * lb * lc
-            + np.einsum("pfi,pfi->pf", a, b) * lc
-            + np.einsum("pfi,pfi->pf", b, c) * la
-            + np.einsum("pfi,pfi->pf", c, a) * lb
-        )
-        out[i : i + 64] = np.arctan2(num, den).sum(axis=1) / (2 * math.pi)
-    return out > 0.5
 
 
 def _clearance_grid(hid: str, nx: int = 25, ny: int = 5, nz: int = 8) -> np.ndarray:
@@ -74,7 +40,7 @@ def test_the_catalog_has_the_two_point_handles() -> None:
 def test_handle_is_a_single_closed_solid(hid: str) -> None:
     import trimesh
 
-    mesh = _mesh(hid)
+    mesh = mesh_of(hid)
     assert mesh.is_watertight and mesh.is_winding_consistent
     assert mesh.volume > 0
     bodies = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(mesh.faces)), engine="scipy")
@@ -84,7 +50,7 @@ def test_handle_is_a_single_closed_solid(hid: str) -> None:
 
 @pytest.mark.parametrize("hid", HANDLES)
 def test_handle_extents_match_the_catalog(hid: str) -> None:
-    mesh = _mesh(hid)
+    mesh = mesh_of(hid)
     g = CATALOG.handles[hid].geometry
     (x0, y0, z0), (x1, y1, z1) = mesh.bounds
     assert x1 - x0 == pytest.approx(g.length, abs=TOL)
@@ -97,15 +63,15 @@ def test_handle_extents_match_the_catalog(hid: str) -> None:
 
 @pytest.mark.parametrize("hid", HANDLES)
 def test_the_loop_is_empty(hid: str) -> None:
-    mesh = _mesh(hid)
+    mesh = mesh_of(hid)
     assert not mesh.contains(_clearance_grid(hid)).any()  # dense, by ray casting
-    assert not _inside(mesh, _clearance_grid(hid, 9, 3, 4)).any()  # sparser, exact
+    assert not inside(mesh, _clearance_grid(hid, 9, 3, 4)).any()  # sparser, exact
 
 
 @pytest.mark.parametrize("hid", HANDLES)
 def test_a_finger_passes_through_the_loop(hid: str) -> None:
     """A 10 mm finger capsule along y, 2 cm longer than the handle is wide, fits anywhere along the loop."""
-    mesh = _mesh(hid)
+    mesh = mesh_of(hid)
     g = CATALOG.handles[hid].geometry
     r = 5e-3 - MARGIN
     half = g.width / 2 + 10e-3
@@ -121,18 +87,18 @@ def test_a_finger_passes_through_the_loop(hid: str) -> None:
 @pytest.mark.parametrize("hid", HANDLES)
 def test_the_screws_are_under_material(hid: str) -> None:
     """Legs and feet stand on the screws: just above the front at each screw is solid."""
-    mesh = _mesh(hid)
+    mesh = mesh_of(hid)
     g = CATALOG.handles[hid].geometry
     pts = np.array([(sx * g.hole_spacing / 2, 0.0, 0.3e-3) for sx in (-1, 1)])
-    assert _inside(mesh, pts).all()
+    assert inside(mesh, pts).all()
 
 
 def test_same_handle_twice_is_byte_identical() -> None:
     for hid in ("two_point/bar-hex-128", "two_point/trapezoid-128", "two_point/strap-96"):
         start = time.perf_counter()
-        a = generate_handle(*_parts(hid))
+        a = generate_handle(*parts(hid))
         assert time.perf_counter() - start < 1.0
-        b = generate_handle(*_parts(hid))
+        b = generate_handle(*parts(hid))
         assert a.vertices.tobytes() == b.vertices.tobytes()
         assert a.faces.tobytes() == b.faces.tobytes()
 
@@ -157,7 +123,7 @@ def test_every_design_builds_at_its_smallest_size(design_id: str) -> None:
     ],
 )
 def test_oversized_legs_and_feet_are_clamped_clear_of_the_loop(hid: str, field: str) -> None:
-    handle, design = _parts(hid)
+    handle, design = parts(hid)
     spec = design.generator.model_copy(update={field: 4.0})
     mesh = require_solid(two_point.GENERATORS[spec.name](spec, handle.geometry, handle.mount), hid)
     g = handle.geometry
@@ -166,4 +132,4 @@ def test_oversized_legs_and_feet_are_clamped_clear_of_the_loop(hid: str, field: 
     assert y1 - y0 <= g.width + TOL
     assert z1 == pytest.approx(g.projection, abs=TOL)
     assert not mesh.contains(_clearance_grid(hid)).any()
-    assert not _inside(mesh, _clearance_grid(hid, 9, 3, 4)).any()
+    assert not inside(mesh, _clearance_grid(hid, 9, 3, 4)).any()

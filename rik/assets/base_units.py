@@ -1,9 +1,10 @@
 """Base-unit generator: the carcass and every moving front as separate rigid parts built from panels.
 
 All meshes are in the base unit's frame with every front closed (origin at the bottom of the carcass's front
-plane, +x to the left of a person facing the front, +y out of the front, +z up; metres). Each part is built from rectangular panels with thickness,
-and the panels themselves are its exact convex decomposition: a box is convex, so the collision of a generated
-base unit needs no CoACD and has zero surface deviation. (Imported base units are decomposed with CoACD.)
+plane, +x to the left of a person facing the front, +y out of the front, +z up; metres). Each part is built from
+rectangular panels with thickness, and the panels themselves are its exact convex decomposition: a box is convex,
+so the collision of a generated base unit needs no CoACD and has zero surface deviation. (Imported base units are
+decomposed with CoACD.)
 """
 
 from __future__ import annotations

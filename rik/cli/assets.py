@@ -35,6 +35,15 @@ def _progress() -> Any:
                     TextColumn("{task.fields[last]}"), console=console(), transient=False)
 
 
+def _print_csv(rows: list[dict[str, Any]], columns: list[str]) -> None:
+    import csv
+    import sys
+
+    writer = csv.DictWriter(sys.stdout, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+
+
 DEMO_ASSETS = ("knob/mushroom-30", "two_point/bow-128", "finger_pull/edge-lip-100", "drawer/chest-80")
 
 
@@ -126,12 +135,7 @@ def fidelity(ids: IdsArg = None, everything: AllOpt = False,
         print_json({"handles": rows, "summary": summary})
         return
     if format is OutputFormat.csv:
-        import csv
-        import sys
-
-        writer = csv.DictWriter(sys.stdout, fieldnames=FIDELITY_COLUMNS, lineterminator="\n")
-        writer.writeheader()
-        writer.writerows(rows)
+        _print_csv(rows, FIDELITY_COLUMNS)
         return
     from rich.table import Table
 
@@ -170,12 +174,7 @@ def stats(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = 
         print_json(rows)
         return
     if format is OutputFormat.csv:
-        import csv
-        import sys
-
-        writer = csv.DictWriter(sys.stdout, fieldnames=STATS_COLUMNS, lineterminator="\n")
-        writer.writeheader()
-        writer.writerows(rows)
+        _print_csv(rows, STATS_COLUMNS)
         return
     from rich.table import Table
 

@@ -118,7 +118,8 @@ def render_catalog_md(index: CatalogIndex, root: Path) -> str:
                           for h in rows])
         out.append("")
     out += ["## Base units", "",
-            "Frame: origin at the bottom of the carcass's front plane, +x to the left of a person facing the front, +y out of the front, +z up; left and right in names are as that person sees them. "
+            "Frame: origin at the bottom of the carcass's front plane, +x to the left of a person facing the front, "
+            "+y out of the front, +z up; left and right in names are as that person sees them. "
             "Each front carries a mount rectangle where a handle must fit.", ""]
     out += _md_table([h for h, _ in COLUMNS["base_units"]],
                      [[cell(b) for _, cell in COLUMNS["base_units"]] for b in index.entries("base_units")])

@@ -53,7 +53,8 @@ class Clearance(Frozen):
     """How deep a finger can go, m: front face to the grip's underside for loops and knob heads, hook depth
     behind a lip or hood; for inset grips, the depth of the recess behind the front's face."""
     width: Length
-    """Free opening along the handle's x axis, m (between the legs of a loop, along a lip)."""
+    """Free opening, m: along the handle's x axis for loops (between the legs) and lips (along the lip); for
+    knobs, the width of the head a finger or gripper reaches behind."""
 
 
 class HandleGeometry(Frozen):
