@@ -7,6 +7,7 @@ import functools
 import math
 
 import numpy as np
+import trimesh
 
 from rik.assets.handles import generate_handle
 from rik.registry import load_catalog
@@ -46,3 +47,12 @@ def inside(mesh, points: np.ndarray) -> np.ndarray:
                + np.einsum("pfi,pfi->pf", c, a) * lb)
         out[i:i + 64] = np.arctan2(num, den).sum(axis=1) / (2 * math.pi)
     return out > 0.5
+
+
+def assert_one_closed_body(mesh, min_faces: int, max_faces: int = 40_000) -> None:
+    """Watertight, consistently wound, positive volume, a single connected body, a sensible triangle count."""
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume > 0
+    bodies = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(mesh.faces)), engine="scipy")
+    assert len(bodies) == 1
+    assert min_faces <= len(mesh.faces) <= max_faces

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 import pytest
-from meshcheck import CATALOG, inside, mesh_of, parts
+from meshcheck import CATALOG, assert_one_closed_body, inside, mesh_of, parts
 
 from rik.assets.handles import generate_handle, two_point
 from rik.assets.meshkit import require_solid
@@ -38,14 +38,9 @@ def test_the_catalog_has_the_two_point_handles() -> None:
 
 @pytest.mark.parametrize("hid", HANDLES)
 def test_handle_is_a_single_closed_solid(hid: str) -> None:
-    import trimesh
 
     mesh = mesh_of(hid)
-    assert mesh.is_watertight and mesh.is_winding_consistent
-    assert mesh.volume > 0
-    bodies = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(mesh.faces)), engine="scipy")
-    assert len(bodies) == 1
-    assert 500 <= len(mesh.faces) <= 40_000
+    assert_one_closed_body(mesh, min_faces=500)
 
 
 @pytest.mark.parametrize("hid", HANDLES)
