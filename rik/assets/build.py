@@ -7,6 +7,7 @@ keeps the single convex hull that prior data sets use, as the baseline of the fi
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -74,8 +75,16 @@ class BuildResult:
 
 
 # ---- identities ---------------------------------------------------------------------------------------------------
-def _generator_sources() -> list[Path]:
-    return [ASSETS_DIR / "meshkit.py", ASSETS_DIR / "base_units.py", *sorted((ASSETS_DIR / "handles").glob("*.py"))]
+@functools.cache
+def _code_and_versions() -> tuple[str, dict[str, str]]:
+    """Digest of the generator code and the library versions: the same for every asset of a run, so read once."""
+    sources = [ASSETS_DIR / "meshkit.py", ASSETS_DIR / "base_units.py", *sorted((ASSETS_DIR / "handles").glob("*.py"))]
+    return source_digest(sources), library_versions()
+
+
+def _beside_definition(catalog: Catalog, section: str, entry_id: str, relative: str) -> Path:
+    """A file named in a catalog entry, relative to the YAML file that defines the entry."""
+    return Path(catalog.origins[(section, entry_id)].file).parent / relative
 
 
 def asset_kind(catalog: Catalog, asset_id: str) -> str:
@@ -91,8 +100,8 @@ def asset_identity(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
     """Everything that decides an asset's files: the catalog entry, generator code, CoACD parameters, seed and
     library versions. Its :func:`content_key` addresses the cache."""
     kind = asset_kind(catalog, asset_id)
-    ident: dict[str, Any] = {"kind": kind, "seed": seed, "versions": library_versions(),
-                             "code": source_digest(_generator_sources())}
+    code, versions = _code_and_versions()
+    ident: dict[str, Any] = {"kind": kind, "seed": seed, "versions": versions, "code": code}
     if kind == "handle":
         handle = catalog.handles[asset_id]
         design = catalog.designs[handle.design]
@@ -125,15 +134,14 @@ def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
         if design.generator.name == "user_mesh":
             from rik.assets.importer import read_user_mesh
 
-            defined_in = Path(catalog.origins[("designs", design.id)].file).parent
-            mesh = read_user_mesh(defined_in / design.generator.file, design.generator.sha256)
+            mesh = read_user_mesh(_beside_definition(catalog, "designs", design.id, design.generator.file),
+                                  design.generator.sha256)
         else:
             mesh = generate_handle(handle, design)
         hulls = decompose(mesh, coacd_params(category, seed))  # imports are cleaned to closed solids too
         return category, [RigidPart("handle", "handle", handle.finish, "coacd", mesh, hulls,
                                     convex_hull_baseline(mesh))]
     from rik.assets.base_units import base_unit_plan, part_mesh
-    from rik.assets.decompose import convex_hull_baseline as baseline
 
     unit = catalog.base_units[asset_id]
     if unit.meshes is not None:
@@ -142,7 +150,8 @@ def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
     for plan in base_unit_plan(unit):
         mesh = part_mesh(plan)
         hulls = [_box_hull(p.mesh()) for p in plan.panels]
-        parts.append(RigidPart(plan.name, plan.role, plan.finish, "exact", mesh, hulls, baseline(mesh)))
+        parts.append(RigidPart(plan.name, plan.role, plan.finish, "exact", mesh, hulls,
+                               convex_hull_baseline(mesh)))
     return "base_unit", parts
 
 
@@ -153,12 +162,11 @@ def _imported_base_parts(catalog: Catalog, asset_id: str, seed: int) -> list[Rig
 
     unit = catalog.base_units[asset_id]
     assert unit.meshes is not None
-    defined_in = Path(catalog.origins[("base_units", asset_id)].file).parent
     roles = [("carcass", "carcass", unit.carcass.finish), *((f.id, f.kind, f.finish) for f in unit.fronts)]
     parts = []
     for name, role, finish in roles:
         ref = unit.meshes[name]
-        mesh = read_user_mesh(defined_in / ref.file, ref.sha256)
+        mesh = read_user_mesh(_beside_definition(catalog, "base_units", asset_id, ref.file), ref.sha256)
         parts.append(RigidPart(name, role, finish, "coacd", mesh, decompose(mesh, coacd_params("base_part", seed)),
                                convex_hull_baseline(mesh)))
     return parts
