@@ -34,7 +34,6 @@ def test_the_catalog_has_the_knobs() -> None:
 
 @pytest.mark.parametrize("hid", KNOBS)
 def test_knob_is_a_single_closed_solid(hid: str) -> None:
-
     mesh = mesh_of(hid)
     assert_one_closed_body(mesh, min_faces=200)
 

@@ -38,7 +38,6 @@ def test_the_catalog_has_the_two_point_handles() -> None:
 
 @pytest.mark.parametrize("hid", HANDLES)
 def test_handle_is_a_single_closed_solid(hid: str) -> None:
-
     mesh = mesh_of(hid)
     assert_one_closed_body(mesh, min_faces=500)
 

@@ -45,20 +45,28 @@ def mesh_sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+def _load(path: Path, suffixes: tuple[str, ...], force: str, wrong_type: str) -> Any:
+    """``trimesh.load`` with one-line errors for a wrong file type, a missing file and a damaged one."""
+    import trimesh
+
+    shown = display_path(path)
+    if path.suffix.lower() not in suffixes:
+        raise RikError(f"{shown}: {wrong_type}")
+    if not path.is_file():
+        raise RikError(f"{shown}: no such file")
+    try:
+        return trimesh.load(path, force=force, process=False)
+    except Exception as exc:  # trimesh raises many types for a damaged file
+        raise RikError(f"{shown}: cannot read the file ({exc.__class__.__name__}: {exc})") from None
+
+
 def read_mesh(path: Path) -> trimesh.Trimesh:
     """Read a mesh file as one triangle mesh (scenes are flattened); clear errors for every way it can fail."""
     import trimesh
 
     shown = display_path(path)
-    if path.suffix.lower() not in SUFFIXES:
-        raise RikError(f"{shown}: unknown mesh file type '{path.suffix or '(none)'}'; rik reads "
-                       + ", ".join(SUFFIXES))
-    if not path.is_file():
-        raise RikError(f"{shown}: no such file")
-    try:
-        loaded = trimesh.load(path, force="mesh", process=False)
-    except Exception as exc:  # trimesh raises many types for a damaged file
-        raise RikError(f"{shown}: cannot read the mesh ({exc.__class__.__name__}: {exc})") from None
+    loaded = _load(path, SUFFIXES, "mesh", f"unknown mesh file type '{path.suffix or '(none)'}'; rik reads "
+                   + ", ".join(SUFFIXES))
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise RikError(f"{shown}: the mesh is empty (no triangles)")
     return loaded
@@ -272,14 +280,8 @@ def node_meshes(path: Path, nodes: dict[str, str], mapping_file: Path) -> dict[s
     import trimesh
 
     shown = display_path(path)
-    if path.suffix.lower() not in (".glb", ".gltf"):
-        raise RikError(f"{shown}: a base unit is imported from a .glb or .gltf file with named nodes")
-    if not path.is_file():
-        raise RikError(f"{shown}: no such file")
-    try:
-        scene = trimesh.load(path, force="scene", process=False)
-    except Exception as exc:  # trimesh raises many types for a damaged file
-        raise RikError(f"{shown}: cannot read the file ({exc.__class__.__name__}: {exc})") from None
+    scene = _load(path, (".glb", ".gltf"), "scene", "a base unit is imported from a .glb or .gltf file with named "
+                  "nodes")
     graph = scene.graph
     parents = graph.transforms.parents
     names = sorted(n for n in graph.nodes if n != graph.base_frame)
