@@ -1,4 +1,4 @@
-"""Where rik keeps files of its own: the cache directory."""
+"""Where rik keeps files of its own (the cache directory), and how it writes files: atomically."""
 
 from __future__ import annotations
 
@@ -12,3 +12,11 @@ def cache_dir() -> Path:
         return Path(env).expanduser()
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(base) / "rik"
+
+
+def write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename: never half-written, and two processes
+    writing the same file do not share a temporary."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)

@@ -19,7 +19,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
-from rik.paths import cache_dir
+from rik.paths import cache_dir, write_atomic
 
 ASSET_FORMAT = 1
 """Bumped when the layout of an entry changes."""
@@ -124,10 +124,7 @@ class AssetCache:
 
     def write_extra(self, key: str, name: str, data: dict[str, Any]) -> None:
         """Store a derived JSON result (for example fidelity figures) beside an entry, atomically."""
-        path = self.path(key) / name
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(json.dumps(data, indent=1, sort_keys=True))
-        os.replace(tmp, path)
+        write_atomic(self.path(key) / name, json.dumps(data, indent=1, sort_keys=True))
 
     def read_extra(self, key: str, name: str) -> dict[str, Any] | None:
         try:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import csv
 import io
-import os
 from collections.abc import Callable, Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -18,6 +17,7 @@ from rik.assets.build import DEFAULT_SEED, build_asset
 from rik.assets.cache import AssetCache, source_digest
 from rik.assets.fidelity import DEFAULT_POINTS, Deviation, Fidelity
 from rik.errors import RikError
+from rik.paths import write_atomic
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -174,9 +174,7 @@ def write_csv(rows: Sequence[Row], columns: Sequence[str], path: Path) -> None:
     writer.writeheader()
     writer.writerows(rows)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(buf.getvalue())
-    os.replace(tmp, path)
+    write_atomic(path, buf.getvalue())
 
 
 def merge_csv(rows: Sequence[Row], columns: Sequence[str], path: Path) -> list[Row]:

@@ -169,7 +169,8 @@ def doc(
     check: Annotated[bool, typer.Option("--check", help="Write nothing; exit 1 if the page is out of date.")] = False,
 ) -> None:
     """Generate CATALOG.md from the built-in catalog (user catalogs are not included)."""
-    from rik.registry.doc import render_catalog_md, write_atomic
+    from rik.paths import write_atomic
+    from rik.registry.doc import render_catalog_md
     from rik.registry.index import catalog_index
 
     text = render_catalog_md(catalog_index([]), out.parent)

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import csv
 import math
-import os
 from pathlib import Path
 
 from rik import CATALOG_SCHEMA, __version__
@@ -171,10 +170,3 @@ def _range(joint: Row) -> str:
     if joint["type"] == "slide":
         return f"{mm(lo)} to {mm(hi)} mm"
     return f"{math.degrees(lo):.0f} to {math.degrees(hi):.0f}°"
-
-
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename: never half-written."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)

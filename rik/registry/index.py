@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import rik
 from rik.errors import UnknownIdError
-from rik.paths import cache_dir
+from rik.paths import cache_dir, write_atomic
 from rik.registry.sources import NOUNS, SECTIONS, catalog_sources
 
 if TYPE_CHECKING:
@@ -156,9 +156,7 @@ def _write(path: Path, index: CatalogIndex) -> None:
     """Write atomically; a cache that cannot be written (read-only home) is not an error."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        tmp.write_text(json.dumps({"fingerprint": index.fingerprint, "sections": index.sections,
-                                   "pairings": index.pairings}), encoding="utf-8")
-        os.replace(tmp, path)
+        write_atomic(path, json.dumps({"fingerprint": index.fingerprint, "sections": index.sections,
+                                       "pairings": index.pairings}))
     except OSError:
         pass
