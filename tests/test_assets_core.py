@@ -158,3 +158,12 @@ def test_finger_passes_the_coacd_loop_and_is_blocked_by_the_hull(bar):
     assert not blocked.passes
     # the probe sits at half the clearance: its gap to the bar is (depth - 2 r) / 2 where the bar is exact
     assert free.min_distance <= (geometry.clearance.depth - 2 * FINGER_RADIUS) / 2 + 1e-4
+
+
+def test_worker_processes_build_the_same_assets(catalog, tmp_path):
+    ids = ["door/double-80", "flap/drop-down-60"]
+    alone = build_assets(catalog, ids, cache=AssetCache(tmp_path / "one"))
+    pooled = build_assets(catalog, ids, workers=2, cache=AssetCache(tmp_path / "two"))
+    assert [r.status for r in pooled] == ["built", "built"]
+    assert [(r.id, r.key, r.hulls, r.collision_vertices) for r in pooled] == \
+        [(r.id, r.key, r.hulls, r.collision_vertices) for r in alone]

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from rik.assets.cache import AssetCache, CorruptEntry, content_key, library_versions, source_digest
 from rik.assets.decompose import Hulls, coacd_params
+from rik.assets.workers import map_ids
 from rik.errors import RikError, UnknownIdError
 
 if TYPE_CHECKING:
@@ -260,25 +261,15 @@ def resolve_ids(catalog: Catalog, ids: Iterable[str], everything: bool) -> list[
     return list(dict.fromkeys(wanted))
 
 
-_WORKER_CATALOG: Catalog | None = None
-
-
-def _init_worker(overlays: list[Path]) -> None:
-    global _WORKER_CATALOG
-    from rik.registry.load import load_catalog
-
-    _WORKER_CATALOG = load_catalog(overlays)
-
-
-def _build_in_worker(asset_id: str, seed: int, cache_root: str) -> BuildResult:
-    assert _WORKER_CATALOG is not None
-    return build_asset(_WORKER_CATALOG, asset_id, seed, AssetCache(Path(cache_root)))[1]
+def _build_result(catalog: Catalog, asset_id: str, seed: int, cache_root: Path) -> BuildResult:
+    return build_asset(catalog, asset_id, seed, AssetCache(cache_root))[1]
 
 
 def build_assets(catalog: Catalog, ids: Sequence[str], *, overlays: Sequence[Path] = (), seed: int = DEFAULT_SEED,
                  workers: int = 1, cache: AssetCache | None = None,
                  on_result: Callable[[BuildResult], None] | None = None) -> list[BuildResult]:
-    """Build every id; cache hits are answered in this process, misses go to ``workers`` processes.
+    """Build every id; cache hits are answered in this process, misses go to ``workers`` processes
+    (:func:`rik.assets.workers.map_ids`).
 
     ``on_result`` is called once per id as it finishes (for progress bars). Results come back in ``ids`` order.
     """
@@ -310,16 +301,7 @@ def build_assets(catalog: Catalog, ids: Sequence[str], *, overlays: Sequence[Pat
         m = entry.meta
         finish(BuildResult(asset_id, m["kind"], key, "cached", time.perf_counter() - t0,
                            sum(p["hulls"] for p in m["parts"]), sum(p["collision_vertices"] for p in m["parts"])))
-    if misses and workers > 1:
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-        from multiprocessing import get_context
-
-        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_init_worker,
-                                 initargs=(list(overlays),)) as pool:
-            futures = [pool.submit(_build_in_worker, i, seed, str(cache.root)) for i in misses]
-            for future in as_completed(futures):
-                finish(future.result())
-    else:
-        for asset_id in misses:
-            finish(build_asset(catalog, asset_id, seed, cache)[1])
+    build = functools.partial(_build_result, seed=seed, cache_root=cache.root)
+    for _, result in map_ids(build, catalog, misses, workers=workers, overlays=overlays):
+        finish(result)
     return [done[i] for i in ids]

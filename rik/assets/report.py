@@ -7,6 +7,7 @@ second report costs only the pictures that are missing.
 from __future__ import annotations
 
 import csv
+import functools
 import io
 from collections.abc import Callable, Sequence
 from dataclasses import asdict
@@ -16,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 from rik.assets.build import DEFAULT_SEED, build_asset
 from rik.assets.cache import AssetCache, source_digest
 from rik.assets.fidelity import DEFAULT_POINTS, Deviation, Fidelity
+from rik.assets.workers import map_ids
 from rik.errors import RikError
 from rik.paths import write_atomic
 
@@ -132,39 +134,12 @@ def run_rows(fn: Callable[..., Row], catalog: Catalog, ids: Sequence[str], *, wo
              overlays: Sequence[Path] = (), on_row: Callable[[Row], None] | None = None, **kwargs: Any) -> list[Row]:
     """``fn(catalog, id, **kwargs)`` for every id, in ``workers`` processes; rows come back in ``ids`` order."""
     rows: dict[str, Row] = {}
-    if workers > 1 and len(ids) > 1:
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-        from multiprocessing import get_context
-
-        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_init_worker,
-                                 initargs=(list(overlays),)) as pool:
-            futures = [pool.submit(_row_in_worker, fn, i, kwargs) for i in ids]
-            for future in as_completed(futures):
-                row = future.result()
-                rows[row["id"]] = row
-                if on_row:
-                    on_row(row)
-    else:
-        for i in ids:
-            rows[i] = fn(catalog, i, **kwargs)
-            if on_row:
-                on_row(rows[i])
+    for handle_id, row in map_ids(functools.partial(fn, **kwargs), catalog, ids, workers=workers,
+                                  overlays=overlays):
+        rows[handle_id] = row
+        if on_row:
+            on_row(row)
     return [rows[i] for i in ids]
-
-
-_CATALOG: Catalog | None = None
-
-
-def _init_worker(overlays: list[Path]) -> None:
-    global _CATALOG
-    from rik.registry.load import load_catalog
-
-    _CATALOG = load_catalog(overlays)
-
-
-def _row_in_worker(fn: Callable[..., Row], handle_id: str, kwargs: dict[str, Any]) -> Row:
-    assert _CATALOG is not None
-    return fn(_CATALOG, handle_id, **kwargs)
 
 
 def write_csv(rows: Sequence[Row], columns: Sequence[str], path: Path) -> None:
