@@ -11,6 +11,7 @@ import hashlib
 import os
 import shutil
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -183,11 +184,42 @@ def measure_geometry(mesh: trimesh.Trimesh, handle_type: str, shown: str, hole_s
     return geometry
 
 
-def _yaml_text(design: dict[str, Any], handle: dict[str, Any]) -> str:
+def _yaml_text(document: dict[str, Any], header: str) -> str:
     import yaml
 
-    header = "# Imported with `rik assets import`; lengths in metres. Edit the names freely; the mesh is the data.\n"
-    return header + yaml.safe_dump({"designs": [design], "handles": [handle]}, sort_keys=False)
+    return f"# {header}\n" + yaml.safe_dump(document, sort_keys=False)
+
+
+def _register(catalog_dir: Path, stem: str, meshes: dict[Path, trimesh.Trimesh],
+              yaml_text: Callable[[dict[Path, str]], str], what: str) -> Path:
+    """Add ``<stem>.yaml`` and ``meshes`` (paths relative to ``catalog_dir``) to the user catalog. Nothing is left
+    behind on failure: the files are staged in a hidden directory inside ``catalog_dir`` (which catalog scans
+    skip), existing files are never overwritten, and the whole catalog (built-in + every overlay file already
+    there + the new one) must validate before the files are moved into place. ``yaml_text`` receives each mesh
+    file's sha256. Returns the YAML's path."""
+    from rik.registry.load import load_catalog
+
+    catalog_dir.mkdir(parents=True, exist_ok=True)
+    yaml_rel = Path(f"{stem}.yaml")
+    tmp = Path(tempfile.mkdtemp(prefix=".import-", dir=catalog_dir))
+    try:
+        sha256 = {}
+        for rel, mesh in meshes.items():
+            (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
+            mesh.export(tmp / rel, file_type="stl")
+            sha256[rel] = mesh_sha256(tmp / rel)
+        (tmp / yaml_rel).write_text(yaml_text(sha256))
+        for rel in (yaml_rel, *meshes):
+            if (catalog_dir / rel).exists():
+                raise RikError(f"{display_path(catalog_dir / rel)} already exists: {what} was imported before; "
+                               "choose another --id or delete the files")
+        load_catalog([catalog_dir, tmp])
+        for rel in (*meshes, yaml_rel):  # the YAML last: it is what makes the entry visible
+            (catalog_dir / rel).parent.mkdir(parents=True, exist_ok=True)
+            os.replace(tmp / rel, catalog_dir / rel)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return catalog_dir / yaml_rel
 
 
 def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, catalog_dir: Path,
@@ -203,7 +235,6 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
     moved into place."""
     import trimesh  # noqa: F401  (the mesh stack; fail early if it is missing)
 
-    from rik.registry.load import load_catalog
 
     shown = display_path(path)
     if not design_id.startswith(f"{handle_type}/"):
@@ -218,31 +249,23 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
     mount_entry: dict[str, Any] = {"kind": mount_kind}
     if mount_kind == "edge_clip":
         mount_entry["edge"] = edge
-    catalog_dir.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=".import-", dir=catalog_dir))
-    try:
-        (tmp / "meshes").mkdir()
-        mesh_rel = Path("meshes") / f"{stem}.stl"
-        mesh.export(tmp / mesh_rel, file_type="stl")
-        generator = {"name": "user_mesh", "file": mesh_rel.as_posix(), "sha256": mesh_sha256(tmp / mesh_rel)}
+    mesh_rel = Path("meshes") / f"{stem}.stl"
+    handle_id = f"{design_id}-{size}"
+
+    def yaml_text(sha256: dict[Path, str]) -> str:
+        generator = {"name": "user_mesh", "file": mesh_rel.as_posix(), "sha256": sha256[mesh_rel]}
         design = {"id": design_id, "type": handle_type, "subtype": "imported", "name": name or f"Imported {stem}",
                   "generator": generator,
                   "provenance": {"origin": "user_mesh", "reference": f"imported from {path.name}"}}
-        handle = {"id": f"{design_id}-{size}", "design": design_id, "size": size, "finish": finish,
+        handle = {"id": handle_id, "design": design_id, "size": size, "finish": finish,
                   "geometry": geometry, "mount": mount_entry,
                   "mass": round(mass if mass is not None else float(mesh.volume) * density, 4), "licence": licence}
-        (tmp / f"{stem}.yaml").write_text(_yaml_text(design, handle))
-        for target in (catalog_dir / f"{stem}.yaml", catalog_dir / mesh_rel):
-            if target.exists():
-                raise RikError(f"{display_path(target)} already exists: design {design_id} was imported before; "
-                               "choose another --id or delete the files")
-        load_catalog([catalog_dir, tmp])  # the catalog with the new entry must validate as a whole
-        (catalog_dir / "meshes").mkdir(exist_ok=True)
-        os.replace(tmp / mesh_rel, catalog_dir / mesh_rel)
-        os.replace(tmp / f"{stem}.yaml", catalog_dir / f"{stem}.yaml")
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    return ImportedHandle(handle["id"], catalog_dir / f"{stem}.yaml", catalog_dir / mesh_rel, geometry)
+        return _yaml_text({"designs": [design], "handles": [handle]},
+                          "Imported with `rik assets import`; lengths in metres. Edit the names freely; the mesh is "
+                          "the data.")
+
+    yaml_path = _register(catalog_dir, stem, {mesh_rel: mesh}, yaml_text, f"design {design_id}")
+    return ImportedHandle(handle_id, yaml_path, catalog_dir / mesh_rel, geometry)
 
 
 # ---- base units from a GLB with named nodes ---------------------------------------------------------------------
@@ -336,7 +359,6 @@ def import_base_unit(path: Path, mapping_path: Path, *, unit_id: str, catalog_di
     anything is moved into place."""
     import numpy as np
 
-    from rik.registry.load import load_catalog
 
     mapping = read_mapping(mapping_path)
     fields = {"carcass.node": mapping.carcass.node,
@@ -381,34 +403,18 @@ def import_base_unit(path: Path, mapping_path: Path, *, unit_id: str, catalog_di
                                  "size": [round(w - 2 * m, 5), round(h - 2 * m, 5)]},
                        "finish": f.finish})
     stem = unit_id.replace("/", "__")
-    catalog_dir.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=".import-", dir=catalog_dir))
-    try:
-        mesh_dir = Path("meshes") / stem
-        (tmp / mesh_dir).mkdir(parents=True)
-        meshes = {}
-        for name, mesh in parts.items():
-            rel = mesh_dir / f"{name}.stl"
-            mesh.export(tmp / rel, file_type="stl")
-            meshes[name] = {"file": rel.as_posix(), "sha256": mesh_sha256(tmp / rel)}
+    files = {Path("meshes") / stem / f"{name}.stl": mesh for name, mesh in parts.items()}
+
+    def yaml_text(sha256: dict[Path, str]) -> str:
+        meshes = {rel.stem: {"file": rel.as_posix(), "sha256": digest} for rel, digest in sha256.items()}
         entry = {"id": unit_id, "name": mapping.name or f"Imported {stem}",
                  "description": mapping.description or f"Imported from {path.name}", "install": mapping.install,
                  "install_height": mapping.install_height,
                  "carcass": {"width": round(width, 5), "height": round(height, 5), "depth": round(depth, 5),
                              "panel_thickness": mapping.carcass.panel_thickness, "finish": mapping.carcass.finish},
                  "fronts": fronts, "licence": licence, "meshes": meshes}
-        import yaml
+        return _yaml_text({"base_units": [entry]},
+                          "Imported with `rik assets import --base-unit`; lengths in metres, angles in radians.")
 
-        header = "# Imported with `rik assets import --base-unit`; lengths in metres, angles in radians.\n"
-        (tmp / f"{stem}.yaml").write_text(header + yaml.safe_dump({"base_units": [entry]}, sort_keys=False))
-        for target in (catalog_dir / f"{stem}.yaml", catalog_dir / mesh_dir):
-            if target.exists():
-                raise RikError(f"{display_path(target)} already exists: base unit {unit_id} was imported before; "
-                               "choose another --id or delete the files")
-        load_catalog([catalog_dir, tmp])
-        (catalog_dir / "meshes").mkdir(exist_ok=True)
-        os.replace(tmp / mesh_dir, catalog_dir / mesh_dir)
-        os.replace(tmp / f"{stem}.yaml", catalog_dir / f"{stem}.yaml")
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    return unit_id, catalog_dir / f"{stem}.yaml"
+    yaml_path = _register(catalog_dir, stem, files, yaml_text, f"base unit {unit_id}")
+    return unit_id, yaml_path

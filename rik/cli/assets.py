@@ -12,7 +12,7 @@ from typing import Annotated, Any
 
 import typer
 
-from rik.cli.common import CatalogOption, OutputFormat, console, overlays, print_json
+from rik.cli.common import CatalogOption, HandleTypeOpt, OutputFormat, console, overlays, print_json
 
 app = typer.Typer(help="Meshes, CoACD collision, collision fidelity and mesh statistics of handles and base units.",
                   no_args_is_help=True)
@@ -189,12 +189,6 @@ def stats(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = 
     console().print(table)
 
 
-class HandleTypeArg(StrEnum):
-    knob = "knob"
-    two_point = "two_point"
-    finger_pull = "finger_pull"
-
-
 class UnitsArg(StrEnum):
     auto = "auto"
     m = "m"
@@ -212,7 +206,7 @@ def import_(
     file: Annotated[Path, typer.Argument(help="Mesh file: .stl, .obj, .ply, .off, .glb or .gltf.")],
     design_id: Annotated[str, typer.Option("--id", help="New id: a design (two_point/my-bar) or, with --base-unit, "
                                            "a base unit (drawer/my-chest).")],
-    handle_type: Annotated[HandleTypeArg | None, typer.Option("--type", help="Handle type (handles).")] = None,
+    handle_type: Annotated[HandleTypeOpt | None, typer.Option("--type", help="Handle type (handles).")] = None,
     handle: Annotated[bool, typer.Option("--handle", help="Import a handle (the default).")] = True,
     base_unit: Annotated[bool, typer.Option("--base-unit", help="Import a base unit from a GLB with named nodes "
                                             "(needs --parts).")] = False,
@@ -268,7 +262,7 @@ def import_(
     con.print(f"collision: {row['hulls']} convex parts; E_Q->P mean {row['eqp_mean_mm']:.2f} mm, E_P->Q mean "
               f"{row['epq_mean_mm']:.2f} mm (convex hull: {row['hull_eqp_mean_mm']:.2f} mm, "
               f"{row['hull_over_coacd']:.1f}x); pictures in {catalog_dir / 'pictures'}")
-    if handle_type is HandleTypeArg.two_point:
+    if handle_type is HandleTypeOpt.two_point:
         from rik.assets.build import build_asset
         from rik.assets.finger import finger_test
 

@@ -13,7 +13,7 @@ from typing import Annotated, Any
 
 import typer
 
-from rik.cli.common import CatalogOption, OutputFormat, console, overlays, print_json
+from rik.cli.common import CatalogOption, HandleTypeOpt, OutputFormat, console, overlays, print_json
 from rik.errors import RikError
 
 app = typer.Typer(help="Browse the catalog of handles, base units and resistance presets.", no_args_is_help=True)
@@ -25,12 +25,6 @@ class Kind(StrEnum):
     bases = "bases"
     presets = "presets"
     finishes = "finishes"
-
-
-class HandleTypeOpt(StrEnum):
-    knob = "knob"
-    two_point = "two_point"
-    finger_pull = "finger_pull"
 
 
 class JointOpt(StrEnum):

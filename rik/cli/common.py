@@ -22,6 +22,14 @@ class OutputFormat(StrEnum):
     csv = "csv"
 
 
+class HandleTypeOpt(StrEnum):
+    """The three handle types, as a command-line choice."""
+
+    knob = "knob"
+    two_point = "two_point"
+    finger_pull = "finger_pull"
+
+
 def overlays(paths: list[Path] | None) -> list[Path]:
     """The overlay paths a command was given (``--catalog`` or ``RIK_CATALOG``)."""
     return list(paths or [])
