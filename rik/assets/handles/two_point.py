@@ -23,7 +23,7 @@ carry a handle's width beyond its section.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import trimesh
@@ -290,6 +290,29 @@ def _sweep_xz(path: np.ndarray, section: _Section) -> trimesh.Trimesh:
 # ---- shared sizing ------------------------------------------------------------------------------------------------
 
 
+_THICKNESS_CAP = {"round": 1.0, "square": 1.0, "hexagon": 1.0, "oval": 0.8, "flat": 0.5, "strap": 0.25}
+"""Largest thickness of each grip section, as a share of ``grip_diameter`` (its width)."""
+
+
+def _grip_section(kind: str, geometry: HandleGeometry, square_round: float) -> tuple[Any, float, float]:
+    """The cross-section of a bar or bow, with its width ``w_s`` (along y) and thickness ``t`` (m).
+
+    round and oval are ellipses; square, flat and strap rounded rectangles (corner radius ``square_round`` x the
+    smaller side for square, 0.4 t for flat, 0.3 t for strap); hexagon a rounded regular hexagon with its flats
+    facing the user."""
+    w_s = min(geometry.grip_diameter, geometry.width)
+    t = _thickness(geometry, _THICKNESS_CAP[kind] * geometry.grip_diameter)
+    if kind in ("round", "oval"):
+        return _ellipse(w_s / 2, t / 2), w_s, t
+    if kind == "square":
+        return _rounded_rect(w_s, t, square_round * min(w_s, t)), w_s, t
+    if kind in ("flat", "strap"):
+        return _rounded_rect(w_s, t, (0.4 if kind == "flat" else 0.3) * t), w_s, t
+    f = 0.06  # corner radius / across-corners size; across flats is then (1 - 2f) sin60 + 2f of it
+    across = min(w_s, t / ((1 - 2 * f) * _SIN60 + 2 * f))
+    return _rounded_hexagon(across, f * across), w_s, t
+
+
 def _thickness(geometry: HandleGeometry, cap: float) -> float:
     """Section thickness normal to the centre line, m: ``projection - clearance.depth`` (the grip's underside
     on the clearance), at most ``cap``; without a clearance, ``cap`` but at most 40 % of the projection."""
@@ -358,19 +381,7 @@ def bar_pull(spec: BarPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
     """
     length, width, proj, grip = geometry.length, geometry.width, geometry.projection, geometry.grip_diameter
     hs = _hole_spacing(geometry)
-    w_s = min(grip, width)
-    cap = {"round": grip, "square": grip, "hexagon": grip, "oval": 0.8 * grip, "flat": 0.5 * grip}[spec.section]
-    t = _thickness(geometry, cap)
-    if spec.section in ("round", "oval"):
-        section = _ellipse(w_s / 2, t / 2)
-    elif spec.section == "square":
-        section = _rounded_rect(w_s, t, 0.12 * min(w_s, t))
-    elif spec.section == "flat":
-        section = _rounded_rect(w_s, t, 0.4 * t)
-    else:
-        f = 0.06  # corner radius / across-corners size; across flats is then (1 - 2f) sin60 + 2f of it
-        across = min(w_s, t / ((1 - 2 * f) * _SIN60 + 2 * f))
-        section = _rounded_hexagon(across, f * across)
+    section, w_s, t = _grip_section(spec.section, geometry, square_round=0.12)
     sec_w, sec_t = section.extent()
     z_mid = proj - sec_t / 2
     x_end = length / 2
@@ -479,17 +490,7 @@ def bow_pull(spec: BowPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
     hs = _hole_spacing(geometry)
     xs = hs / 2
     xo = length / 2
-    w_s = min(grip, width)
-    cap = {"round": grip, "square": grip, "oval": 0.8 * grip, "flat": 0.5 * grip, "strap": 0.25 * grip}[spec.section]
-    t = _thickness(geometry, cap)
-    if spec.section in ("round", "oval"):
-        section = _ellipse(w_s / 2, t / 2)
-    elif spec.section == "square":
-        section = _rounded_rect(w_s, t, 0.15 * min(w_s, t))
-    elif spec.section == "flat":
-        section = _rounded_rect(w_s, t, 0.4 * t)
-    else:
-        section = _rounded_rect(w_s, t, 0.3 * t)
+    section, w_s, t = _grip_section(spec.section, geometry, square_round=0.15)
     half_t = t / 2
     zc = proj - half_t
 
