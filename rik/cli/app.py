@@ -6,7 +6,7 @@ import sys
 
 import typer
 
-from rik.cli import assets, catalog
+from rik.cli import assets, catalog, variants
 from rik.cli.common import CatalogOption, overlays
 from rik.errors import RikError
 
@@ -19,6 +19,7 @@ app = typer.Typer(
 )
 app.add_typer(catalog.app, name="catalog")
 app.add_typer(assets.app, name="assets")
+app.add_typer(variants.app, name="variants")
 
 
 @app.command()

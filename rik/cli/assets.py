@@ -5,14 +5,16 @@ Only parsing and printing here; :mod:`rik.assets` does the work (heavy libraries
 
 from __future__ import annotations
 
-import os
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
-from rik.cli.common import CatalogOption, HandleTypeOpt, OutputFormat, console, overlays, print_json
+from rik.cli.common import (
+    DEFAULT_WORKERS, CatalogOption, HandleTypeOpt, OutputFormat, WorkersOpt, console, overlays, print_json,
+    progress_bar,
+)
 
 app = typer.Typer(help="Meshes, CoACD collision, collision fidelity and mesh statistics of handles and base units.",
                   no_args_is_help=True)
@@ -20,19 +22,7 @@ app = typer.Typer(help="Meshes, CoACD collision, collision fidelity and mesh sta
 IdsArg = Annotated[list[str] | None, typer.Argument(help="Handle or base-unit ids, e.g. two_point/bow-128.",
                                                     show_default=False)]
 AllOpt = Annotated[bool, typer.Option("--all", help="Every handle (and, for build, every base unit).")]
-WorkersOpt = Annotated[int, typer.Option("--workers", "-j", min=1, help="Parallel processes.")]
 SeedOpt = Annotated[int, typer.Option(help="Seed of CoACD and of the surface sampling.")]
-
-
-DEFAULT_WORKERS = max(1, min(8, os.cpu_count() or 1))
-"""One process per core, at most eight."""
-
-
-def _progress() -> Any:
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                    TextColumn("{task.fields[last]}"), console=console(), transient=False)
 
 
 def _print_csv(rows: list[dict[str, Any]], columns: list[str]) -> None:
@@ -89,7 +79,7 @@ def build(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = 
     wanted = resolve_ids(cat, ids or [], everything)
     cache = AssetCache()
     notes = []
-    with _progress() as progress:
+    with progress_bar() as progress:
         task = progress.add_task("assets", total=len(wanted), last="")
 
         def advance(result: Any) -> None:
@@ -124,7 +114,7 @@ def fidelity(ids: IdsArg = None, everything: AllOpt = False,
 
     cat = load_catalog(overlays(catalog))
     wanted = handle_ids(cat, ids or [], everything)
-    with _progress() as progress:
+    with progress_bar() as progress:
         task = progress.add_task("fidelity", total=len(wanted), last="")
         rows = run_rows(fidelity_row, cat, wanted, workers=workers, overlays=overlays(catalog),
                         on_row=lambda r: progress.update(task, advance=1, last=r["id"]), out=out, points=points,

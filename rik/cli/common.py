@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
@@ -14,6 +15,11 @@ CatalogOption = Annotated[
                  help="A user catalog (YAML file or directory) to add to the built-in one; repeatable. "
                       "RIK_CATALOG takes several paths joined by ':'."),
 ]
+
+
+DEFAULT_WORKERS = max(1, min(8, os.cpu_count() or 1))
+"""One process per core, at most eight."""
+WorkersOpt = Annotated[int, typer.Option("--workers", "-j", min=1, help="Parallel processes.")]
 
 
 class OutputFormat(StrEnum):
@@ -53,3 +59,11 @@ def console() -> Any:
 
     width = None if sys.stdout.isatty() else 240
     return Console(highlight=False, emoji=False, width=width)
+
+
+def progress_bar() -> Any:
+    """A rich progress bar for batch work: description, bar, done/total, elapsed time and the last item."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                    TextColumn("{task.fields[last]}"), console=console(), transient=False)

@@ -1,6 +1,6 @@
 """Typed, frozen models of everything in the catalog. Importing this package imports pydantic only."""
 
-from rik.schemas.base_units import BaseUnit, Carcass, DrawerBox, Front, MountSite
+from rik.schemas.base_units import BaseUnit, Carcass, DrawerBox, Front, MountSite, Placement
 from rik.schemas.common import Provenance
 from rik.schemas.finishes import Finish
 from rik.schemas.generators import GeneratorSpec
@@ -10,5 +10,5 @@ from rik.schemas.joints import JointResistance, JointSpec, JointType, Resistance
 __all__ = [
     "BaseUnit", "Carcass", "Clearance", "DesignProvenance", "DrawerBox", "Finish", "Front", "GeneratorSpec",
     "Handle", "HandleDesign", "HandleGeometry", "HandleType", "JointResistance", "JointSpec", "JointType",
-    "Mount", "MountSite", "Provenance", "ResistancePreset", "Spring",
+    "Mount", "MountSite", "Placement", "Provenance", "ResistancePreset", "Spring",
 ]

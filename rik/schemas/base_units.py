@@ -14,7 +14,8 @@ from typing import Literal
 
 from pydantic import Field
 
-from rik.schemas.common import CatalogId, Frozen, Length, MeshFile, NonNegLength, Quat, Vec3
+from rik.schemas.common import CatalogId, Frozen, Length, MeshFile, NonNegLength, Quat, Real, Vec3
+from rik.schemas.handles import HandleType
 from rik.schemas.joints import JointSpec
 
 
@@ -45,6 +46,23 @@ class MountSite(Frozen):
     """Extents of the allowed rectangle along the site's x and y, m; a handle's whole footprint must lie in it."""
 
 
+class Placement(Frozen):
+    """Where handles go on one front, overriding the combinator's rule for the front's kind.
+
+    Positions are in the mount site's frame (x along the front's width, y down on upright fronts, metres),
+    relative to the centre of the mount rectangle.
+    """
+
+    at: tuple[Real, Real]
+    """Site-frame (x, y) of the handle's mount point, relative to the mount rectangle's centre, m. For edge
+    pulls: x along the edge (the point on the edge is the combinator's)."""
+    rotation: Literal[0, 90] | None = None
+    """Degrees about the site's z: 0 puts the handle's long axis along the site's x (horizontal on upright
+    fronts), 90 across it. Absent: the rule's rotation."""
+    handle_types: tuple[HandleType, ...] = (HandleType.knob, HandleType.two_point, HandleType.finger_pull)
+    """Handle types this placement applies to; the first placement of a front that lists a type wins."""
+
+
 class DrawerBox(Frozen):
     """The box behind a drawer front that travels with it."""
 
@@ -69,6 +87,8 @@ class Front(Frozen):
     drawer_box: DrawerBox | None = None
     """For drawers: the box behind the front."""
     finish: CatalogId
+    placements: tuple[Placement, ...] = ()
+    """Overrides of the combinator's placement rule, per handle type (see :class:`Placement`)."""
 
 
 class BaseUnit(Frozen):

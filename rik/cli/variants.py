@@ -1,0 +1,171 @@
+"""``rik variants``: list, build, validate and look at base unit x handle x preset variants (MJCF).
+
+Only parsing and printing here; :mod:`rik.combinator` does the work (MuJoCo loads inside it).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from rik.cli.common import (
+    DEFAULT_WORKERS, CatalogOption, HandleTypeOpt, OutputFormat, WorkersOpt, console, overlays, print_json,
+    progress_bar,
+)
+from rik.errors import RikError
+
+app = typer.Typer(help="Validated MuJoCo variants: every base unit x handle x resistance preset.",
+                  no_args_is_help=True)
+
+BaseOpt = Annotated[list[str] | None, typer.Option("--base", "-b", help="Base unit id (repeatable).")]
+TypeOpt = Annotated[list[HandleTypeOpt] | None, typer.Option("--handle-type", "-t", help="Handle type (repeatable).")]
+HandleOpt = Annotated[list[str] | None, typer.Option("--handle", help="Handle id (repeatable).")]
+PresetOpt = Annotated[list[str] | None, typer.Option("--preset", "-p", help="Resistance preset id (repeatable; "
+                                                     "default: every preset).")]
+OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Directory of built variants.")]
+DirOpt = Annotated[Path, typer.Option("--dir", "-d", help="Directory of built variants.")]
+
+
+def _select(cat: Any, base: list[str] | None, handle_type: list[HandleTypeOpt] | None, handle: list[str] | None,
+            preset: list[str] | None) -> list[Any]:
+    from rik.combinator.ids import select_variants
+
+    return select_variants(cat, bases=base or (), handle_types=[t.value for t in handle_type or ()],
+                           handles=handle or (), presets=preset or ())
+
+
+@app.command("list")
+def list_variants(base: BaseOpt = None, handle_type: TypeOpt = None, handle: HandleOpt = None,
+                  preset: PresetOpt = None, directory: DirOpt = Path("variants"),
+                  format: Annotated[OutputFormat, typer.Option("--format", "-f", help="table, json or csv.")] =
+                  OutputFormat.table, catalog: CatalogOption = None) -> None:
+    """List variant ids (every pairing of the filters), with their status in --dir when built there."""
+    from rik.combinator.build import read_manifest
+    from rik.registry.load import load_catalog
+
+    cat = load_catalog(overlays(catalog))
+    keys = _select(cat, base, handle_type, handle, preset)
+    built = read_manifest(directory)["variants"]
+    rows = [{"id": k.id, "base_unit": k.base, "handle": k.handle,
+             "handle_type": cat.handle_type(cat.handles[k.handle]).value, "preset": k.preset,
+             "status": built.get(k.id, {}).get("status", "not built")} for k in keys]
+    if format is OutputFormat.json:
+        print_json(rows)
+        return
+    if format is OutputFormat.csv:
+        import csv
+        import sys
+
+        writer = csv.DictWriter(sys.stdout, fieldnames=list(rows[0]) if rows else ["id"], lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+        return
+    from rich.table import Table
+
+    table = Table(title=f"{len(rows)} variants", title_justify="left")
+    for column in ("id", "base unit", "handle", "type", "preset", "status"):
+        table.add_column(column)
+    for r in rows:
+        table.add_row(*(str(v) for v in r.values()))
+    console().print(table)
+
+
+@app.command()
+def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g. "
+                                                           "drawer-chest-60__two_point-bow-128__normal.",
+                                                           show_default=False)] = None,
+          everything: Annotated[bool, typer.Option("--all", help="Every pairing of the filters.")] = False,
+          base: BaseOpt = None, handle_type: TypeOpt = None, handle: HandleOpt = None, preset: PresetOpt = None,
+          workers: WorkersOpt = DEFAULT_WORKERS, out: OutOpt = Path("variants"),
+          force: Annotated[bool, typer.Option("--force", help="Rebuild variants that are already valid.")] = False,
+          catalog: CatalogOption = None) -> None:
+    """Build variants into --out/<id>/ (model.xml, scene.xml, meshes/, report.json); valid ones are skipped."""
+    from rik.combinator.build import MANIFEST, build_variants
+    from rik.combinator.ids import parse_variant_id
+    from rik.registry.load import load_catalog
+
+    cat = load_catalog(overlays(catalog))
+    filters = any((base, handle_type, handle, preset))
+    if ids and (everything or filters):
+        raise RikError("name variant ids, or select them with --all and the filters, not both")
+    if ids:
+        keys = list(dict.fromkeys(parse_variant_id(cat, i) for i in ids))
+    elif everything or filters:
+        keys = _select(cat, base, handle_type, handle, preset)
+    else:
+        raise RikError("name at least one variant id, or pass --all (with --base, --handle-type, --handle or "
+                       "--preset to narrow it)")
+    con = console()
+    with progress_bar() as progress:
+        task = progress.add_task("variants", total=len(keys), last="")
+
+        def advance(result: Any) -> None:
+            progress.update(task, advance=1, last=f"{result.id} ({result.status})")
+
+        def assets_done(built: int) -> None:
+            if built:
+                progress.console.print(f"{built} assets built into the cache first")
+
+        results = build_variants(cat, keys, out, workers=workers, overlays=overlays(catalog), force=force,
+                                 on_result=advance, on_assets=assets_done)
+    rejected = [r for r in results if r.status == "rejected"]
+    counts = {s: sum(r.status == s for r in results) for s in ("built", "skipped")}
+    for r in rejected:
+        con.print(f"[red]rejected[/] {r.id}: check {r.failed_check}: {r.reason}")
+    con.print(f"{len(results)} variants: {counts['built'] + counts['skipped']} valid ({counts['built']} built, "
+              f"{counts['skipped']} already valid), {len(rejected)} rejected. Manifest: {out / MANIFEST}")
+    if rejected:
+        if len(results) == 1:
+            raise RikError(f"variant {rejected[0].id} rejected by check {rejected[0].failed_check}: "
+                           f"{rejected[0].reason}")
+        raise RikError(f"{len(rejected)} of {len(results)} variants rejected (listed above); nothing was written "
+                       "for them")
+
+
+@app.command()
+def validate(target: Annotated[str, typer.Argument(metavar="PATH|ID", help="A variant directory (or its "
+                                                   "model.xml), or a variant id.")],
+             directory: DirOpt = Path("variants"),
+             format: Annotated[OutputFormat, typer.Option("--format", "-f", help="table or json.")] =
+             OutputFormat.table, catalog: CatalogOption = None) -> None:
+    """Run every check on a variant: its written files when it is built, else assembled in memory."""
+    from rik.combinator.inspect import validate_variant
+    from rik.registry.load import load_catalog
+
+    result = validate_variant(load_catalog(overlays(catalog)), target, directory)
+    if format is OutputFormat.json:
+        print_json({"id": result.key.id, "source": result.source, "passed": result.passed, "notes": result.notes,
+                    "checks": [c.as_dict() for c in result.checks]})
+    else:
+        from rich.markup import escape
+
+        con = console()
+        con.print(f"[bold]{result.key.id}[/] (checked from {result.source})")
+        for c in result.checks:
+            con.print(f"  {'[green]pass[/]' if c.passed else '[red]FAIL[/]'}  {c.name:20s} {escape(c.reason)}")
+        for note in result.notes:
+            con.print(f"[yellow]note:[/] {note}")
+    if not result.passed:
+        failed = next(c for c in result.checks if not c.passed)
+        raise RikError(f"variant {result.key.id} fails check {failed.name}: {failed.reason}")
+
+
+@app.command()
+def show(variant: Annotated[str, typer.Argument(metavar="ID", help="A variant id.")],
+         png: Annotated[Path, typer.Option("--png", help="Where to write the picture.")],
+         open_fraction: Annotated[float, typer.Option("--open", help="Open every front to this fraction of its "
+                                                      "range.")] = 0.5,
+         width: Annotated[int, typer.Option(min=64, max=4096, help="Pixels.")] = 960,
+         height: Annotated[int, typer.Option(min=64, max=4096, help="Pixels.")] = 720,
+         directory: DirOpt = Path("variants"), catalog: CatalogOption = None) -> None:
+    """Render a variant's scene through its front camera (MuJoCo, headless) into a PNG."""
+    from rik.combinator.ids import parse_variant_id
+    from rik.combinator.inspect import render_variant
+    from rik.registry.load import load_catalog
+
+    cat = load_catalog(overlays(catalog))
+    path = render_variant(cat, parse_variant_id(cat, variant), png, out=directory, open_fraction=open_fraction,
+                          width=width, height=height)
+    console().print(f"wrote {path}")

@@ -1,0 +1,351 @@
+"""Build variants: assemble, check, and write ``<out>/<id>/{model.xml, scene.xml, meshes/, report.json}``.
+
+A variant is written only when every check passes, through a staging directory renamed into place, so a
+directory under ``<out>`` is always a whole, valid variant. Mesh files are stored once per content under
+``<out>/.meshes/`` and hard-linked into each variant (copied where links are not possible), so a thousand
+variants of 83 handles take the disk of 83. ``<out>/manifest.json`` lists every variant asked for and its
+status. A variant whose report matches its current spec hash and whose files match their recorded sha256 is
+skipped (resumable builds).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+import shutil
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rik.combinator.checks import GEOMETRY_CHECKS, CheckResult, ModelContext, run_model_checks
+from rik.combinator.ids import VariantKey
+from rik.errors import RikError
+
+if TYPE_CHECKING:
+    from rik.assets.build import Asset
+    from rik.assets.cache import AssetCache
+    from rik.combinator.mjcf import VariantModel
+    from rik.registry.catalog import Catalog
+
+REPORT_FORMAT = 1
+DEFAULT_OUT = Path("variants")
+MESH_STORE = ".meshes"
+STAGING = ".staging"
+MANIFEST = "manifest.json"
+COMBINATOR_DIR = Path(__file__).parent
+
+
+class VariantRejected(RikError):
+    """A variant failed a check; the message names the check and why."""
+
+    def __init__(self, variant: str, check: CheckResult):
+        self.variant, self.check = variant, check
+        super().__init__(f"variant {variant} rejected by check {check.name}: {check.reason}")
+
+
+@dataclass(frozen=True)
+class VariantResult:
+    """What building one variant did (small and picklable: it comes back from worker processes)."""
+
+    id: str
+    status: str
+    """``built``, ``skipped`` (already valid on disk) or ``rejected``."""
+    spec_hash: str
+    seconds: float
+    failed_check: str | None = None
+    reason: str = ""
+    hulls: int = 0
+    collision_vertices: int = 0
+    compile_seconds: float | None = None
+
+
+@dataclass
+class CheckedVariant:
+    """A variant assembled and checked in memory."""
+
+    variant: VariantModel
+    checks: list[CheckResult]
+    model: Any = None
+    compile_seconds: float | None = None
+    metrics: dict[str, Any] | None = None
+
+    @property
+    def failed(self) -> CheckResult | None:
+        return next((c for c in self.checks if not c.passed), None)
+
+
+# ---- identity ---------------------------------------------------------------------------------------------------
+@functools.cache
+def _code_digest() -> str:
+    from rik.assets.cache import source_digest
+
+    return source_digest(sorted(COMBINATOR_DIR.glob("*.py")))
+
+
+def spec_identity(catalog: Catalog, key: VariantKey) -> dict[str, Any]:
+    """Everything that decides a variant's files: the catalog entries, the asset keys, the combinator's code
+    and the library versions."""
+    from importlib.metadata import version
+
+    from rik.assets.build import asset_key
+    from rik.assets.cache import library_versions
+
+    unit, handle = catalog.base_unit(key.base), catalog.handle(key.handle)
+    finishes = sorted({unit.carcass.finish, handle.finish, *(f.finish for f in unit.fronts)})
+    return {"report_format": REPORT_FORMAT, "variant": key.id,
+            "base_unit": unit.model_dump(mode="json"), "handle": handle.model_dump(mode="json"),
+            "design": catalog.designs[handle.design].model_dump(mode="json"),
+            "preset": catalog.preset(key.preset).model_dump(mode="json"),
+            "finishes": [catalog.finishes[f].model_dump(mode="json") for f in finishes],
+            "assets": [asset_key(catalog, key.handle), asset_key(catalog, key.base)],
+            "code": _code_digest(), "versions": {**library_versions(), "mujoco": version("mujoco")}}
+
+
+def spec_hash(catalog: Catalog, key: VariantKey) -> str:
+    from rik.assets.cache import content_key
+
+    return content_key(spec_identity(catalog, key))
+
+
+# ---- assemble and check -----------------------------------------------------------------------------------------
+_ASSETS: dict[tuple[str, str], Asset] = {}
+"""Assets loaded in this process, by (cache root, id): a handle is used by every base unit."""
+
+
+def _asset(catalog: Catalog, asset_id: str, cache: AssetCache) -> Asset:
+    from rik.assets.build import asset_key, build_asset
+
+    memo = (str(cache.root), asset_key(catalog, asset_id))
+    if memo not in _ASSETS:
+        if len(_ASSETS) > 128:
+            _ASSETS.clear()
+        _ASSETS[memo] = build_asset(catalog, asset_id, cache=cache)[0]
+    return _ASSETS[memo]
+
+
+def check_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None = None,
+                  stop_at_failure: bool = True) -> CheckedVariant:
+    """Assemble a variant in memory and run its checks (geometry first, then the compiled model's)."""
+    import mujoco
+
+    from rik.assets.cache import AssetCache
+    from rik.combinator.mjcf import variant_spec
+
+    cache = cache or AssetCache()
+    variant = variant_spec(catalog, key, _asset(catalog, key.handle, cache), _asset(catalog, key.base, cache))
+    checks: list[CheckResult] = []
+    for check in GEOMETRY_CHECKS:
+        checks.append(check(catalog, variant))
+        if stop_at_failure and not checks[-1].passed:
+            return CheckedVariant(variant, checks)
+    for name, data in variant.mesh_files.items():
+        variant.spec.assets[name] = data
+    t0 = time.perf_counter()
+    try:
+        model = variant.spec.compile()
+    except ValueError as exc:
+        checks.append(CheckResult("compiles", False, f"MuJoCo could not compile the model: {exc}"))
+        return CheckedVariant(variant, checks)
+    compile_seconds = time.perf_counter() - t0
+    checks.append(CheckResult("compiles", True, f"MuJoCo compiled it in {compile_seconds * 1000:.0f} ms"))
+    ctx = ModelContext(variant, variant.unit, model, mujoco.MjData(model))
+    checks += run_model_checks(ctx, stop_at_failure)
+    return CheckedVariant(variant, checks, model, compile_seconds, ctx.metrics)
+
+
+# ---- writing ----------------------------------------------------------------------------------------------------
+def _sha256(data: bytes) -> str:
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()
+
+
+def _store_mesh(out: Path, data: bytes) -> Path:
+    """The content-addressed copy of a mesh file under ``<out>/.meshes`` (written once)."""
+    store = out / MESH_STORE / f"{_sha256(data)}.stl"
+    if not store.exists():
+        store.parent.mkdir(parents=True, exist_ok=True)
+        tmp = store.with_name(f".{store.name}.{os.getpid()}.tmp")
+        tmp.write_bytes(data)
+        os.replace(tmp, store)
+    return store
+
+
+def _link(src: Path, dst: Path) -> None:
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copyfile(src, dst)
+
+
+def materialise(checked: CheckedVariant, directory: Path, report: dict[str, Any], out: Path | None = None) -> None:
+    """Write ``model.xml``, ``scene.xml``, ``meshes/`` and ``report.json`` into ``directory`` (replaced
+    whole, through a staging directory beside it under ``out``)."""
+    from rik.combinator.scene import scene_xml
+
+    variant = checked.variant
+    out = out or directory.parent
+    stage = out / STAGING / f"{directory.name}.{os.getpid()}"
+    shutil.rmtree(stage, ignore_errors=True)
+    (stage / "meshes").mkdir(parents=True)
+    files: dict[str, str] = {}
+    for name, data in sorted(variant.mesh_files.items()):
+        _link(_store_mesh(out, data), stage / "meshes" / name)
+        files[f"meshes/{name}"] = _sha256(data)
+    model_xml = variant.spec.to_xml()
+    scene = scene_xml(variant.key.id, variant.unit)
+    for name, text in (("model.xml", model_xml), ("scene.xml", scene)):
+        (stage / name).write_text(text, encoding="utf-8")
+        files[name] = _sha256(text.encode())
+    (stage / "report.json").write_text(json.dumps({**report, "files": files}, indent=2) + "\n", encoding="utf-8")
+    old = out / STAGING / f"{directory.name}.{os.getpid()}.old"
+    if directory.exists():
+        os.replace(directory, old)
+    os.replace(stage, directory)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def make_report(catalog: Catalog, checked: CheckedVariant, digest: str, build_seconds: float) -> dict[str, Any]:
+    """The ``report.json`` of a checked variant (without its file list)."""
+    from importlib.metadata import version
+
+    from rik import __version__
+
+    variant = checked.variant
+    model = checked.model
+    pull = (checked.metrics or {}).get("pull", {})
+    fronts = [{"id": f.id, "kind": f.kind, "motion": f.motion, "joint_range": list(f.joint_range),
+               "placement": {"rule": f.placement.rule, "u_m": round(f.placement.u, 6), "v_m": round(f.placement.v, 6),
+                             "rotation_deg": f.placement.rotation, "edge": f.placement.edge,
+                             "pos_m": [round(c, 6) for c in f.placement.pos]},
+               **pull.get(f.id, {})} for f in variant.fronts]
+    failed = checked.failed
+    return {
+        **variant.info(), "status": "valid" if failed is None else "rejected", "spec_hash": digest,
+        "rik_version": __version__, "mujoco_version": version("mujoco"),
+        "checks": [c.as_dict() for c in checked.checks],
+        "fronts": fronts,
+        "hulls": variant.hulls, "collision_vertices": _collision_vertices(variant),
+        "bodies": int(model.nbody) if model is not None else None,
+        "geoms": int(model.ngeom) if model is not None else None,
+        "compile_seconds": round(checked.compile_seconds, 5) if checked.compile_seconds else None,
+        "step_seconds": round((checked.metrics or {}).get("step_seconds", 0.0), 8) or None,
+        "build_seconds": round(build_seconds, 4),
+    }
+
+
+def _collision_vertices(variant: VariantModel) -> int:
+    """Vertices of every collision mesh geom plus 8 per box."""
+    import numpy as np
+
+    counts = {}
+    for name, data in variant.mesh_files.items():
+        faces = int(np.frombuffer(data[80:84], dtype=np.uint32)[0])
+        tri = np.frombuffer(data[84:], dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")], count=faces)
+        counts[name[:-4]] = len(np.unique(tri["v"].reshape(-1, 3), axis=0))
+    total = 0
+    for g in variant.spec.geoms:
+        if g.classname.name != "collision":
+            continue
+        total += counts.get(g.meshname, 0) if g.meshname else 8
+    return total
+
+
+# ---- one variant ------------------------------------------------------------------------------------------------
+def is_current(directory: Path, digest: str) -> bool:
+    """True when ``directory`` holds a valid variant built from this spec hash, with every file intact."""
+    try:
+        report = json.loads((directory / "report.json").read_text(encoding="utf-8"))
+        if report.get("spec_hash") != digest or report.get("status") != "valid":
+            return False
+        return all(_sha256((directory / name).read_bytes()) == sha for name, sha in report["files"].items())
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+
+
+def build_variant(catalog: Catalog, key: VariantKey, out: Path = DEFAULT_OUT, cache: AssetCache | None = None,
+                  force: bool = False) -> VariantResult:
+    """Build one variant into ``out/<id>`` unless it is already there and current; a variant that fails a check
+    is not written (the result says which check and why)."""
+    t0 = time.perf_counter()
+    digest = spec_hash(catalog, key)
+    directory = out / key.id
+    if not force and is_current(directory, digest):
+        return VariantResult(key.id, "skipped", digest, time.perf_counter() - t0)
+    checked = check_variant(catalog, key, cache)
+    failed = checked.failed
+    if failed is not None:
+        return VariantResult(key.id, "rejected", digest, time.perf_counter() - t0, failed.name, failed.reason)
+    report = make_report(catalog, checked, digest, time.perf_counter() - t0)
+    materialise(checked, directory, report, out)
+    return VariantResult(key.id, "built", digest, time.perf_counter() - t0, hulls=report["hulls"],
+                         collision_vertices=report["collision_vertices"], compile_seconds=checked.compile_seconds)
+
+
+# ---- many variants ----------------------------------------------------------------------------------------------
+def _build_one(catalog: Catalog, variant: str, out: Path, cache_root: Path, force: bool) -> VariantResult:
+    from rik.assets.cache import AssetCache
+    from rik.combinator.ids import parse_variant_id
+
+    return build_variant(catalog, parse_variant_id(catalog, variant), out, AssetCache(cache_root), force)
+
+
+def read_manifest(out: Path) -> dict[str, Any]:
+    """``<out>/manifest.json`` (empty when absent or unreadable)."""
+    try:
+        data = json.loads((out / MANIFEST).read_text(encoding="utf-8"))
+        return data if isinstance(data.get("variants"), dict) else {"variants": {}}
+    except (OSError, ValueError, AttributeError):
+        return {"variants": {}}
+
+
+def write_manifest(out: Path, results: Sequence[VariantResult]) -> Path:
+    """Merge ``results`` into ``<out>/manifest.json`` (atomically)."""
+    from rik.paths import write_atomic
+
+    manifest = read_manifest(out)
+    variants = manifest["variants"]
+    for r in results:
+        variants[r.id] = {"status": "valid" if r.status in ("built", "skipped") else "rejected",
+                          "spec_hash": r.spec_hash, "failed_check": r.failed_check, "reason": r.reason}
+    manifest = {"format": REPORT_FORMAT, "variants": dict(sorted(variants.items()))}
+    out.mkdir(parents=True, exist_ok=True)
+    write_atomic(out / MANIFEST, json.dumps(manifest, indent=1) + "\n")
+    return out / MANIFEST
+
+
+def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEFAULT_OUT, *, workers: int = 1,
+                   overlays: Sequence[Path] = (), cache: AssetCache | None = None, force: bool = False,
+                   on_result: Callable[[VariantResult], None] | None = None,
+                   on_assets: Callable[[int], None] | None = None) -> list[VariantResult]:
+    """Build many variants (in ``workers`` processes), then record them in the manifest. Their assets are
+    built first (once each, also in parallel). ``on_result`` is called as each variant finishes."""
+    from rik.assets.build import build_assets
+    from rik.assets.cache import AssetCache
+    from rik.assets.workers import map_ids
+
+    cache = cache or AssetCache()
+    needed = list(dict.fromkeys([k.handle for k in keys] + [k.base for k in keys]))
+    assets = build_assets(catalog, needed, overlays=overlays, workers=workers, cache=cache)
+    if on_assets:
+        on_assets(sum(r.status != "cached" for r in assets))
+    out.mkdir(parents=True, exist_ok=True)
+    fn = functools.partial(_build_one, out=out.resolve(), cache_root=cache.root, force=force)
+    done: dict[str, VariantResult] = {}
+    pending: list[VariantResult] = []
+    try:
+        for _, result in map_ids(fn, catalog, [k.id for k in keys], workers=workers, overlays=overlays):
+            done[result.id] = result
+            pending.append(result)
+            if on_result:
+                on_result(result)
+            if len(pending) >= 100:
+                write_manifest(out, pending)
+                pending = []
+    finally:
+        write_manifest(out, pending)
+        shutil.rmtree(out / STAGING, ignore_errors=True)
+    return [done[k.id] for k in keys]
