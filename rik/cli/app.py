@@ -47,6 +47,10 @@ def _root(version: bool = typer.Option(False, "--version", help="Print rik's ver
 
 def main() -> None:
     """Entry point: bad input becomes one line on stderr and exit code 2, never a traceback."""
+    import os
+
+    if not os.environ.get("DISPLAY"):
+        os.environ.setdefault("MUJOCO_GL", "egl")  # headless machines render through EGL
     try:
         app()
     except RikError as exc:

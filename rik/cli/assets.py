@@ -12,7 +12,14 @@ from typing import Annotated, Any
 import typer
 
 from rik.cli.common import (
-    DEFAULT_WORKERS, CatalogOption, HandleTypeOpt, OutputFormat, WorkersOpt, console, overlays, print_json,
+    DEFAULT_WORKERS,
+    CatalogOption,
+    HandleTypeOpt,
+    OutputFormat,
+    WorkersOpt,
+    console,
+    overlays,
+    print_json,
     progress_bar,
 )
 

@@ -11,7 +11,14 @@ from typing import Annotated, Any
 import typer
 
 from rik.cli.common import (
-    DEFAULT_WORKERS, CatalogOption, HandleTypeOpt, OutputFormat, WorkersOpt, console, overlays, print_json,
+    DEFAULT_WORKERS,
+    CatalogOption,
+    HandleTypeOpt,
+    OutputFormat,
+    WorkersOpt,
+    console,
+    overlays,
+    print_json,
     progress_bar,
 )
 from rik.errors import RikError
@@ -50,7 +57,7 @@ def list_variants(base: BaseOpt = None, handle_type: TypeOpt = None, handle: Han
     built = read_manifest(directory)["variants"]
     rows = [{"id": k.id, "base_unit": k.base, "handle": k.handle,
              "handle_type": cat.handle_type(cat.handles[k.handle]).value, "preset": k.preset,
-             "status": built.get(k.id, {}).get("status", "not built")} for k in keys]
+             "status": built.get(k.id, {}).get("status") or _status_on_disk(directory / k.id)} for k in keys]
     if format is OutputFormat.json:
         print_json(rows)
         return
@@ -70,6 +77,16 @@ def list_variants(base: BaseOpt = None, handle_type: TypeOpt = None, handle: Han
     for r in rows:
         table.add_row(*(str(v) for v in r.values()))
     console().print(table)
+
+
+def _status_on_disk(path: Path) -> str:
+    """A variant's status from its report when the manifest does not list it."""
+    import json
+
+    try:
+        return json.loads((path / "report.json").read_text(encoding="utf-8"))["status"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return "not built"
 
 
 @app.command()

@@ -231,11 +231,10 @@ def _grasp_velocity(ctx: ModelContext, front: str) -> np.ndarray:
 def check_opens_outward(ctx: ModelContext) -> CheckResult:
     """Opening each joint moves its handle out of the front (along the front's outward normal), not into the
     carcass."""
+    import mujoco
     import numpy as np
 
     from rik.registry.geometry import site_axes
-
-    import mujoco
 
     unit = ctx.variant.key.base
     ctx.pose({})
@@ -353,8 +352,8 @@ def check_rest_stable(ctx: ModelContext) -> CheckResult:
     ctx.metrics["step_seconds"] = (time.perf_counter() - t0) / steps
     warnings = _warnings(ctx)
     if not _finite(ctx) or warnings:
-        return CheckResult("rest_stable", False, f"{REST_SECONDS:g} s of stepping from closed: "
-                           + ("state became non-finite" if not _finite(ctx) else "MuJoCo warned " + ", ".join(warnings)))
+        what = "state became non-finite" if not _finite(ctx) else "MuJoCo warned " + ", ".join(warnings)
+        return CheckResult("rest_stable", False, f"{REST_SECONDS:g} s of stepping from closed: {what}")
     worst, worst_fraction = ctx.variant.fronts[0], -1.0
     for layout in ctx.variant.fronts:
         q = float(d.qpos[ctx.joint(layout.id)[1]])
@@ -418,9 +417,9 @@ def check_opens_under_pull(ctx: ModelContext) -> CheckResult:
                              "lever_arm_m": round(lever, 4) if layout.motion != "slide" else None,
                              "seconds_to_open": opened_at}
         if opened_at is None or not _finite(ctx):
+            reached, full = _fmt_q(layout, float(d.qpos[qadr])), _fmt_q(layout, layout.joint_range[1])
             return CheckResult("opens_under_pull", False, f"{layout.id} pulled with {pull:.1f} N at its handle "
-                               f"reaches {_fmt_q(layout, float(d.qpos[qadr]))} of {_fmt_q(layout, layout.joint_range[1])}"
-                               f" in {PULL_SECONDS:g} s", {"fronts": forces})
+                               f"reaches {reached} of {full} in {PULL_SECONDS:g} s", {"fronts": forces})
     ctx.metrics["pull"] = forces
     slowest = max(forces.items(), key=lambda kv: kv[1]["seconds_to_open"])
     return CheckResult("opens_under_pull", True, "every front opens fully under its test pull (" + ", ".join(
