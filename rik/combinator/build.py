@@ -79,6 +79,16 @@ class CheckedVariant:
 
 # ---- identity ---------------------------------------------------------------------------------------------------
 @functools.cache
+def _versions() -> dict[str, str]:
+    """Library versions that shape a variant (read once: importlib.metadata is slow)."""
+    from importlib.metadata import version
+
+    from rik.assets.cache import library_versions
+
+    return {**library_versions(), "mujoco": version("mujoco")}
+
+
+@functools.cache
 def _code_digest() -> str:
     from rik.assets.cache import source_digest
 
@@ -88,10 +98,7 @@ def _code_digest() -> str:
 def spec_identity(catalog: Catalog, key: VariantKey) -> dict[str, Any]:
     """Everything that decides a variant's files: the catalog entries, the asset keys, the combinator's code
     and the library versions."""
-    from importlib.metadata import version
-
     from rik.assets.build import asset_key
-    from rik.assets.cache import library_versions
 
     unit, handle = catalog.base_unit(key.base), catalog.handle(key.handle)
     finishes = sorted({unit.carcass.finish, handle.finish, *(f.finish for f in unit.fronts)})
@@ -101,7 +108,7 @@ def spec_identity(catalog: Catalog, key: VariantKey) -> dict[str, Any]:
             "preset": catalog.preset(key.preset).model_dump(mode="json"),
             "finishes": [catalog.finishes[f].model_dump(mode="json") for f in finishes],
             "assets": [asset_key(catalog, key.handle), asset_key(catalog, key.base)],
-            "code": _code_digest(), "versions": {**library_versions(), "mujoco": version("mujoco")}}
+            "code": _code_digest(), "versions": _versions()}
 
 
 def spec_hash(catalog: Catalog, key: VariantKey) -> str:
@@ -210,8 +217,6 @@ def materialise(checked: CheckedVariant, directory: Path, report: dict[str, Any]
 
 def make_report(catalog: Catalog, checked: CheckedVariant, digest: str, build_seconds: float) -> dict[str, Any]:
     """The ``report.json`` of a checked variant (without its file list)."""
-    from importlib.metadata import version
-
     from rik import __version__
 
     variant = checked.variant
@@ -225,7 +230,7 @@ def make_report(catalog: Catalog, checked: CheckedVariant, digest: str, build_se
     failed = checked.failed
     return {
         **variant.info(), "status": "valid" if failed is None else "rejected", "spec_hash": digest,
-        "rik_version": __version__, "mujoco_version": version("mujoco"),
+        "rik_version": __version__, "mujoco_version": _versions()["mujoco"],
         "checks": [c.as_dict() for c in checked.checks],
         "fronts": fronts,
         "hulls": variant.hulls, "collision_vertices": _collision_vertices(variant),
@@ -239,18 +244,10 @@ def make_report(catalog: Catalog, checked: CheckedVariant, digest: str, build_se
 
 def _collision_vertices(variant: VariantModel) -> int:
     """Vertices of every collision mesh geom plus 8 per box."""
-    import numpy as np
-
-    counts = {}
-    for name, data in variant.mesh_files.items():
-        faces = int(np.frombuffer(data[80:84], dtype=np.uint32)[0])
-        tri = np.frombuffer(data[84:], dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")], count=faces)
-        counts[name[:-4]] = len(np.unique(tri["v"].reshape(-1, 3), axis=0))
     total = 0
     for g in variant.spec.geoms:
-        if g.classname.name != "collision":
-            continue
-        total += counts.get(g.meshname, 0) if g.meshname else 8
+        if g.classname.name == "collision":
+            total += variant.mesh_vertices[g.meshname] if g.meshname else 8
     return total
 
 

@@ -256,9 +256,15 @@ def _front(ctx: ModelContext, front_id: str) -> Any:
 
 def _penetrations(ctx: ModelContext) -> list[tuple[float, int, int]]:
     """(depth, geom1, geom2) of contacts deeper than the tolerance, deepest first."""
+    import numpy as np
+
     d = ctx.data
-    out = [(-float(c.dist), int(c.geom1), int(c.geom2)) for c in d.contact[: d.ncon] if -c.dist > PENETRATION_TOL]
-    return sorted(out, reverse=True)
+    if d.ncon == 0:
+        return []
+    depth = -np.asarray(d.contact.dist[: d.ncon])
+    deep = np.flatnonzero(depth > PENETRATION_TOL)
+    geoms = np.asarray(d.contact.geom[: d.ncon])
+    return sorted(((float(depth[i]), int(geoms[i, 0]), int(geoms[i, 1])) for i in deep), reverse=True)
 
 
 def _describe(ctx: ModelContext, depth: float, g1: int, g2: int) -> str:
@@ -394,7 +400,6 @@ def force_to_open(ctx: ModelContext, layout: FrontLayout) -> tuple[float, float]
 def check_opens_under_pull(ctx: ModelContext) -> CheckResult:
     """Each front, pulled at its handle along the handle's path with the test pull, opens fully."""
     import mujoco
-    import numpy as np
 
     m, d = ctx.model, ctx.data
     forces = {}
@@ -406,9 +411,10 @@ def check_opens_under_pull(ctx: ModelContext) -> CheckResult:
         target = OPEN_FRACTION * layout.joint_range[1]
         steps = round(PULL_SECONDS / m.opt.timestep)
         opened_at = None
-        mujoco.mj_forward(m, d)
-        for step in range(steps):  # the lever arm from the previous step's kinematics (mj_step leaves them)
-            d.qfrc_applied[dof] = pull * float(np.linalg.norm(_grasp_velocity(ctx, layout.id)))
+        # the pull acts along the handle's path: a generalised force of pull x lever arm, constant because a
+        # slide's handle moves 1 m per m and a hinge's handle stays at the same distance from the axis
+        d.qfrc_applied[dof] = pull * lever
+        for step in range(steps):
             mujoco.mj_step(m, d)
             if d.qpos[qadr] >= target:
                 opened_at = (step + 1) * m.opt.timestep

@@ -78,6 +78,8 @@ class VariantModel:
     """``mujoco.MjSpec``."""
     mesh_files: dict[str, bytes]
     """File name under ``meshes/`` -> STL bytes."""
+    mesh_vertices: dict[str, int]
+    """Mesh name -> its number of vertices."""
     fronts: list[FrontLayout]
     handle_type: str
     handle_bounds: Any
@@ -243,7 +245,8 @@ def _add_boxes(spec: Any, body: Any, boxes: list[Box], prefix: str, material: st
 
 
 def _add_mesh_part(spec: Any, body: Any, asset: Asset, part_name: str, prefix: str, material: str,
-                   classes: dict[str, Any], files: dict[str, bytes], pos: Any = None, quat: Any = None) -> None:
+                   classes: dict[str, Any], files: dict[str, bytes], vertices: dict[str, int], pos: Any = None,
+                   quat: Any = None) -> None:
     """A part from meshes: its visual mesh and its hulls (meshes added once per model, geoms per use)."""
     import mujoco
 
@@ -254,9 +257,11 @@ def _add_mesh_part(spec: Any, body: Any, asset: Asset, part_name: str, prefix: s
     if f"{visual}.stl" not in files:
         files[f"{visual}.stl"] = stl_bytes(asset.key, part_name, -1, part.visual.vertices, part.visual.faces)
         spec.add_mesh(name=visual, file=f"{visual}.stl")
+        vertices[visual] = len(part.visual.vertices)
         for i, (v, f) in enumerate(part.hulls):
             files[f"{stem}-hull-{i:02d}.stl"] = stl_bytes(asset.key, part_name, i, v, f)
             spec.add_mesh(name=f"{stem}-hull-{i:02d}", file=f"{stem}-hull-{i:02d}.stl")
+            vertices[f"{stem}-hull-{i:02d}"] = len(v)
     body.add_geom(name=f"{prefix}visual", default=classes["visual"], type=mujoco.mjtGeom.mjGEOM_MESH,
                   meshname=visual, material=material, **frame)
     for i in range(len(part.hulls)):
@@ -308,6 +313,7 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
     joint_classes = add_joint_classes(spec, preset, catalog.joint_types(unit))
 
     files: dict[str, bytes] = {}
+    vertices: dict[str, int] = {}
     materials: set[str] = set()
     root = spec.worldbody.add_body(name="base_unit", pos=[0.0, 0.0, unit.install_height])
     plans = {p.name: p for p in base_unit_plan(unit)} if unit.meshes is None else {}
@@ -315,7 +321,7 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
     if plans:
         _add_boxes(spec, root, _panel_boxes(plans["carcass"]), "carcass/", carcass_material, classes)
     else:
-        _add_mesh_part(spec, root, base_asset, "carcass", "carcass/", carcass_material, classes, files)
+        _add_mesh_part(spec, root, base_asset, "carcass", "carcass/", carcass_material, classes, files, vertices)
 
     hpart = handle_asset.part("handle")
     bounds = np.asarray(hpart.visual.bounds)
@@ -346,17 +352,18 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
             _add_boxes(spec, body, boxes, f"{front.id}/", material, classes)
             _set_inertial(body, *_box_inertia(boxes, _board_density(catalog, front.finish)))
         else:
-            _add_mesh_part(spec, body, base_asset, front.id, f"{front.id}/", material, classes, files)
+            _add_mesh_part(spec, body, base_asset, front.id, f"{front.id}/", material, classes, files, vertices)
             _set_inertial(body, *_mesh_inertial(catalog, base_asset, front.id, front.finish))
         _add_mount_site(body, front)
         hbody = body.add_body(name=f"{front.id}/handle", pos=list(placement.pos), quat=list(placement.quat))
-        _add_mesh_part(spec, hbody, handle_asset, "handle", f"{front.id}/handle/", handle_material, classes, files)
+        _add_mesh_part(spec, hbody, handle_asset, "handle", f"{front.id}/handle/", handle_material, classes, files,
+                       vertices)
         _set_inertial(hbody, handle.mass, h_com, h_inertia)
         hbody.add_site(name=f"{front.id}/handle", group=SITE_GROUP, size=[0.003, 0.003, 0.003])
         hbody.add_site(name=f"{front.id}/grasp", group=SITE_GROUP, pos=((bounds[0] + bounds[1]) / 2).tolist(),
                        size=[0.004, 0.004, 0.004], rgba=[1.0, 0.2, 0.2, 0.6])
         fronts.append(FrontLayout(front.id, front.kind, front_motion(front), placement, tuple(front.joint.range)))
-    model = VariantModel(key, spec, files, fronts, handle_type.value, bounds, unit, recess)
+    model = VariantModel(key, spec, files, vertices, fronts, handle_type.value, bounds, unit, recess)
     spec.add_text(name="rik.variant", data=json.dumps(model.info(), separators=(",", ":")))
     return model
 
