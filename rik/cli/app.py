@@ -26,7 +26,7 @@ app.add_typer(variants.app, name="variants")
 def demo(catalog_paths: CatalogOption = None) -> None:
     """The main job on built-in defaults: validate the catalog and print its summary, then build a sample of
     assets (one handle of each type and a chest of drawers), measure their collision fidelity and run the finger
-    test on the two-point handle."""
+    test on the two-point handle, then build and check three MuJoCo variants into variants/."""
     from rik.cli.assets import print_demo_assets
     from rik.cli.catalog import print_summary
     from rik.registry.index import catalog_index
@@ -34,6 +34,9 @@ def demo(catalog_paths: CatalogOption = None) -> None:
 
     print_summary(catalog_stats(catalog_index(overlays(catalog_paths))))
     print_demo_assets(overlays(catalog_paths))
+    from rik.cli.variants import print_demo_variants
+
+    print_demo_variants(overlays(catalog_paths))
 
 
 @app.callback()

@@ -35,6 +35,34 @@ OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Directory of built va
 DirOpt = Annotated[Path, typer.Option("--dir", "-d", help="Directory of built variants.")]
 
 
+DEMO_VARIANTS = ("drawer-chest-80__two_point-bow-128__normal", "door-base-60-left__knob-mushroom-30__high",
+                 "flap-lift-up-60__finger_pull-edge-lip-100__smooth")
+
+
+def print_demo_variants(overlay_paths: list[Path], out: Path = Path("variants")) -> None:
+    """Build :data:`DEMO_VARIANTS` into ``out`` (valid ones are skipped) and print what each check found."""
+    import json
+
+    from rik.combinator.build import build_variant
+    from rik.combinator.ids import parse_variant_id
+    from rik.registry.load import load_catalog
+
+    cat = load_catalog(overlay_paths)
+    con = console()
+    with con.status("building sample variants (MuJoCo) ..."):
+        results = [build_variant(cat, parse_variant_id(cat, v), out) for v in DEMO_VARIANTS]
+    for r in results:
+        if r.status == "rejected":
+            con.print(f"variant {r.id}: [red]rejected[/] by {r.failed_check}: {r.reason}")
+            continue
+        report = json.loads((out / r.id / "report.json").read_text(encoding="utf-8"))
+        pulls = ", ".join(f"{f['id']} {f['force_to_open_n']:.0f} N" for f in report["fronts"])
+        con.print(f"variant {r.id}: valid ({len(report['checks'])} checks), {report['hulls']} convex handle parts; "
+                  f"force to open at the handle: {pulls}")
+    con.print(f"variants are in {out}/ (model.xml, scene.xml, meshes/, report.json); next: "
+              "rik variants build --all --preset normal")
+
+
 def _select(cat: Any, base: list[str] | None, handle_type: list[HandleTypeOpt] | None, handle: list[str] | None,
             preset: list[str] | None) -> list[Any]:
     from rik.combinator.ids import select_variants

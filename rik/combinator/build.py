@@ -127,8 +127,8 @@ def _asset(catalog: Catalog, asset_id: str, cache: AssetCache) -> Asset:
 
     memo = (str(cache.root), asset_key(catalog, asset_id))
     if memo not in _ASSETS:
-        if len(_ASSETS) > 128:
-            _ASSETS.clear()
+        if len(_ASSETS) > 16:  # builds run handle by handle, so a few suffice
+            _ASSETS.pop(next(iter(_ASSETS)))
         _ASSETS[memo] = build_asset(catalog, asset_id, cache=cache)[0]
     return _ASSETS[memo]
 
@@ -333,8 +333,9 @@ def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEF
     fn = functools.partial(_build_one, out=out.resolve(), cache_root=cache.root, force=force)
     done: dict[str, VariantResult] = {}
     pending: list[VariantResult] = []
+    order = sorted(keys, key=lambda k: (k.handle, k.base, k.preset))  # handle by handle: each loads once
     try:
-        for _, result in map_ids(fn, catalog, [k.id for k in keys], workers=workers, overlays=overlays):
+        for _, result in map_ids(fn, catalog, [k.id for k in order], workers=workers, overlays=overlays):
             done[result.id] = result
             pending.append(result)
             if on_result:

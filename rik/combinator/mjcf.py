@@ -185,7 +185,7 @@ def _cut_recess(panel: Box, placement: HandlePlacement, recess: tuple[float, flo
             for i, (p, q) in enumerate(pieces)]
 
 
-@functools.lru_cache(maxsize=256)
+@functools.lru_cache(maxsize=64)
 def _stl(asset_key: str, part: str, index: int, vertices: bytes, faces: bytes) -> bytes:
     """Binary STL of a mesh (cached per process: a handle's files are the same in every variant)."""
     import numpy as np
@@ -209,7 +209,7 @@ def stl_bytes(asset_key: str, part: str, index: int, vertices: Any, faces: Any) 
                 np.ascontiguousarray(faces, dtype=np.int64).tobytes())
 
 
-@functools.lru_cache(maxsize=256)
+@functools.lru_cache(maxsize=64)
 def _handle_mass_properties(asset_key: str, mass: float, vertices: bytes, faces: bytes) -> tuple[list, list]:
     """Centre of mass (m, mount frame) and full inertia (kg·m²) of a handle of ``mass`` kg, uniform over its
     visual mesh."""
