@@ -24,6 +24,7 @@ import json
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from rik.assets.base_units import Panel
 from rik.combinator.ids import VariantKey
 from rik.combinator.joints import add_front_joint, add_joint_classes
 from rik.combinator.placement import HandlePlacement, front_motion, place_handle
@@ -43,19 +44,6 @@ TIMESTEP = 0.002
 MESHDIR = "meshes"
 SITE_GROUP = 4
 """Sites are in group 4, hidden by default in MuJoCo's viewer."""
-
-
-@dataclass(frozen=True)
-class Box:
-    """An axis-aligned box in the base unit's frame: centre and full extents, m."""
-
-    name: str
-    center: tuple[float, float, float]
-    extents: tuple[float, float, float]
-
-    @property
-    def volume(self) -> float:
-        return self.extents[0] * self.extents[1] * self.extents[2]
 
 
 @dataclass
@@ -106,11 +94,11 @@ def _board_density(catalog: Catalog, finish: str) -> float:
     return BOARD_DENSITY.get(catalog.finishes[finish].kind, DEFAULT_BOARD_DENSITY)
 
 
-def _box_inertia(boxes: list[Box], density: float) -> tuple[float, list[float], list[float]]:
+def _box_inertia(boxes: list[Panel], density: float) -> tuple[float, list[float], list[float]]:
     """Mass (kg), centre of mass and full inertia (Ixx Iyy Izz Ixy Ixz Iyz about the centre, kg·m²) of boxes."""
     import numpy as np
 
-    masses = np.array([density * b.volume for b in boxes])
+    masses = np.array([density * float(np.prod(b.extents)) for b in boxes])
     centers = np.array([b.center for b in boxes])
     mass = float(masses.sum())
     com = (masses[:, None] * centers).sum(axis=0) / mass
@@ -128,21 +116,22 @@ def _full(inertia: np.ndarray) -> list[float]:
             float(inertia[0, 1]), float(inertia[0, 2]), float(inertia[1, 2])]
 
 
-def _panel_boxes(plan: Any) -> list[Box]:
-    return [Box(p.name, p.center, p.extents) for p in plan.panels]
+def _panel_boxes(plan: Any) -> list[Panel]:
+    return list(plan.panels)
 
 
-def _trimmed(panel: Box, axis: tuple[float, float, float], trim: float) -> Box:
+def _trimmed(panel: Panel, axis: tuple[float, float, float], trim: float) -> Panel:
     """``panel`` cut back by ``trim`` (m) at its face toward ``axis`` (a base-frame axis direction)."""
     i = max(range(3), key=lambda k: abs(axis[k]))
     sign = 1.0 if axis[i] > 0 else -1.0
     center, extents = list(panel.center), list(panel.extents)
     extents[i] -= trim
     center[i] -= sign * trim / 2
-    return Box(panel.name, tuple(center), tuple(extents))  # type: ignore[arg-type]
+    return Panel(panel.name, tuple(center), tuple(extents))  # type: ignore[arg-type]
 
 
-def _cut_recess(panel: Box, placement: HandlePlacement, recess: tuple[float, float, float, float, float]) -> list[Box]:
+def _cut_recess(panel: Panel, placement: HandlePlacement,
+                recess: tuple[float, float, float, float, float]) -> list[Panel]:
     """The front panel with an inset handle's recess routed into its outer face: up to five boxes (the recess's
     rounded corners are cut square). The panel's outer face must be normal to a base-frame axis."""
     import numpy as np
@@ -181,7 +170,7 @@ def _cut_recess(panel: Box, placement: HandlePlacement, recess: tuple[float, flo
     else:
         back_lo[n_axis] = lo[n_axis] + depth
     slab(back_lo, back_hi)
-    return [Box(f"{panel.name}_{i}", tuple(((p + q) / 2).tolist()), tuple((q - p).tolist()))  # type: ignore[arg-type]
+    return [Panel(f"{panel.name}_{i}", tuple(((p + q) / 2).tolist()), tuple((q - p).tolist()))  # type: ignore[arg-type]
             for i, (p, q) in enumerate(pieces)]
 
 
@@ -233,7 +222,7 @@ def _material(spec: Any, catalog: Catalog, finish_id: str, made: set[str]) -> st
     return finish_id
 
 
-def _add_boxes(spec: Any, body: Any, boxes: list[Box], prefix: str, material: str, classes: dict[str, Any]) -> None:
+def _add_boxes(spec: Any, body: Any, boxes: list[Panel], prefix: str, material: str, classes: dict[str, Any]) -> None:
     import mujoco
 
     for b in boxes:
