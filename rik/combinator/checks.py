@@ -131,11 +131,9 @@ def check_mount_fit(catalog: Catalog, variant: VariantModel) -> CheckResult:
     for layout, front in zip(variant.fronts, unit.fronts, strict=True):
         sx, sy = front.mount.size
         lo, hi = handle_footprint(variant, layout)
-        edge = layout.placement.edge
-        axes = [0, 1] if edge is None else ([0] if edge in ("top", "bottom") or
-                                            (edge == "free edge" and layout.motion != "side_hinge") else [1])
-        if edge == "free edge":
-            axes = [0] if abs(layout.placement.rotation) % 180 == 0 else [1]
+        # edge pulls overhang their edge by design: only their extent along the edge (their x) must fit
+        edge_axis = 0 if layout.placement.rotation % 180 == 0 else 1
+        axes = [0, 1] if layout.placement.edge is None else [edge_axis]
         for axis in axes:
             half = (sx, sy)[axis] / 2
             margin = min(half - hi[axis], lo[axis] + half)

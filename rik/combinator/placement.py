@@ -132,11 +132,7 @@ def _front_half_extents(front: Front) -> tuple[float, float, float, float]:
     """The front's centre (u, v) relative to the mount rectangle's centre, and its half extents along u and v."""
     ex, ey, _ = site_axes(front.mount.quat)
     rel = sub(front.center, front.mount.pos)
-    w, h, t = front.size
-    half = (w / 2, t / 2, h / 2)  # along base x, y, z
-    hu = sum(abs(ex[i]) * half[i] for i in range(3))
-    hv = sum(abs(ey[i]) * half[i] for i in range(3))
-    return dot(rel, ex), dot(rel, ey), hu, hv
+    return dot(rel, ex), dot(rel, ey), _half_extent(front, ex), _half_extent(front, ey)
 
 
 def _edge_trim(unit: BaseUnit, front: Front, direction: tuple[float, float, float], overhang: float,
@@ -171,6 +167,7 @@ def _edge_trim(unit: BaseUnit, front: Front, direction: tuple[float, float, floa
 
 
 def _half_extent(front: Front, axis: tuple[float, float, float]) -> float:
+    """Half the front panel's extent along ``axis`` (a base-frame direction), m."""
     w, h, t = front.size
     return abs(axis[0]) * w / 2 + abs(axis[1]) * t / 2 + abs(axis[2]) * h / 2
 
