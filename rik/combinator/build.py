@@ -133,11 +133,9 @@ def _asset(catalog: Catalog, asset_id: str, cache: AssetCache) -> Asset:
     return _ASSETS[memo]
 
 
-def check_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None = None,
-                  stop_at_failure: bool = True) -> CheckedVariant:
-    """Assemble a variant in memory and run its checks (geometry first, then the compiled model's)."""
-    import mujoco
-
+def assemble_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None = None,
+                     stop_at_failure: bool = True) -> CheckedVariant:
+    """Assemble a variant's spec in memory and run the checks of its geometry (nothing compiled yet)."""
     from rik.assets.cache import AssetCache
     from rik.combinator.mjcf import variant_spec
 
@@ -147,7 +145,19 @@ def check_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None = 
     for check in GEOMETRY_CHECKS:
         checks.append(check(catalog, variant))
         if stop_at_failure and not checks[-1].passed:
-            return CheckedVariant(variant, checks)
+            break
+    return CheckedVariant(variant, checks)
+
+
+def check_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None = None,
+                  stop_at_failure: bool = True) -> CheckedVariant:
+    """Assemble a variant in memory and run its checks (geometry first, then the compiled model's)."""
+    import mujoco
+
+    assembled = assemble_variant(catalog, key, cache, stop_at_failure)
+    variant, checks = assembled.variant, assembled.checks
+    if assembled.failed is not None and stop_at_failure:
+        return assembled
     for name, data in variant.mesh_files.items():
         variant.spec.assets[name] = data
     t0 = time.perf_counter()

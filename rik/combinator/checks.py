@@ -441,11 +441,6 @@ MODEL_CHECKS: tuple[Callable[[ModelContext], CheckResult], ...] = (
     check_inertia, check_opens_outward, check_closed_contact_free, check_handle_seated, check_sweep_clear,
     check_rest_stable, check_opens_under_pull)
 
-CHECK_NAMES = ("mount_fit", "grasp_depth", "recess_depth", "compiles", "inertia_valid", "opens_outward",
-               "closed_contact_free", "handle_seated", "sweep_clear", "rest_stable", "opens_under_pull")
-"""Every check, in the order they run."""
-
-
 def run_model_checks(ctx: ModelContext, stop_at_failure: bool = True) -> list[CheckResult]:
     results = []
     for check in MODEL_CHECKS:

@@ -9,7 +9,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rik.combinator.build import DEFAULT_OUT, check_variant, is_current, make_report, materialise, spec_hash
+from rik.combinator.build import (
+    DEFAULT_OUT,
+    assemble_variant,
+    check_variant,
+    is_current,
+    make_report,
+    materialise,
+    spec_hash,
+)
 from rik.combinator.checks import CheckResult, ModelContext, run_model_checks
 from rik.combinator.ids import VariantKey, parse_variant_id
 from rik.errors import RikError
@@ -76,12 +84,12 @@ def validate_variant(catalog: Catalog, target: str, out: Path = DEFAULT_OUT) -> 
     notes = []
     if not is_current(directory, spec_hash(catalog, key)):
         notes.append(f"{directory} is stale or damaged: its report's spec hash or file hashes differ from what the "
-                     "catalog builds now (rebuild it with rik variants build --force)")
-    checked = check_variant(catalog, key, stop_at_failure=False)
-    geometry = [c for c in checked.checks if c.name in ("mount_fit", "grasp_depth", "recess_depth")]
+                     "catalog builds now (rik variants build rebuilds it)")
+    assembled = assemble_variant(catalog, key, stop_at_failure=False)  # the layout and the geometry checks
     loaded = CheckResult("compiles", True, f"{file.name} loads with mujoco.MjModel.from_xml_path")
-    ctx = ModelContext(checked.variant, checked.variant.unit, model, mujoco.MjData(model))
-    return Validation(key, [*geometry, loaded, *run_model_checks(ctx, stop_at_failure=False)], "files", notes)
+    ctx = ModelContext(assembled.variant, assembled.variant.unit, model, mujoco.MjData(model))
+    return Validation(key, [*assembled.checks, loaded, *run_model_checks(ctx, stop_at_failure=False)], "files",
+                      notes)
 
 
 def render_variant(catalog: Catalog, key: VariantKey, png: Path, *, out: Path = DEFAULT_OUT,

@@ -19,9 +19,8 @@ handles from their catalogued mass spread over the visual mesh.
 from __future__ import annotations
 
 import functools
-import hashlib
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rik.assets.base_units import Panel
@@ -75,7 +74,6 @@ class VariantModel:
     unit: BaseUnit | None = None
     recess: tuple[float, float, float, float, float] | None = None
     """Inset handles: the recess cut into each front, (x0, y0, x1, y1) in the mount frame and its depth, m."""
-    notes: list[str] = field(default_factory=list)
 
     @property
     def hulls(self) -> int:
@@ -364,18 +362,3 @@ def _add_mount_site(body: Any, front: Front) -> None:
     body.add_site(name=f"{front.id}/mount", type=mujoco.mjtGeom.mjGEOM_BOX, group=SITE_GROUP,
                   pos=list(front.mount.pos), quat=list(front.mount.quat), size=[sx / 2, sy / 2, 0.0005],
                   rgba=[0.2, 0.6, 1.0, 0.25])
-
-
-def spec_digest(files: dict[str, bytes]) -> str:
-    """sha256 over mesh file names and contents (part of a report)."""
-    h = hashlib.sha256()
-    for name in sorted(files):
-        h.update(name.encode())
-        h.update(hashlib.sha256(files[name]).digest())
-    return h.hexdigest()
-
-
-def unit_extent(unit: BaseUnit) -> tuple[float, float, float]:
-    """Width, depth and height of a base unit's carcass, m."""
-    c = unit.carcass
-    return c.width, c.depth, c.height
