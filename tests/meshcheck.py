@@ -7,6 +7,7 @@ import functools
 import math
 
 import numpy as np
+import pytest
 import trimesh
 
 from rik.assets.handles import generate_handle
@@ -47,6 +48,14 @@ def inside(mesh, points: np.ndarray) -> np.ndarray:
                + np.einsum("pfi,pfi->pf", c, a) * lb)
         out[i:i + 64] = np.arctan2(num, den).sum(axis=1) / (2 * math.pi)
     return out > 0.5
+
+
+def assert_catalogued_extents(mesh, geometry, tol: float) -> None:
+    """The mesh's overall length (x), width (y) and projection (top z) are the catalog's, within ``tol`` (m)."""
+    (x0, y0, _), (x1, y1, z1) = mesh.bounds
+    assert x1 - x0 == pytest.approx(geometry.length, abs=tol)
+    assert y1 - y0 == pytest.approx(geometry.width, abs=tol)
+    assert z1 == pytest.approx(geometry.projection, abs=tol)
 
 
 def assert_one_closed_body(mesh, min_faces: int, max_faces: int = 40_000) -> None:
