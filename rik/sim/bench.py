@@ -1,0 +1,214 @@
+"""The resistance benchmark (the paper's section 4 and Table 3): randomised drawer-opening episodes per handle
+type x resistance preset x strategy, counted as F/P/S; and a sweep of the gripper's grip force that shows how
+success depends on the ratio of the grasp's friction capacity to the joint's resistance."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from collections import Counter
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from rik.errors import RikError
+from rik.sim.outcome import OUTCOMES
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+
+DEFAULT_TYPES = ("knob", "finger_pull", "two_point")
+DEFAULT_PRESETS = ("smooth", "normal", "high")
+DEFAULT_STRATEGIES = ("grasp_horizontal", "grasp_vertical", "contact_rich")
+DEFAULT_KINDS = ("drawer",)
+"""The paper's case study opens drawers."""
+SWEEP_GRIP_FORCES = (5.0, 10.0, 20.0, 40.0, 80.0, 130.0)
+"""Grip forces of ``--sweep grip-force``, N (130 N: the Hand-E's maximum)."""
+MAX_SECONDS = 30.0
+
+
+@dataclass(frozen=True)
+class BenchTask:
+    """One episode of the benchmark; the seed decides handle, base unit, front and jitter."""
+
+    handle_type: str
+    preset: str
+    strategy: str
+    index: int
+    seed: int
+    variant: str = ""
+    front: str = ""
+    grip_force: float | None = None
+
+    def encode(self) -> str:
+        return json.dumps(asdict(self), sort_keys=True)
+
+
+def _choose(catalog: Catalog, handle_type: str, preset: str, rng: np.random.Generator, kinds: Sequence[str],
+            compatible: set[str]) -> tuple[str, str]:
+    from rik.combinator.ids import variant_id
+
+    bases = sorted(b for b, u in catalog.base_units.items() if u.fronts[0].kind in kinds)
+    handles = sorted(h for h, v in catalog.handles.items() if catalog.handle_type(v).value == handle_type)
+    for _ in range(100):
+        base = bases[int(rng.integers(len(bases)))]
+        handle = handles[int(rng.integers(len(handles)))]
+        vid = variant_id(base, handle, preset)
+        if vid in compatible:
+            fronts = catalog.base_units[base].fronts
+            return vid, fronts[int(rng.integers(len(fronts)))].id
+    raise RikError(f"no valid {handle_type} variant on a {'/'.join(kinds)} base unit with preset {preset}")
+
+
+def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, presets: Sequence[str] = DEFAULT_PRESETS,
+               strategies: Sequence[str] = DEFAULT_STRATEGIES, per_cell: int = 10, seed: int = 0,
+               kinds: Sequence[str] = DEFAULT_KINDS, grip_forces: Sequence[float | None] = (None,)) -> list[BenchTask]:
+    """Every episode of the benchmark. The same episode index of every strategy (and grip force) gets the same
+    variant, front and start pose, so strategies are compared on the same draws."""
+    from rik.combinator.ids import select_variants
+    from rik.sim.operators import make_operator
+
+    for s in strategies:
+        make_operator(s)
+    for p in presets:
+        if p not in catalog.presets:
+            raise RikError(f"unknown preset '{p}' (presets: {', '.join(catalog.presets)})")
+    compatible = {k.id for k in select_variants(catalog, handle_types=types, presets=presets)}
+    tasks = []
+    for ti, t in enumerate(types):
+        for pi, p in enumerate(presets):
+            for i in range(per_cell):
+                s = seed * 1_000_003 + ti * 10_007 + pi * 101 + i
+                vid, front = _choose(catalog, t, p, np.random.default_rng(s), kinds, compatible)
+                for strategy in strategies:
+                    for g in grip_forces:
+                        tasks.append(BenchTask(t, p, strategy, i, s, vid, front, g))
+    return tasks
+
+
+def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) -> dict[str, Any]:
+    """Run one benchmark episode (not written to disk); returns its row for the results table."""
+    from rik.sim.episode import run_operator
+    from rik.sim.gripper import HAND_E
+    from rik.sim.operators import PULL_SPEED, make_operator
+    from rik.sim.outcome import classify
+    from rik.sim.record import randomise_start
+    from rik.sim.scene import build_scene
+
+    task = BenchTask(**json.loads(encoded))
+    gripper = HAND_E if task.grip_force is None else HAND_E.with_(grip_force=task.grip_force)
+    scene = build_scene(variants / task.variant, task.front, gripper)
+    rng = np.random.default_rng(task.seed)
+    randomise_start(scene, rng)
+    operator = make_operator(task.strategy)
+    recorder = run_operator(scene, operator, rng, MAX_SECONDS)
+    res = catalog.presets[task.preset].slide
+    resistance = res.frictionloss + res.damping * PULL_SPEED
+    return {**asdict(task), "grip_force": gripper.grip_force, "pad_friction": gripper.pad_friction,
+            "friction_capacity": gripper.friction_capacity(), "resistance": resistance,
+            "capacity_ratio": gripper.friction_capacity() / resistance, "outcome": classify(scene.opening()),
+            "final_opening": round(scene.opening(), 4), "max_opening": round(recorder.max_opening, 4),
+            "seconds": round(recorder.steps / scene.control_fps, 2), "log": " | ".join(operator.log)}
+
+
+def run_bench(catalog: Catalog, tasks: Sequence[BenchTask], *, workers: int = 1, variants: Path = Path("variants"),
+              overlays: Sequence[Path] = (), progress: Callable[[dict[str, Any]], None] | None = None
+              ) -> list[dict[str, Any]]:
+    """Build the variants the tasks need, then run the episodes (in ``workers`` processes); rows in task order."""
+    import functools
+
+    from rik.assets.workers import map_ids
+    from rik.combinator.build import build_variants
+    from rik.combinator.ids import parse_variant_id
+
+    keys = [parse_variant_id(catalog, v) for v in sorted({t.variant for t in tasks})]
+    for r in build_variants(catalog, keys, variants, workers=workers, overlays=overlays):
+        if r.status == "rejected":
+            raise RikError(f"variant {r.id} rejected by check {r.failed_check}: {r.reason}")
+    order = {t.encode(): i for i, t in enumerate(tasks)}
+    rows: list[dict[str, Any] | None] = [None] * len(tasks)
+    fn = functools.partial(run_task, variants=variants)
+    for encoded, row in map_ids(fn, catalog, list(order), workers=workers, overlays=overlays):
+        rows[order[encoded]] = row
+        if progress is not None:
+            progress(row)
+    return [r for r in rows if r is not None]
+
+
+def summarise(rows: Sequence[dict[str, Any]], by: Sequence[str] = ("handle_type", "strategy", "preset")
+              ) -> dict[tuple, dict[str, float]]:
+    """F/P/S fractions (and the count ``n``) per group."""
+    groups: dict[tuple, Counter] = {}
+    for r in rows:
+        groups.setdefault(tuple(r[k] for k in by), Counter())[r["outcome"]] += 1
+    out = {}
+    for key, c in sorted(groups.items()):
+        n = sum(c.values())
+        out[key] = {"n": n, **{o: c[o] / n for o in OUTCOMES}}
+    return out
+
+
+def table_markdown(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFAULT_PRESETS) -> str:
+    """Table 3 of the paper, rik's version: per handle type, one row per strategy, F/P/S per preset."""
+    summary = summarise(rows)
+    types = list(dict.fromkeys(r["handle_type"] for r in rows))
+    strategies = list(dict.fromkeys(r["strategy"] for r in rows))
+    presets = [p for p in presets if any(r["preset"] == p for r in rows)]
+    lines = []
+    for t in types:
+        lines += [f"**{t}**", "", "| strategy | " + " | ".join(f"{p} F | {p} P | {p} S" for p in presets) + " | n |",
+                  "|---|" + "---:|" * (3 * len(presets) + 1)]
+        for s in strategies:
+            cells, n = [], 0
+            for p in presets:
+                v = summary.get((t, s, p))
+                cells += [f"{v[o]:.2f}" for o in OUTCOMES] if v else ["-"] * 3
+                n = max(n, v["n"] if v else 0)
+            lines.append(f"| {s} | " + " | ".join(cells) + f" | {n} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
+    buf = io.StringIO()
+    if rows:
+        w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+    return buf.getvalue()
+
+
+def sweep_plot(rows: Sequence[dict[str, Any]], png: Path) -> Path:
+    """Success rate against the friction-capacity ratio (2 x pad friction x grip force / joint resistance), one
+    line per strategy."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
+    for s in dict.fromkeys(r["strategy"] for r in rows):
+        pts: dict[float, list[int]] = {}
+        for r in rows:
+            if r["strategy"] == s:
+                pts.setdefault(round(r["capacity_ratio"], 3), []).append(r["outcome"] == "S")
+        xs = sorted(pts)
+        ax.plot(xs, [float(np.mean(pts[x])) for x in xs], marker="o", label=s)
+    ax.axvline(1.0, color="grey", lw=0.8, ls="--")
+    ax.set_xscale("log")
+    ax.set_xlabel("friction capacity / joint resistance  (2 μ F_grip / (F_friction + c v))")
+    ax.set_ylabel("success rate (S)")
+    ax.set_ylim(-0.03, 1.03)
+    ax.legend(frameon=False)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    png.parent.mkdir(parents=True, exist_ok=True)
+    tmp = png.with_name(f".{png.name}.tmp.png")
+    fig.savefig(tmp)
+    plt.close(fig)
+    tmp.replace(png)
+    return png

@@ -1,0 +1,228 @@
+"""Recording and reading episodes: ``<out>/<id>/meta.json`` and ``states.parquet``.
+
+Each row of ``states.parquet`` holds the full integration state (``mj_getState``, ``mjSTATE_INTEGRATION``), so
+setting it back reproduces every body pose bit for bit, and stepping on from it with the row's action reproduces
+the next row. An episode is written to a staging directory and renamed into place when complete: an
+interrupted recording leaves nothing that looks like an episode. ``meta.json`` records the sha256 of
+``states.parquet``, so a truncated or edited file is refused when read.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rik.errors import RikError
+from rik.sim.outcome import classify
+from rik.sim.scene import SimScene
+
+DEFAULT_EPISODES = Path("episodes")
+META = "meta.json"
+STATES = "states.parquet"
+STAGING_PREFIX = ".staging-"
+COLUMNS = ("step", "time", "state", "action", "front_qpos", "front_qvel", "opening", "gripper_opening",
+           "tcp", "contacts", "contact_normal_force", "contact_tangential_force")
+
+
+class EpisodeError(RikError):
+    """An episode on disk is missing, truncated or corrupt."""
+
+
+def _versions() -> dict[str, str]:
+    import mujoco
+
+    from rik import __version__
+
+    return {"rik": __version__, "mujoco": mujoco.__version__}
+
+
+@dataclass
+class EpisodeRecorder:
+    """Records a scene control step by control step: ``step(action)`` stores the state and the action, then
+    advances the physics by one control step."""
+
+    scene: SimScene
+    rows: dict[str, list[Any]] = field(default_factory=lambda: {c: [] for c in COLUMNS})
+    max_opening: float = 0.0
+
+    def _store(self, action: np.ndarray) -> None:
+        s = self.scene
+        q, qd = s.front_q()
+        contact = s.contact_summary()
+        r = self.rows
+        r["step"].append(len(r["step"]))
+        r["time"].append(float(s.data.time))
+        r["state"].append(s.state())
+        r["action"].append(np.asarray(action, np.float64).copy())
+        r["front_qpos"].append(q)
+        r["front_qvel"].append(qd)
+        r["opening"].append(s.opening())
+        r["gripper_opening"].append(s.finger_opening())
+        r["tcp"].append(s.tcp())
+        r["contacts"].append(int(contact["contacts"]))
+        r["contact_normal_force"].append(contact["normal_force"])
+        r["contact_tangential_force"].append(contact["tangential_force"])
+        self.max_opening = max(self.max_opening, s.opening())
+
+    def step(self, action: np.ndarray) -> None:
+        self._store(action)
+        self.scene.step(action)
+
+    @property
+    def steps(self) -> int:
+        return len(self.rows["step"])
+
+    def table(self) -> Any:
+        """The rows so far plus the final state, as a pyarrow table."""
+        import pyarrow as pa
+
+        last = self.rows["action"][-1] if self.rows["action"] else np.zeros(7)
+        self._store(last)
+        try:
+            r = self.rows
+            n_state = len(r["state"][0])
+            arrays = {
+                "step": pa.array(r["step"], pa.int32()),
+                "time": pa.array(r["time"], pa.float64()),
+                "state": pa.FixedSizeListArray.from_arrays(pa.array(np.concatenate(r["state"])), n_state),
+                "action": pa.FixedSizeListArray.from_arrays(pa.array(np.concatenate(r["action"])), 7),
+                "tcp": pa.FixedSizeListArray.from_arrays(pa.array(np.concatenate(r["tcp"])), 3),
+                "contacts": pa.array(r["contacts"], pa.int32()),
+            }
+            for c in COLUMNS:
+                arrays.setdefault(c, pa.array(r[c], pa.float64()))
+            return pa.table({c: arrays[c] for c in COLUMNS})
+        finally:
+            for c in COLUMNS:
+                self.rows[c].pop()
+
+
+def episode_id(variant: str, front: str, operator: str, seed: int) -> str:
+    return f"{variant}__{front}__{operator}__s{seed:04d}"
+
+
+def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operator: str, operator_kind: str,
+                  seed: int, log: tuple[str, ...] = ()) -> Any:
+    """Write the recorded episode to ``out/<episode>`` (through a staging directory); returns its meta."""
+    import pyarrow.parquet as pq
+
+    from rik.schemas.episodes import EpisodeMeta, GripperInfo
+
+    s = recorder.scene
+    table = recorder.table()
+    out.mkdir(parents=True, exist_ok=True)
+    staging = out / f"{STAGING_PREFIX}{episode}-{os.getpid()}"
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
+    try:
+        pq.write_table(table, staging / STATES, compression="zstd")
+        digest = hashlib.sha256((staging / STATES).read_bytes()).hexdigest()
+        g = s.gripper
+        info = s.info
+        meta = EpisodeMeta(
+            id=episode, variant=info["id"], base_unit=info["base_unit"], handle=info["handle"],
+            handle_type=info["handle_type"], preset=info["preset"], front=s.front.id, operator=operator,
+            operator_kind=operator_kind, seed=seed, fps=s.control_fps, timestep=float(s.model.opt.timestep),
+            steps=recorder.steps, state_size=len(table.column("state")[0]), outcome=classify(s.opening()),
+            final_opening=round(s.opening(), 6), max_opening=round(recorder.max_opening, 6),
+            gripper=GripperInfo(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
+                                arm_force=g.arm_force),
+            versions=_versions(), log=tuple(log), states_sha256=digest)
+        (staging / META).write_text(json.dumps(meta.model_dump(mode="json"), indent=2) + "\n", encoding="utf-8")
+        final = out / episode
+        if final.exists():
+            shutil.rmtree(final)
+        os.replace(staging, final)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return meta
+
+
+def read_meta(directory: Path) -> Any:
+    """The validated meta of the episode in ``directory``."""
+    from pydantic import ValidationError
+
+    from rik.schemas.episodes import EpisodeMeta
+
+    file = Path(directory) / META
+    if not file.is_file():
+        raise EpisodeError(f"{file}: no such file; {directory} is not a recorded episode")
+    try:
+        return EpisodeMeta.model_validate(json.loads(file.read_text(encoding="utf-8")))
+    except json.JSONDecodeError as exc:
+        raise EpisodeError(f"{file}: not valid JSON (line {exc.lineno}): {exc.msg}") from None
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        where = ".".join(str(p) for p in err["loc"])
+        raise EpisodeError(f"{file}: field '{where}': {err['msg']}") from None
+
+
+def read_episode(directory: Path) -> tuple[Any, Any]:
+    """(meta, states table) of a recorded episode, checked whole: the states file's hash and row count must
+    match the meta."""
+    import pyarrow.parquet as pq
+
+    meta = read_meta(directory)
+    file = Path(directory) / STATES
+    if not file.is_file():
+        raise EpisodeError(f"{file}: no such file; the episode is incomplete")
+    if hashlib.sha256(file.read_bytes()).hexdigest() != meta.states_sha256:
+        raise EpisodeError(f"{file}: truncated or corrupt (its sha256 differs from the one in meta.json)")
+    table = pq.read_table(file)
+    if table.num_rows != meta.steps + 1 or list(table.column_names) != list(COLUMNS):
+        raise EpisodeError(f"{file}: {table.num_rows} rows and columns {table.column_names}, expected "
+                           f"{meta.steps + 1} rows and {list(COLUMNS)}")
+    return meta, table
+
+
+def find_episodes(paths: list[Path]) -> list[Path]:
+    """Episode directories under ``paths`` (each an episode or a directory of episodes), sorted."""
+    found: list[Path] = []
+    for p in paths:
+        p = Path(p)
+        if (p / META).is_file():
+            found.append(p)
+        elif p.is_dir():
+            found += sorted(d for d in p.iterdir() if (d / META).is_file() and not d.name.startswith("."))
+        else:
+            raise EpisodeError(f"{p}: no such episode or directory")
+    if not found:
+        raise EpisodeError(f"no episodes under {', '.join(str(p) for p in paths)} (each has a {META})")
+    return found
+
+
+def states(table: Any) -> np.ndarray:
+    """The ``state`` column as an array, one row per recorded step."""
+    col = table.column("state").combine_chunks()
+    return col.values.to_numpy().reshape(len(col), -1)
+
+
+def replay(scene: SimScene, table: Any) -> Iterator[int]:
+    """Set the scene to each recorded state in turn (positions, velocities, everything derived); yields the row."""
+    for i, state in enumerate(states(table)):
+        scene.restore(state)
+        yield i
+
+
+def run_operator(scene: SimScene, operator: Any, rng: np.random.Generator, max_seconds: float,
+                 recorder: EpisodeRecorder | None = None,
+                 on_step: Callable[[SimScene], None] | None = None) -> EpisodeRecorder:
+    """Run ``operator`` on ``scene`` until it is done or ``max_seconds`` of simulated time have passed."""
+    recorder = recorder or EpisodeRecorder(scene)
+    operator.reset(scene, rng)
+    for _ in range(int(round(max_seconds * scene.control_fps))):
+        if operator.done:
+            break
+        recorder.step(operator.act(scene))
+        if on_step is not None:
+            on_step(scene)
+    return recorder

@@ -1,0 +1,165 @@
+"""The parallel-jaw gripper rik simulates, on a force-limited 6-DoF base that follows a target pose.
+
+**The gripper is a Robotiq Hand-E** (a true parallel-jaw gripper, common on UR and Franka arms in teleoperation
+data sets). Its figures, with where they come from:
+
+- stroke 50 mm (25 mm per finger), finger speed 20-150 mm/s, mass about 1 kg: Robotiq Hand-E specifications;
+- grip force: the manual's friction-payload example uses the gripper's maximum force, 130 N
+  (Robotiq Hand-E instruction manual, section 6 "Payload and force", W = 2 F Cf / Sf);
+- pad friction: 0.3, the manual's tested static coefficient of its silicone fingertips (HND-TIP-SLC-KIT), measured
+  on lubricated steel (same page). It is the only pad friction Robotiq publishes; dry lacquer or metal is
+  grippier, so this is a conservative figure. ``rik bench --sweep`` varies it.
+- finger and palm dimensions: approximate, from the Hand-E's outline drawings (fingertip 20 mm wide).
+
+**The arm** is not modelled link by link: the gripper's base is a chain of three slides and three hinges driven by
+position servos whose force is capped, so the gripper cannot push or pull harder than an arm could. The caps
+(150 N per axis, 15 N·m per rotation) are an assumption of the order of a collaborative arm's default safety
+force limit, not a datasheet figure. The base carries armature (reflected arm inertia) and gravity compensation,
+as a real arm's controller compensates the hand's weight.
+
+The base chain is x, y, z slides, then hinges about x (pitch), z (yaw) and y (roll), so that the poses the
+strategies need (fingers towards the front, down or up, rolled about the approach) stay away from the chain's
+singularity (yaw = ±90°). Gripper frame: fingers point along +z, the jaws close along x, y completes the frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+GRIPPER_PREFIX = "gripper/"
+BASE_JOINTS = ("x", "y", "z", "pitch", "yaw", "roll")
+"""The base chain's joints (``gripper/<name>``): three slides (m) then three hinges (rad)."""
+
+
+@dataclass(frozen=True)
+class GripperSpec:
+    """A parallel-jaw gripper and the arm that carries it. SI units; sources in the module docstring."""
+
+    name: str = "Robotiq Hand-E"
+    stroke: float = 0.050
+    """Jaw opening at full open, m (both fingers together)."""
+    grip_force: float = 130.0
+    """Force each jaw presses with when closed on an object, N."""
+    finger_speed: float = 0.150
+    """Closing speed of each finger, m/s."""
+    pad_friction: float = 0.3
+    """Static friction coefficient of the fingertip pads."""
+    mass: float = 1.0
+    """kg."""
+    arm_force: float = 150.0
+    """Force cap of each translational axis of the arm, N (assumption)."""
+    arm_torque: float = 15.0
+    """Torque cap of each rotational axis of the arm, N·m (assumption)."""
+    arm_stiffness: float = 3000.0
+    """Servo stiffness of the translational axes, N/m."""
+    arm_rot_stiffness: float = 150.0
+    """Servo stiffness of the rotational axes, N·m/rad."""
+    arm_armature: float = 2.0
+    """Reflected inertia of the arm on each translational axis, kg."""
+    arm_rot_armature: float = 0.01
+    """Reflected inertia on each rotational axis, kg·m²."""
+    finger_length: float = 0.045
+    finger_width: float = 0.020
+    finger_thickness: float = 0.008
+    """Along the closing direction, pad included, m."""
+    pad_length: float = 0.030
+    palm: tuple[float, float, float] = (0.090, 0.050, 0.060)
+    """Palm (housing) size along x, y, z, m."""
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def with_(self, **changes: Any) -> GripperSpec:
+        return replace(self, **changes)
+
+    @property
+    def finger_travel(self) -> float:
+        """Travel of one finger, m."""
+        return self.stroke / 2
+
+    @property
+    def tcp_offset(self) -> float:
+        """Distance from the base origin (palm's back face) to the middle of the pads along +z, m."""
+        return self.palm[2] + self.finger_length - self.pad_length / 2
+
+    def friction_capacity(self) -> float:
+        """The largest pull a pinch can transmit by friction alone: two pads, each pressed with the grip force, N."""
+        return 2.0 * self.pad_friction * self.grip_force
+
+
+HAND_E = GripperSpec()
+
+
+BASE_QUAT = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)
+"""The base body's fixed rotation: at zero joint angles the fingers point along world -y (into a front, which
+faces +y) and the jaws close along world x."""
+_AXES = {"x": [1, 0, 0], "y": [0, 0, -1], "z": [0, 1, 0], "pitch": [1, 0, 0], "yaw": [0, 1, 0], "roll": [0, 0, 1]}
+"""Joint axes in the base frame: the slides move along world x, y, z; pitch turns about world x (positive: fingers
+down), yaw about the (pitched) vertical, roll about the approach axis."""
+
+
+def add_gripper(spec: Any, gripper: GripperSpec = HAND_E) -> None:
+    """Add the gripper, its base chain, servos and wrist camera to ``spec`` (a ``mujoco.MjSpec``).
+
+    The base sits at the world origin, so the slide joints' values are the world position of the base (the back
+    face of the palm) and the hinge values its pitch, yaw and roll: together, the target pose."""
+    import mujoco
+
+    p = GRIPPER_PREFIX
+    geom_box = mujoco.mjtGeom.mjGEOM_BOX
+    base = spec.worldbody.add_body(name=f"{p}base", quat=list(BASE_QUAT), gravcomp=1.0)
+    slide, hinge = mujoco.mjtJoint.mjJNT_SLIDE, mujoco.mjtJoint.mjJNT_HINGE
+    for name in BASE_JOINTS:
+        rotary = name in ("pitch", "yaw", "roll")
+        base.add_joint(name=f"{p}{name}", type=hinge if rotary else slide, axis=_AXES[name],
+                       armature=gripper.arm_rot_armature if rotary else gripper.arm_armature,
+                       range=[-3.2, 3.2] if rotary else [-3.0, 3.0])
+        act = spec.add_actuator(name=f"{p}{name}", target=f"{p}{name}", trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.set_to_position(kp=gripper.arm_rot_stiffness if rotary else gripper.arm_stiffness, dampratio=1.0)
+        limit = gripper.arm_torque if rotary else gripper.arm_force
+        act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        act.forcerange = [-limit, limit]
+    px, py, pz = gripper.palm
+    _box_inertial(base, gripper.mass * 0.8, (px, py, pz), (0.0, 0.0, pz / 2))
+    base.add_geom(name=f"{p}palm", type=geom_box, size=[px / 2, py / 2, pz / 2], pos=[0, 0, pz / 2],
+                  mass=gripper.mass * 0.8, rgba=[0.15, 0.15, 0.17, 1])
+    base.add_site(name=f"{p}tcp", pos=[0, 0, gripper.tcp_offset], size=[0.004, 0.004, 0.004], group=4)
+    base.add_camera(name="wrist", pos=[0, -py / 2 - 0.01, pz * 0.4], xyaxes=[-1, 0, 0, 0, -0.5, 0.866], fovy=70)
+    for side, sign in (("left", -1.0), ("right", 1.0)):
+        finger = base.add_body(name=f"{p}{side}", pos=[0, 0, pz], gravcomp=1.0)
+        # The joint measures how far the finger's inner face is from the centre line: 0 closed, travel open.
+        finger.add_joint(name=f"{p}{side}", type=slide, axis=[sign, 0, 0], range=[0.0, gripper.finger_travel],
+                         armature=0.5, damping=20.0)
+        t, w, length = gripper.finger_thickness, gripper.finger_width, gripper.finger_length
+        _box_inertial(finger, gripper.mass * 0.1, (t, w, length), (sign * t / 2, 0.0, length / 2))
+        finger.add_geom(name=f"{p}{side}/finger", type=geom_box, size=[t / 2, w / 2, length / 2],
+                        pos=[sign * t / 2, 0, length / 2], mass=gripper.mass * 0.1, rgba=[0.3, 0.3, 0.32, 1],
+                        friction=[gripper.pad_friction, 0.005, 0.0001], priority=1)
+        finger.add_geom(name=f"{p}{side}/pad", type=geom_box, size=[0.0015, w / 2, gripper.pad_length / 2],
+                        pos=[sign * 0.001, 0, length - gripper.pad_length / 2], mass=0.0, rgba=[0.1, 0.1, 0.1, 1],
+                        friction=[gripper.pad_friction, 0.005, 0.0001], priority=2, condim=4,
+                        solref=[0.004, 1.0], solimp=[0.95, 0.99, 0.001, 0.5, 2.0])
+        act = spec.add_actuator(name=f"{p}{side}", target=f"{p}{side}", trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        # Position servo on the opening; a closed command aims a full stroke past closed, so in contact the
+        # servo saturates at the grip force, as the real gripper's force setting caps its motor current.
+        act.set_to_position(kp=20.0 * gripper.grip_force / gripper.finger_travel, dampratio=1.0)
+        act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        act.forcerange = [-gripper.grip_force, gripper.grip_force]
+    spec.add_exclude(bodyname1=f"{p}base", bodyname2=f"{p}left")
+    spec.add_exclude(bodyname1=f"{p}base", bodyname2=f"{p}right")
+    spec.add_exclude(bodyname1=f"{p}left", bodyname2=f"{p}right")
+
+
+def _box_inertial(body: Any, mass: float, size: tuple[float, float, float], com: tuple[float, float, float]) -> None:
+    """Explicit inertia of a solid box (variants compile with ``inertiafromgeom="false"``)."""
+    x, y, z = size
+    body.explicitinertial = True
+    body.mass = mass
+    body.ipos = list(com)
+    body.inertia = [mass * (y * y + z * z) / 12, mass * (x * x + z * z) / 12, mass * (x * x + y * y) / 12]
+
+
+def finger_target(gripper: GripperSpec, command: float) -> float:
+    """Opening target of each finger (m from the centre line) for a gripper command in [0, 1]: 0 fully open,
+    0.5 closed with no force, 1 closed and pressing with the full grip force."""
+    travel = gripper.finger_travel
+    return travel * (1.0 - 2.0 * min(max(command, 0.0), 1.0))

@@ -1,0 +1,314 @@
+"""Operators: whatever produces the action of each control step. Scripted strategies with ground-truth handle
+geometry (the paper's baselines and a closed-loop contact-rich strategy), learned policies, and teleop devices
+all have the same shape, so the recorder and the benchmark treat them alike.
+
+An action is 7 numbers: the target pose of the gripper's base (x, y, z in m, world; pitch, yaw, roll in rad) and
+the gripper command (0 open, 0.5 closed without force, 1 closed with the full grip force).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from rik.errors import RikError
+from rik.sim.probe import APPROACH, CLEARANCE, find_hooks, front_face_y, handle_extent, pose_is_free
+from rik.sim.scene import SimScene, base_for_tcp, gripper_rotation
+
+ACTION_NAMES = ("x", "y", "z", "pitch", "yaw", "roll", "gripper")
+MOVE_SPEED = 0.25
+"""Free-space speed of the gripper, m/s."""
+APPROACH_SPEED = 0.08
+"""Speed of the last few centimetres onto the handle, m/s."""
+PULL_SPEED = 0.12
+"""Speed of the pull, m/s."""
+PULL_LEAD = 0.06
+"""How far the commanded point may run ahead of the gripper in a pull, m (beyond the servo's force cap)."""
+CLOSE_TIME = 0.6
+"""Time given to the fingers to close and settle, s."""
+SLIP_DISTANCE = 0.015
+"""The handle moving this far relative to the pads means the grasp slipped, m."""
+STALL_TIME = 1.5
+"""A pull that gains less than :data:`STALL_PROGRESS` of the range in this time has stalled, s."""
+STALL_PROGRESS = 0.01
+DONE_OPENING = 0.97
+"""A strategy stops pulling when the front is this far open (fraction of its range)."""
+
+
+class Operator(Protocol):
+    """Produces one action per control step. ``done`` ends the episode early."""
+
+    name: str
+    done: bool
+
+    def reset(self, scene: SimScene, rng: np.random.Generator) -> None: ...
+
+    def act(self, scene: SimScene) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class GraspPlan:
+    """Where to put the pads (``tcp``, world), how to turn the gripper, and where to come from."""
+
+    mode: str
+    tcp: np.ndarray
+    angles: np.ndarray
+    approach: np.ndarray
+    """Unit vector from the grasp towards the pre-grasp pose."""
+    detail: str = ""
+    key: str = ""
+    """Plans with the same key are one way of grasping; a re-grasp tries another."""
+
+
+# ---- grasp planning (ground truth) ------------------------------------------------------------------------------
+def pinch_plan(scene: SimScene, vertical: bool) -> GraspPlan:
+    """Friction grasp: fingers towards the front, jaws horizontal or vertical, pads on the handle's outer part."""
+    g = scene.gripper
+    lo, hi = handle_extent(scene)
+    centre = scene.grasp_point()
+    face = front_face_y(scene, centre[0], centre[2] + (0.0 if vertical else 0.0), hi[1] + 0.05)
+    face = min(face, lo[1])
+    pad_y = max(hi[1] - g.pad_length / 2, face + CLEARANCE + 0.001 + g.pad_length / 2)
+    tcp = np.array([centre[0], pad_y, centre[2]])
+    angles = np.array([0.0, 0.0, math.pi / 2 if vertical else 0.0])
+    mode = "pinch_vertical" if vertical else "pinch_horizontal"
+    return GraspPlan(mode, tcp, angles, np.array([0.0, 1.0, 0.0]), key=mode)
+
+
+def hook_plans(scene: SimScene, limit: int = 6) -> list[GraspPlan]:
+    """Form-closure grasps: a finger behind material of the front (see :func:`rik.sim.probe.find_hooks`), with
+    the jaws open across the handle and the whole gripper clear of the furniture there and on the way in."""
+    g = scene.gripper
+    plans: list[GraspPlan] = []
+    for h in find_hooks(scene, g.finger_thickness, g.finger_width, g.stroke, g.pad_length):
+        sign = 1.0 if h.side == "above" else -1.0
+        tcp = h.pad + h.normal * g.finger_travel
+        angles = np.array([sign * h.tilt, 0.0, math.pi / 2])
+        if not all(pose_is_free(scene, base_for_tcp(g, tcp - h.finger * k * APPROACH, angles), g.finger_travel)
+                   for k in (0.0, 0.5, 1.0)):
+            continue
+        plan = GraspPlan(f"hook_{h.side}", tcp, angles, -h.finger,
+                         f"tilt {math.degrees(h.tilt):.0f} deg, bite {h.engagement * 1000:.0f} mm",
+                         f"hook_{h.side}_{math.degrees(h.tilt):.0f}")
+        if all(np.linalg.norm(plan.tcp - p.tcp) > 0.006 or p.mode != plan.mode for p in plans):
+            plans.append(plan)
+        if len(plans) >= limit:
+            break
+    return plans
+
+
+def pinch_fits(scene: SimScene) -> bool:
+    """Whether the handle is narrower vertically than horizontally (so a vertical pinch is the natural one)."""
+    lo, hi = handle_extent(scene)
+    return (hi[2] - lo[2]) <= (hi[0] - lo[0])
+
+
+# ---- the scripted operator ------------------------------------------------------------------------------------
+@dataclass
+class _Motion:
+    """A straight move of the commanded pads' point and a blend of the angles."""
+
+    start: np.ndarray
+    end: np.ndarray
+    a0: np.ndarray
+    a1: np.ndarray
+    speed: float
+    t: float = 0.0
+
+    @property
+    def duration(self) -> float:
+        return max(float(np.linalg.norm(self.end - self.start)) / self.speed,
+                   float(np.max(np.abs(self.a1 - self.a0))) / 1.5, 1e-9)
+
+
+@dataclass
+class ScriptedGrasp:
+    """Grasp the operated handle by a plan, close, and pull the front open along its motion.
+
+    ``closed_loop``: watch for slip (the handle moving relative to the pads) and stall (no progress while pulling),
+    then let go, back off and re-grasp with the next plan, up to ``regrasps`` times.
+    """
+
+    name: str
+    planner: Callable[[SimScene], list[GraspPlan]]
+    closed_loop: bool = False
+    regrasps: int = 3
+    jitter: float = 0.0
+    """Standard deviation of a random offset of the grasp point (m), drawn per episode."""
+    done: bool = False
+    log: list[str] = field(default_factory=list)
+
+    def reset(self, scene: SimScene, rng: np.random.Generator) -> None:
+        self.done, self.log = False, []
+        self._rng = rng
+        self._offset = rng.normal(0.0, self.jitter, 3) if self.jitter > 0 else np.zeros(3)
+        self._offset[1] = 0.0
+        self._tried: list[str] = []
+        self._attempts = 0
+        self._cmd_tcp = scene.tcp()
+        self._angles = scene.pose()[3:].copy()
+        self._grip = 0.0
+        self._start_plan(scene)
+
+    # phases: approach (motions) -> close -> pull -> [release -> retreat -> approach ...]
+    def _start_plan(self, scene: SimScene) -> None:
+        plans = [p for p in self.planner(scene) if p.key not in self._tried]
+        if not plans:
+            self.done = True
+            self.log.append("no grasp found")
+            return
+        plan = plans[0]
+        self._tried.append(plan.key)
+        self._plan = plan
+        target = plan.tcp + self._offset
+        pre = target + plan.approach * APPROACH
+        # leave the current spot along the old approach before turning, then come in along the new one
+        self._motions = [_Motion(self._cmd_tcp, pre, self._angles.copy(), plan.angles, MOVE_SPEED),
+                         _Motion(pre, target, plan.angles, plan.angles, APPROACH_SPEED)]
+        self._phase, self._clock = "approach", 0.0
+        self.log.append(f"attempt {self._attempts + 1}: {plan.mode} {plan.detail}".strip())
+
+    def _action(self, scene: SimScene) -> np.ndarray:
+        return np.concatenate([base_for_tcp(scene.gripper, self._cmd_tcp, self._angles), [self._grip]])
+
+    def act(self, scene: SimScene) -> np.ndarray:
+        dt = 1.0 / scene.control_fps
+        self._clock += dt
+        if self.done:
+            return self._action(scene)
+        if self._phase == "approach":
+            m = self._motions[0]
+            m.t = min(m.t + dt, m.duration)
+            s = m.t / m.duration
+            self._cmd_tcp = m.start + s * (m.end - m.start)
+            self._angles = m.a0 + s * (m.a1 - m.a0)
+            if m.t >= m.duration:
+                self._motions.pop(0)
+                if not self._motions:
+                    self._phase, self._clock, self._grip = "close", 0.0, 1.0
+        elif self._phase == "close":
+            if self._clock >= CLOSE_TIME:
+                self._phase, self._clock = "pull", 0.0
+                self._hold = scene.grasp_point() - scene.tcp()
+                self._progress = [(0.0, scene.opening())]
+        elif self._phase == "pull":
+            self._pull(scene, dt)
+        elif self._phase == "release":
+            self._grip = 0.0
+            if self._clock >= 0.4:
+                back = self._plan.approach * 0.04 + np.array([0.0, 0.03, 0.0])
+                self._motions = [_Motion(self._cmd_tcp, scene.tcp() + back, self._angles, self._angles, MOVE_SPEED)]
+                self._phase, self._clock = "retreat", 0.0
+        elif self._phase == "retreat":
+            m = self._motions[0]
+            m.t = min(m.t + dt, m.duration)
+            self._cmd_tcp = m.start + (m.t / m.duration) * (m.end - m.start)
+            if m.t >= m.duration:
+                self._start_plan(scene)
+        return self._action(scene)
+
+    def _pull(self, scene: SimScene, dt: float) -> None:
+        opening = scene.opening()
+        if opening >= DONE_OPENING:
+            self.done = True
+            self.log.append(f"opened {opening:.0%}")
+            return
+        tcp = scene.tcp()
+        direction = scene.pull_direction()
+        cmd = self._cmd_tcp + PULL_SPEED * dt * direction
+        lead = cmd - tcp
+        if np.linalg.norm(lead) > PULL_LEAD:
+            cmd = tcp + lead / np.linalg.norm(lead) * PULL_LEAD
+        self._cmd_tcp = cmd
+        self._progress.append((self._clock, opening))
+        if not self.closed_loop:
+            return
+        slipped = np.linalg.norm(scene.grasp_point() - tcp - self._hold) > SLIP_DISTANCE
+        old = [o for t, o in self._progress if t <= self._clock - STALL_TIME]
+        stalled = bool(old) and opening - old[-1] < STALL_PROGRESS
+        if slipped or stalled:
+            self._attempts += 1
+            self.log.append(f"{'slip' if slipped else 'stall'} at {opening:.0%} open")
+            if self._attempts > self.regrasps:
+                self.done = True
+                return
+            self._phase, self._clock = "release", 0.0
+
+
+def _pinch_h(scene: SimScene) -> list[GraspPlan]:
+    return [pinch_plan(scene, vertical=False)]
+
+
+def _pinch_v(scene: SimScene) -> list[GraspPlan]:
+    return [pinch_plan(scene, vertical=True)]
+
+
+def _pinch_natural(scene: SimScene) -> list[GraspPlan]:
+    return [pinch_plan(scene, vertical=pinch_fits(scene))]
+
+
+def _contact_rich(scene: SimScene) -> list[GraspPlan]:
+    natural = pinch_fits(scene)
+    return [*hook_plans(scene, limit=2), pinch_plan(scene, vertical=natural), pinch_plan(scene, vertical=not natural)]
+
+
+@dataclass(frozen=True)
+class Strategy:
+    name: str
+    summary: str
+    make: Callable[[], Operator]
+
+
+STRATEGIES: dict[str, Strategy] = {s.name: s for s in (
+    Strategy("grasp_horizontal", "friction only: fingers towards the front, jaws horizontal, close on the handle's "
+             "outer part and pull (the paper's 'normal way')",
+             lambda: ScriptedGrasp("grasp_horizontal", _pinch_h, jitter=0.002)),
+    Strategy("grasp_vertical", "friction only: as grasp_horizontal with the jaws vertical",
+             lambda: ScriptedGrasp("grasp_vertical", _pinch_v, jitter=0.002)),
+    Strategy("grasp_natural", "friction only: the pinch whose jaws close across the handle's narrower side",
+             lambda: ScriptedGrasp("grasp_natural", _pinch_natural, jitter=0.002)),
+    Strategy("contact_rich", "closed loop: a finger behind material (into a loop, under a lip, behind a knob's "
+             "head) found by ray casts; on slip or stall let go and re-grasp with the next plan",
+             lambda: ScriptedGrasp("contact_rich", _contact_rich, closed_loop=True, jitter=0.002)),
+)}
+
+
+def make_operator(name: str) -> Operator:
+    """A fresh scripted operator by strategy name."""
+    try:
+        return STRATEGIES[name].make()
+    except KeyError:
+        import difflib
+
+        close = difflib.get_close_matches(name, STRATEGIES, n=1)
+        hint = f"; did you mean '{close[0]}'?" if close else ""
+        raise RikError(f"unknown strategy '{name}' (strategies: {', '.join(STRATEGIES)}){hint}") from None
+
+
+@dataclass
+class PolicyOperator:
+    """A learned (or any) policy as an operator: ``policy(observation) -> action`` where the action is the
+    environment's (a target-pose delta and a gripper command, see :mod:`rik.sim.env`)."""
+
+    policy: Callable[[dict[str, Any]], np.ndarray]
+    name: str = "policy"
+    done: bool = False
+
+    def reset(self, scene: SimScene, rng: np.random.Generator) -> None:
+        self.done = False
+        self._target = scene.pose()
+
+    def act(self, scene: SimScene) -> np.ndarray:
+        from rik.sim.env import delta_to_absolute, observe
+
+        action = np.asarray(self.policy(observe(scene)), np.float64)
+        absolute = delta_to_absolute(self._target, action)
+        self._target = absolute[:6]
+        return absolute
+
+
+__all__ = ["ACTION_NAMES", "Operator", "PolicyOperator", "STRATEGIES", "make_operator", "gripper_rotation"]
