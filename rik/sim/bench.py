@@ -212,3 +212,18 @@ def sweep_plot(rows: Sequence[dict[str, Any]], png: Path) -> Path:
     plt.close(fig)
     tmp.replace(png)
     return png
+
+
+def sweep_markdown(rows: Sequence[dict[str, Any]]) -> str:
+    """Success rate per strategy against grip force and friction-capacity ratio (all presets pooled)."""
+    strategies = list(dict.fromkeys(r["strategy"] for r in rows))
+    keys = sorted({(r["grip_force"], r["preset"], round(r["capacity_ratio"], 2)) for r in rows})
+    lines = ["| grip force (N) | preset | capacity / resistance | " + " | ".join(strategies) + " |",
+             "|---:|---|---:|" + "---:|" * len(strategies)]
+    for g, p, ratio in keys:
+        cells = []
+        for s in strategies:
+            sel = [r["outcome"] == "S" for r in rows if (r["grip_force"], r["preset"], r["strategy"]) == (g, p, s)]
+            cells.append(f"{np.mean(sel):.2f}" if sel else "-")
+        lines.append(f"| {g:g} | {p} | {ratio:.2f} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

@@ -98,7 +98,8 @@ class EpisodeRecorder:
                 "contacts": pa.array(r["contacts"], pa.int32()),
             }
             for c in COLUMNS:
-                arrays.setdefault(c, pa.array(r[c], pa.float64()))
+                if c not in arrays:
+                    arrays[c] = pa.array(r[c], pa.float64())
             return pa.table({c: arrays[c] for c in COLUMNS})
         finally:
             for c in COLUMNS:

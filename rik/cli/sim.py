@@ -1,0 +1,131 @@
+"""``rik record``, ``rik teleop``, ``rik replay`` and ``rik bench``: simulation, teleoperation and the resistance
+benchmark. Only parsing and printing here; :mod:`rik.sim` does the work."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from rik.cli.common import DEFAULT_WORKERS, CatalogOption, HandleTypeOpt, WorkersOpt, console, overlays, progress_bar
+from rik.errors import RikError
+
+VariantArg = Annotated[str, typer.Argument(help="Variant id, e.g. drawer-chest-80__two_point-bow-128__normal "
+                                           "(built into --variants first if needed).", show_default=False)]
+FrontOpt = Annotated[str | None, typer.Option("--front", help="Front to open (default: the variant's first).")]
+EpisodesOutOpt = Annotated[Path, typer.Option("--out", "-o", help="Directory of episodes.")]
+VariantsOpt = Annotated[Path, typer.Option("--variants", help="Directory of built variants.")]
+
+
+def _strategies_help() -> str:
+    return "grasp_horizontal, grasp_vertical, grasp_natural or contact_rich"
+
+
+def record(variant: VariantArg,
+           strategy: Annotated[str, typer.Option("--strategy", "-s", help=f"Scripted strategy: {_strategies_help()}.")],
+           episodes: Annotated[int, typer.Option("--episodes", "-n", min=1, help="Episodes to record.")] = 1,
+           seed: Annotated[int, typer.Option("--seed", help="Seed of the first episode (then +1 each).")] = 0,
+           front: FrontOpt = None, out: EpisodesOutOpt = Path("episodes"), variants: VariantsOpt = Path("variants"),
+           catalog: CatalogOption = None) -> None:
+    """Record episodes of a scripted strategy on a variant into --out/<id>/ (meta.json, states.parquet)."""
+    from rik.registry.load import load_catalog
+    from rik.sim.record import record as run
+
+    cat = load_catalog(overlays(catalog))
+    con = console()
+    with progress_bar() as progress:
+        task = progress.add_task("episodes", total=episodes, last="")
+        metas = run(cat, variant, strategy, episodes=episodes, seed=seed, out=out, variants=variants, front=front,
+                    progress=lambda m: progress.update(task, advance=1, last=f"{m.id} {m.outcome}"))
+    for m in metas:
+        con.print(f"{out / m.id}: {m.outcome} (opened {m.final_opening:.0%}, {m.steps} steps at {m.fps} Hz)")
+
+
+def teleop(variant: VariantArg,
+           device: Annotated[str, typer.Option("--device", "-d", help="keyboard or spacemouse.")] = "keyboard",
+           front: FrontOpt = None, out: EpisodesOutOpt = Path("episodes"), variants: VariantsOpt = Path("variants"),
+           seed: Annotated[int, typer.Option("--seed", help="Recorded as the episode's seed.")] = 0,
+           catalog: CatalogOption = None) -> None:
+    """Teleoperate a variant in MuJoCo's viewer (keymap: docs/simulation.md) and record the episode."""
+    from rik.registry.load import load_catalog
+    from rik.sim.teleop import teleoperate
+
+    meta = teleoperate(load_catalog(overlays(catalog)), variant, device, out=out, variants=variants, front=front,
+                       seed=seed)
+    con = console()
+    if meta is None:
+        con.print("episode discarded; nothing written")
+    else:
+        con.print(f"{out / meta.id}: {meta.outcome} (opened {meta.final_opening:.0%}, {meta.steps} steps)")
+
+
+def replay(episodes: Annotated[list[Path], typer.Argument(help="Episode directories, or directories of them.",
+                                                          show_default=False)],
+           variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
+    """Check recorded episodes: each loads whole, and setting its recorded states back and stepping on with its
+    actions reproduces the recording bit for bit."""
+    from rik.registry.load import load_catalog
+    from rik.sim.episode import find_episodes
+    from rik.sim.replay import verify_episode
+
+    cat = load_catalog(overlays(catalog))
+    con = console()
+    bad = 0
+    for d in find_episodes(episodes):
+        result = verify_episode(cat, d, variants)
+        bad += not result.exact
+        con.print(f"{d}: {'exact' if result.exact else '[red]differs[/]'} ({result.rows} states, "
+                  f"largest difference {result.max_difference:g})")
+    if bad:
+        raise typer.Exit(1)
+
+
+def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "-t", help="Handle types "
+                                                                    "(repeatable; default: all three).")] = None,
+          presets: Annotated[str, typer.Option("--presets", help="Comma-separated presets.")] = "smooth,normal,high",
+          strategies: Annotated[str, typer.Option("--strategies", help="Comma-separated strategies.")] =
+          "grasp_horizontal,grasp_vertical,contact_rich",
+          per_cell: Annotated[int, typer.Option("--episodes-per-cell", "-n", min=1,
+                                                help="Episodes per handle type x preset x strategy.")] = 10,
+          sweep: Annotated[str | None, typer.Option("--sweep", help="grip-force: repeat every episode at "
+                                                    "several grip forces and plot success against the friction "
+                                                    "capacity ratio.")] = None,
+          seed: Annotated[int, typer.Option("--seed")] = 0,
+          out: Annotated[Path, typer.Option("--out", "-o", help="Where results.csv, table.md (and sweep.png) go.")]
+          = Path("bench"),
+          workers: WorkersOpt = DEFAULT_WORKERS, variants: VariantsOpt = Path("variants"),
+          catalog: CatalogOption = None) -> None:
+    """The resistance benchmark: randomised drawer-opening episodes, F/P/S per handle type, strategy and preset
+    (the paper's Table 3)."""
+    from rik.paths import write_atomic
+    from rik.registry.load import load_catalog
+    from rik.sim import bench as b
+
+    cat = load_catalog(overlays(catalog))
+    grip_forces: tuple[Any, ...] = (None,)
+    if sweep is not None:
+        if sweep != "grip-force":
+            raise RikError(f"unknown sweep '{sweep}' (sweeps: grip-force)")
+        grip_forces = b.SWEEP_GRIP_FORCES
+    type_names = [t.value for t in types] if types else list(b.DEFAULT_TYPES)
+    tasks = b.plan_tasks(cat, types=type_names, presets=[p.strip() for p in presets.split(",") if p.strip()],
+                         strategies=[s.strip() for s in strategies.split(",") if s.strip()], per_cell=per_cell,
+                         seed=seed, grip_forces=grip_forces)
+    with progress_bar() as progress:
+        task = progress.add_task("episodes", total=len(tasks), last="")
+        rows = b.run_bench(cat, tasks, workers=workers, variants=variants, overlays=overlays(catalog),
+                           progress=lambda r: progress.update(task, advance=1, last=f"{r['variant']} {r['outcome']}"))
+    out.mkdir(parents=True, exist_ok=True)
+    write_atomic(out / "results.csv", b.rows_csv(rows))
+    table = b.table_markdown(rows)
+    write_atomic(out / "table.md", table)
+    con = console()
+    if sweep is not None:
+        png = b.sweep_plot(rows, out / "sweep.png")
+        write_atomic(out / "sweep.md", b.sweep_markdown(rows))
+        con.print(b.sweep_markdown(rows))
+        con.print(f"plot: {png}")
+    else:
+        con.print(table)
+    con.print(f"{len(rows)} episodes; results in {out / 'results.csv'} and {out / 'table.md'}")

@@ -1,0 +1,53 @@
+"""Replaying recorded episodes: set each recorded state back, and check that stepping on from it with the
+recorded action reproduces the next recorded state bit for bit."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rik.sim.episode import EpisodeError, read_episode, states
+
+
+@dataclass(frozen=True)
+class ReplayCheck:
+    exact: bool
+    rows: int
+    max_difference: float
+    """Largest absolute difference between a re-simulated and a recorded state."""
+
+
+def episode_scene(catalog: Any, directory: Path, variants: Path, meta: Any) -> Any:
+    """The scene an episode was recorded in (its variant is built first if missing), with its gripper."""
+    from rik.sim.gripper import HAND_E
+    from rik.sim.record import variant_dir
+    from rik.sim.scene import build_scene
+
+    g = meta.gripper
+    gripper = HAND_E.with_(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
+                           arm_force=g.arm_force)
+    scene = build_scene(variant_dir(catalog, meta.variant, variants), meta.front, gripper, meta.fps)
+    import mujoco
+
+    size = mujoco.mj_stateSize(scene.model, mujoco.mjtState.mjSTATE_INTEGRATION)
+    if size != meta.state_size:
+        raise EpisodeError(f"{Path(directory) / 'meta.json'}: field 'state_size': {meta.state_size}, but the scene of "
+                           f"{meta.variant} has states of {size} numbers (recorded with another rik or MuJoCo?)")
+    return scene
+
+
+def verify_episode(catalog: Any, directory: Path, variants: Path = Path("variants")) -> ReplayCheck:
+    """Re-simulate every recorded step from its recorded state and action; compare with the next state."""
+    meta, table = read_episode(directory)
+    scene = episode_scene(catalog, directory, variants, meta)
+    recorded = states(table)
+    actions = table.column("action").combine_chunks().values.to_numpy().reshape(len(recorded), -1)
+    worst = 0.0
+    for k in range(len(recorded) - 1):
+        scene.restore(recorded[k])
+        scene.step(actions[k])
+        worst = max(worst, float(np.max(np.abs(scene.state() - recorded[k + 1]))))
+    return ReplayCheck(worst == 0.0, len(recorded), worst)
