@@ -6,6 +6,7 @@ data sets). Its figures, with where they come from:
 - stroke 50 mm (25 mm per finger), finger speed 20-150 mm/s, mass about 1 kg: Robotiq Hand-E specifications;
 - grip force: the manual's friction-payload example uses the gripper's maximum force, 130 N
   (Robotiq Hand-E instruction manual, section 6 "Payload and force", W = 2 F Cf / Sf);
+- fingers: synchronised (the manual: "finger movement is always synchronized");
 - pad friction: 0.3, the manual's tested static coefficient of its silicone fingertips (HND-TIP-SLC-KIT), measured
   on lubricated steel (same page). It is the only pad friction Robotiq publishes; dry lacquer or metal is
   grippier, so this is a conservative figure. ``rik bench --sweep`` varies it.
@@ -138,12 +139,19 @@ def add_gripper(spec: Any, gripper: GripperSpec = HAND_E) -> None:
                         pos=[sign * 0.001, 0, length - gripper.pad_length / 2], mass=0.0, rgba=[0.1, 0.1, 0.1, 1],
                         friction=[gripper.pad_friction, 0.005, 0.0001], priority=2, condim=4,
                         solref=[0.004, 1.0], solimp=[0.95, 0.99, 0.001, 0.5, 2.0])
-        act = spec.add_actuator(name=f"{p}{side}", target=f"{p}{side}", trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        # Position servo on the opening; a closed command aims a full stroke past closed, so in contact the
-        # servo saturates at the grip force, as the real gripper's force setting caps its motor current.
-        act.set_to_position(kp=20.0 * gripper.grip_force / gripper.finger_travel, dampratio=1.0)
-        act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-        act.forcerange = [-gripper.grip_force, gripper.grip_force]
+    # The Hand-E's fingers move together (one motor, synchronised): the right finger's opening equals the left's,
+    # and one servo drives the jaw opening (a tendon: the sum of both). A closed command aims a full stroke past
+    # closed, so on an object the servo saturates at the grip force, as the gripper's force setting caps its
+    # motor current. Each jaw then presses with the servo's force.
+    spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=f"{p}right", name2=f"{p}left",
+                      solref=[0.004, 1.0])
+    jaw = spec.add_tendon(name=f"{p}jaw")
+    jaw.wrap_joint(f"{p}left", 1.0)
+    jaw.wrap_joint(f"{p}right", 1.0)
+    act = spec.add_actuator(name=f"{p}jaw", target=f"{p}jaw", trntype=mujoco.mjtTrn.mjTRN_TENDON)
+    act.set_to_position(kp=20.0 * gripper.grip_force / gripper.stroke, dampratio=1.0)
+    act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+    act.forcerange = [-gripper.grip_force, gripper.grip_force]
     spec.add_exclude(bodyname1=f"{p}base", bodyname2=f"{p}left")
     spec.add_exclude(bodyname1=f"{p}base", bodyname2=f"{p}right")
     spec.add_exclude(bodyname1=f"{p}left", bodyname2=f"{p}right")
@@ -158,8 +166,7 @@ def _box_inertial(body: Any, mass: float, size: tuple[float, float, float], com:
     body.inertia = [mass * (y * y + z * z) / 12, mass * (x * x + z * z) / 12, mass * (x * x + y * y) / 12]
 
 
-def finger_target(gripper: GripperSpec, command: float) -> float:
-    """Opening target of each finger (m from the centre line) for a gripper command in [0, 1]: 0 fully open,
-    0.5 closed with no force, 1 closed and pressing with the full grip force."""
-    travel = gripper.finger_travel
-    return travel * (1.0 - 2.0 * min(max(command, 0.0), 1.0))
+def jaw_target(gripper: GripperSpec, command: float) -> float:
+    """Jaw-opening target (m, both fingers) for a gripper command in [0, 1]: 0 fully open, 0.5 closed with no
+    force, 1 closed and pressing with the full grip force."""
+    return gripper.stroke * (1.0 - 2.0 * min(max(command, 0.0), 1.0))

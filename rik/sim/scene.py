@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from rik.errors import RikError
-from rik.sim.gripper import BASE_JOINTS, GRIPPER_PREFIX, HAND_E, GripperSpec, finger_target
+from rik.sim.gripper import BASE_JOINTS, GRIPPER_PREFIX, HAND_E, GripperSpec, jaw_target
 
 CONTROL_FPS = 20
 """Control (and recording) rate, Hz."""
@@ -147,24 +147,24 @@ class SimScene:
 
         self.data.qpos[self.base_qpos] = pose
         self.data.qvel[:] = 0.0
-        opening = min(max(finger_target(self.gripper, grip), 0.0), self.gripper.finger_travel)
-        self.data.qpos[self.finger_qpos] = opening
+        opening = min(max(jaw_target(self.gripper, grip), 0.0), self.gripper.stroke)
+        self.data.qpos[self.finger_qpos] = opening / 2
         self.data.ctrl[:6] = pose
-        self.data.ctrl[6:8] = opening
+        self.data.ctrl[6] = opening
         mujoco.mj_forward(self.model, self.data)
 
     def step(self, action: np.ndarray) -> None:
-        """One control step: the base servos aim at ``action[:6]``; the fingers move towards the opening of the grip
+        """One control step: the base servos aim at ``action[:6]``; the jaws move towards the opening of the grip
         command ``action[6]`` at the gripper's finger speed."""
         import mujoco
 
         action = np.asarray(action, dtype=np.float64)
         self.data.ctrl[:6] = action[:6]
-        goal = finger_target(self.gripper, float(action[6]))
-        dmax = self.gripper.finger_speed * self.model.opt.timestep
+        goal = jaw_target(self.gripper, float(action[6]))
+        dmax = 2.0 * self.gripper.finger_speed * self.model.opt.timestep
         for _ in range(self.substeps):
-            c = self.data.ctrl[6:8]
-            self.data.ctrl[6:8] = c + np.clip(goal - c, -dmax, dmax)
+            c = float(self.data.ctrl[6])
+            self.data.ctrl[6] = c + min(max(goal - c, -dmax), dmax)
             mujoco.mj_step(self.model, self.data)
 
     def state(self) -> np.ndarray:
