@@ -28,7 +28,8 @@ for _command in (sim.record, sim.teleop, sim.replay, sim.bench):
 def demo(catalog_paths: CatalogOption = None) -> None:
     """The main job on built-in defaults: validate the catalog and print its summary, then build a sample of
     assets (one handle of each type and a chest of drawers), measure their collision fidelity and run the finger
-    test on the two-point handle, then build and check three MuJoCo variants into variants/."""
+    test on the two-point handle, then build and check three MuJoCo variants into variants/, and record one
+    scripted contact-rich episode of the first into episodes/ (checked to replay exactly)."""
     from rik.cli.assets import print_demo_assets
     from rik.cli.catalog import print_summary
     from rik.registry.index import catalog_index
@@ -36,9 +37,10 @@ def demo(catalog_paths: CatalogOption = None) -> None:
 
     print_summary(catalog_stats(catalog_index(overlays(catalog_paths))))
     print_demo_assets(overlays(catalog_paths))
-    from rik.cli.variants import print_demo_variants
+    from rik.cli.variants import print_demo_episode, print_demo_variants
 
     print_demo_variants(overlays(catalog_paths))
+    print_demo_episode(overlays(catalog_paths))
 
 
 @app.callback()

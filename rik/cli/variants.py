@@ -63,6 +63,24 @@ def print_demo_variants(overlay_paths: list[Path], out: Path = Path("variants"))
               "rik variants build --all --preset normal")
 
 
+def print_demo_episode(overlay_paths: list[Path], out: Path = Path("episodes"), variants: Path = Path("variants")
+                       ) -> None:
+    """Record one contact-rich episode of the first demo variant into ``out`` and check that it replays exactly."""
+    from rik.registry.load import load_catalog
+    from rik.sim.record import record
+    from rik.sim.replay import verify_episode
+
+    cat = load_catalog(overlay_paths)
+    con = console()
+    with con.status("recording a scripted episode (MuJoCo) ..."):
+        meta = record(cat, DEMO_VARIANTS[0], "contact_rich", out=out, variants=variants)[0]
+        check = verify_episode(cat, out / meta.id, variants)
+    con.print(f"episode {out / meta.id}: {meta.outcome} (opened {meta.final_opening:.0%} in "
+              f"{meta.steps / meta.fps:.1f} s; {'; '.join(meta.log)}); replay "
+              f"{'exact' if check.exact else 'NOT exact'} over {check.rows} states")
+    con.print("next: rik bench (the resistance benchmark), rik teleop VARIANT --device keyboard")
+
+
 def _select(cat: Any, base: list[str] | None, handle_type: list[HandleTypeOpt] | None, handle: list[str] | None,
             preset: list[str] | None) -> list[Any]:
     from rik.combinator.ids import select_variants

@@ -218,9 +218,10 @@ def _add_environment(spec: Any) -> None:
     spec.visual.headlight.diffuse = [0.5, 0.5, 0.5]
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
                             rgba=[0.55, 0.5, 0.45, 1], group=1)
-    spec.worldbody.add_light(name="key", pos=[0.8, 2.0, 2.8], dir=[-0.25, -0.6, -0.75], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+    directional = mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
+    spec.worldbody.add_light(name="key", pos=[0.8, 2.0, 2.8], dir=[-0.25, -0.6, -0.75], type=directional,
                              diffuse=[0.7, 0.7, 0.7])
-    spec.worldbody.add_light(name="fill", pos=[-1.5, 1.5, 2.0], dir=[0.5, -0.5, -0.6], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+    spec.worldbody.add_light(name="fill", pos=[-1.5, 1.5, 2.0], dir=[0.5, -0.5, -0.6], type=directional,
                              diffuse=[0.3, 0.3, 0.3])
 
 
