@@ -25,7 +25,7 @@ singularity (yaw = ±90°). Gripper frame: fingers point along +z, the jaws clos
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 GRIPPER_PREFIX = "gripper/"
@@ -67,7 +67,6 @@ class GripperSpec:
     pad_length: float = 0.030
     palm: tuple[float, float, float] = (0.090, 0.050, 0.060)
     """Palm (housing) size along x, y, z, m."""
-    extra: dict[str, Any] = field(default_factory=dict)
 
     def with_(self, **changes: Any) -> GripperSpec:
         return replace(self, **changes)

@@ -17,7 +17,7 @@ import numpy as np
 
 from rik.errors import RikError
 from rik.sim.probe import APPROACH, CLEARANCE, find_hooks, front_face_y, handle_extent, pose_is_free
-from rik.sim.scene import SimScene, base_for_tcp, gripper_rotation
+from rik.sim.scene import SimScene, base_for_tcp
 
 ACTION_NAMES = ("x", "y", "z", "pitch", "yaw", "roll", "gripper")
 MOVE_SPEED = 0.25
@@ -70,8 +70,7 @@ def pinch_plan(scene: SimScene, vertical: bool) -> GraspPlan:
     g = scene.gripper
     lo, hi = handle_extent(scene)
     centre = scene.grasp_point()
-    face = front_face_y(scene, centre[0], centre[2] + (0.0 if vertical else 0.0), hi[1] + 0.05)
-    face = min(face, lo[1])
+    face = min(front_face_y(scene, centre[0], centre[2], hi[1] + 0.05), lo[1])
     pad_y = max(hi[1] - g.pad_length / 2, face + CLEARANCE + 0.001 + g.pad_length / 2)
     tcp = np.array([centre[0], pad_y, centre[2]])
     angles = np.array([0.0, 0.0, math.pi / 2 if vertical else 0.0])
@@ -311,4 +310,4 @@ class PolicyOperator:
         return absolute
 
 
-__all__ = ["ACTION_NAMES", "Operator", "PolicyOperator", "STRATEGIES", "make_operator", "gripper_rotation"]
+__all__ = ["ACTION_NAMES", "Operator", "PolicyOperator", "STRATEGIES", "make_operator"]
