@@ -75,6 +75,7 @@ class OpenFrontEnv(gym.Env):
         self.render_mode = render_mode
         self._scenes: dict[tuple[str, str | None], SimScene] = {}
         self._renderer: Any = None
+        self._renderer_model: Any = None
         self.scene = self._scene(variant, front)
         n = len(STATE_NAMES)
         spaces = {"state": gym.spaces.Box(-np.inf, np.inf, (n,), np.float64)}
@@ -97,7 +98,7 @@ class OpenFrontEnv(gym.Env):
     def _get_renderer(self) -> Any:
         import mujoco
 
-        if self._renderer is None or self._renderer_model is not self.scene.model:
+        if self._renderer_model is not self.scene.model:
             h, w = self._size
             self._renderer = mujoco.Renderer(self.scene.model, h, w)
             self._renderer_model = self.scene.model

@@ -180,15 +180,8 @@ class ScriptedGrasp:
         if self.done:
             return self._action(scene)
         if self._phase == "approach":
-            m = self._motions[0]
-            m.t = min(m.t + dt, m.duration)
-            s = m.t / m.duration
-            self._cmd_tcp = m.start + s * (m.end - m.start)
-            self._angles = m.a0 + s * (m.a1 - m.a0)
-            if m.t >= m.duration:
-                self._motions.pop(0)
-                if not self._motions:
-                    self._phase, self._clock, self._grip = "close", 0.0, 1.0
+            if self._follow(dt):
+                self._phase, self._clock, self._grip = "close", 0.0, 1.0
         elif self._phase == "close":
             if self._clock >= CLOSE_TIME:
                 self._phase, self._clock = "pull", 0.0
@@ -203,12 +196,20 @@ class ScriptedGrasp:
                 self._motions = [_Motion(self._cmd_tcp, scene.tcp() + back, self._angles, self._angles, MOVE_SPEED)]
                 self._phase, self._clock = "retreat", 0.0
         elif self._phase == "retreat":
-            m = self._motions[0]
-            m.t = min(m.t + dt, m.duration)
-            self._cmd_tcp = m.start + (m.t / m.duration) * (m.end - m.start)
-            if m.t >= m.duration:
+            if self._follow(dt):
                 self._start_plan(scene)
         return self._action(scene)
+
+    def _follow(self, dt: float) -> bool:
+        """Advance the commanded pose ``dt`` along the queued motions; True once the last one is done."""
+        m = self._motions[0]
+        m.t = min(m.t + dt, m.duration)
+        s = m.t / m.duration
+        self._cmd_tcp = m.start + s * (m.end - m.start)
+        self._angles = m.a0 + s * (m.a1 - m.a0)
+        if m.t >= m.duration:
+            self._motions.pop(0)
+        return not self._motions
 
     def _pull(self, scene: SimScene, dt: float) -> None:
         opening = scene.opening()
