@@ -28,6 +28,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Any
 
+import numpy as np
+
 GRIPPER_PREFIX = "gripper/"
 BASE_JOINTS = ("x", "y", "z", "pitch", "yaw", "roll")
 """The base chain's joints (``gripper/<name>``): three slides (m) then three hinges (rad)."""
@@ -123,7 +125,13 @@ def add_gripper(spec: Any, gripper: GripperSpec = HAND_E) -> None:
     base.add_geom(name=f"{p}palm", type=geom_box, size=[px / 2, py / 2, pz / 2], pos=[0, 0, pz / 2],
                   mass=gripper.mass * 0.8, rgba=[0.15, 0.15, 0.17, 1])
     base.add_site(name=f"{p}tcp", pos=[0, 0, gripper.tcp_offset], size=[0.004, 0.004, 0.004], group=4)
-    base.add_camera(name="wrist", pos=[0, -py / 2 - 0.01, pz * 0.4], xyaxes=[-1, 0, 0, 0, -0.5, 0.866], fovy=70)
+    # The wrist camera sits at the palm's front edge and looks past the fingertips (3 cm beyond the TCP), image up away
+    # from the palm, so the fingers and what they grasp show in the lower half of the image.
+    eye = np.array([0.0, -py / 2 - 0.015, pz + 0.005])
+    look = np.array([0.0, 0.0, gripper.tcp_offset + 0.03]) - eye
+    back = -look / np.linalg.norm(look)
+    right = np.array([1.0, 0.0, 0.0])
+    base.add_camera(name="wrist", pos=eye.tolist(), xyaxes=[*right, *np.cross(back, right)], fovy=70)
     for side, sign in (("left", -1.0), ("right", 1.0)):
         finger = base.add_body(name=f"{p}{side}", pos=[0, 0, pz], gravcomp=1.0)
         # The joint measures how far the finger's inner face is from the centre line: 0 closed, travel open.
