@@ -1,0 +1,88 @@
+"""``rik render`` and ``rik rerender``: image streams of recorded episodes, from MuJoCo (the live ``sim`` stream)
+and from Mitsuba 3 (the offline path-traced ``rerendered`` stream). Only parsing and printing here;
+:mod:`rik.render` does the work."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from rik.cli.common import CatalogOption, WorkersOpt, console, overlays, progress_bar
+from rik.cli.sim import VariantsOpt
+
+EpisodesArg = Annotated[list[Path], typer.Argument(help="Episode directories, or directories of them.",
+                                                   show_default=False)]
+ResOpt = Annotated[str, typer.Option("--res", help="Image size: 256 (square) or WIDTHxHEIGHT, px.")]
+CamerasOpt = Annotated[str | None, typer.Option("--cameras", help="Comma-separated cameras (default: every "
+                                                "camera of the scene: front, wrist).")]
+RendersOpt = Annotated[Path, typer.Option("--out", "-o", help="Root of rendered streams: "
+                                          "<out>/<episode>/<stream>/<camera>/<frame>.png.")]
+
+
+def _run(episodes: list[Path], kind: str, res: str, cameras: str | None, out: Path, variants: Path, workers: int,
+         catalog: list[Path] | None, sheet: bool = False, **quality: object) -> None:
+    from rik.registry.load import load_catalog
+    from rik.render.episodes import render_episodes
+    from rik.render.streams import StreamSpec, parse_resolution
+    from rik.sim.episode import find_episodes, read_meta
+
+    width, height = parse_resolution(res)
+    spec = StreamSpec(kind, width, height, **quality)  # type: ignore[arg-type]
+    if kind == "rerendered":
+        from rik.render.backend import use_variant
+
+        use_variant(spec.variant)  # an unsupported or unavailable variant fails before any work
+    dirs = find_episodes(episodes)
+    by_id = {read_meta(d).id: d for d in dirs}
+    total = sum(read_meta(d).steps + 1 for d in dirs)
+    cams = [c.strip() for c in cameras.split(",") if c.strip()] if cameras else None
+    cat = load_catalog(overlays(catalog))
+    con = console()
+    results = []
+    with progress_bar() as progress:
+        task = progress.add_task(f"{spec.key} frames", total=total, last="")
+        for r in render_episodes(cat, dirs, spec, renders=out, variants=variants, cameras=cams, workers=workers,
+                                 overlays=overlays(catalog), progress=lambda n: progress.update(task, advance=n)):
+            progress.update(task, last=r.episode)
+            results.append(r)
+    for r in results:
+        how = (f"{r.rendered} frames rendered, {r.seconds_per_frame:.2f} s per frame ({len(r.cameras)} cameras)"
+               if r.rendered else "already rendered")
+        con.print(f"{r.directory}: {r.frames} frames x {', '.join(r.cameras)}; {how}")
+        if sheet:
+            from rik.render.episodes import render_episode
+            from rik.render.sheet import contact_sheet
+
+            sim = render_episode(cat, by_id[r.episode], StreamSpec("sim", width, height), renders=out,
+                                 variants=variants, cameras=list(r.cameras))
+            png = contact_sheet([sim.directory, r.directory], r.directory.parent / f"compare-{spec.key}.png",
+                                cameras=list(r.cameras))
+            con.print(f"  side by side with the sim stream: {png}")
+
+
+def render(episodes: EpisodesArg, res: ResOpt = "256", cameras: CamerasOpt = None,
+           out: RendersOpt = Path("renders"), workers: WorkersOpt = 1, variants: VariantsOpt = Path("variants"),
+           catalog: CatalogOption = None) -> None:
+    """The sim stream: MuJoCo images of every camera, replayed from the recorded states (headless through EGL).
+    Resumable: finished episodes are skipped, interrupted ones continue."""
+    _run(episodes, "sim", res, cameras, out, variants, workers, catalog)
+
+
+def rerender(episodes: EpisodesArg, res: ResOpt = "256",
+             spp: Annotated[int, typer.Option("--spp", min=1, max=4096, help="Samples per pixel.")] = 16,
+             denoise: Annotated[bool, typer.Option("--denoise/--no-denoise", help="Intel Open Image Denoise with "
+                                                   "albedo and normal guides.")] = True,
+             variant: Annotated[str, typer.Option("--variant", help="Mitsuba variant: auto (fastest that works "
+                                                  "here), cuda_ad_rgb, llvm_ad_rgb or scalar_rgb.")] = "auto",
+             cameras: CamerasOpt = None, out: RendersOpt = Path("renders"), workers: WorkersOpt = 1,
+             sheet: Annotated[bool, typer.Option("--sheet/--no-sheet", help="Also render the sim stream at the "
+                                                 "same size and write a PNG of the two side by side per "
+                                                 "episode.")] = True,
+             variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
+    """The re-rendered stream: every recorded state path-traced by Mitsuba 3 (materials from the catalog's
+    finishes, a procedural room light, MuJoCo's cameras), denoised and tone-mapped to 8-bit sRGB. Resumable per
+    frame. The LLVM and CUDA variants use every core: keep --workers 1 there."""
+    _run(episodes, "rerendered", res, cameras, out, variants, workers, catalog, sheet=sheet, spp=spp,
+         denoise=denoise, variant=variant)

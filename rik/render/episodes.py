@@ -1,0 +1,129 @@
+"""Rendering recorded episodes: set each recorded state back into the episode's scene and render every camera,
+into a resumable stream folder (:mod:`rik.render.streams`). Episodes are only read, never changed."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rik.errors import RikError
+from rik.render.streams import StreamSpec, StreamWriter, is_done, read_manifest, stream_dir
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+
+
+@dataclass(frozen=True)
+class StreamResult:
+    episode: str
+    directory: Path
+    frames: int
+    cameras: tuple[str, ...]
+    rendered: int
+    """Frames rendered by this call (0 when the stream was already finished)."""
+    seconds_per_frame: float
+    """Render time per frame (all cameras) of the frames rendered by this call, s."""
+
+
+def scene_cameras(model: Any, wanted: Sequence[str] | None, where: str) -> list[str]:
+    """The scene's camera names (all, in model order), or the ``wanted`` ones after checking they exist."""
+    import mujoco
+
+    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_CAMERA, i) for i in range(model.ncam)]
+    if not wanted:
+        return names
+    for cam in wanted:
+        if cam not in names:
+            raise RikError(f"{where}: no camera '{cam}' in the scene (cameras: {', '.join(names)})")
+    return list(wanted)
+
+
+def _episode_scene(catalog: Catalog, directory: Path, variants: Path) -> tuple[Any, Any, Any]:
+    from rik.sim.episode import read_episode
+    from rik.sim.replay import episode_scene
+
+    meta, table = read_episode(directory)
+    try:
+        scene = episode_scene(catalog, directory, variants, meta)
+    except RikError as exc:
+        raise RikError(f"{Path(directory) / 'meta.json'}: field 'variant': cannot load {meta.variant} from "
+                       f"{variants} or rebuild it from the catalog: {exc}") from None
+    return meta, table, scene
+
+
+def render_episode(catalog: Catalog, directory: Path, spec: StreamSpec, *, renders: Path,
+                   variants: Path = Path("variants"), cameras: Sequence[str] | None = None,
+                   progress: Callable[[int], None] | None = None) -> StreamResult:
+    """Render one stream of the episode in ``directory`` into ``renders``; resumes an interrupted render and
+    returns at once when the stream is already finished. ``progress(n)`` is called as frames are done."""
+    from rik.sim.episode import read_meta, states
+
+    meta = read_meta(directory)
+    final = stream_dir(renders, meta.id, spec)
+    if is_done(final, meta.states_sha256):
+        manifest = read_manifest(final) or {}
+        if not cameras or set(cameras) <= set(manifest.get("cameras", [])):
+            if progress:
+                progress(int(manifest.get("frames", 0)))
+            return StreamResult(meta.id, final, int(manifest.get("frames", 0)), tuple(manifest.get("cameras", ())),
+                                0, float(manifest.get("seconds_per_frame", 0.0)))
+    meta, table, scene = _episode_scene(catalog, directory, variants)
+    cams = scene_cameras(scene.model, cameras, str(directory))
+    recorded = states(table)
+    writer = StreamWriter(final, spec, cams, len(recorded), meta.states_sha256)
+    todo = list(writer.missing())
+    if progress and len(recorded) > len(todo):
+        progress(len(recorded) - len(todo))
+    renderer = None
+    try:
+        if todo:
+            scene.restore(recorded[todo[0]])
+            from rik.render.renderers import make_renderer
+
+            renderer = make_renderer(scene.model, scene.data, cams, spec, catalog.finishes)
+        for k in todo:
+            scene.restore(recorded[k])
+            for cam, image in renderer.render(scene.data, k).items():  # type: ignore[union-attr]
+                writer.write(k, cam, image)
+            if progress:
+                progress(1)
+        info = renderer.info() if renderer else {"renderer": "resumed", "render_seconds": 0.0}
+    finally:
+        if renderer is not None:
+            renderer.close()
+    per_frame = info["render_seconds"] / len(todo) if todo else 0.0
+    info.update(episode=meta.id, episode_variant=meta.variant, fps=meta.fps, seconds_per_frame=round(per_frame, 4))
+    info["render_seconds"] = round(info["render_seconds"], 3)
+    writer.publish(info)
+    return StreamResult(meta.id, final, len(recorded), tuple(cams), len(todo), per_frame)
+
+
+def _render_one(spec: StreamSpec, renders: Path, variants: Path, cameras: tuple[str, ...] | None,
+                catalog: Catalog, directory: str) -> StreamResult:
+    return render_episode(catalog, Path(directory), spec, renders=renders, variants=variants, cameras=cameras)
+
+
+def render_episodes(catalog: Catalog, episodes: Sequence[Path], spec: StreamSpec, *, renders: Path,
+                    variants: Path = Path("variants"), cameras: Sequence[str] | None = None, workers: int = 1,
+                    overlays: Sequence[Path] = (), progress: Callable[[int], None] | None = None
+                    ) -> Iterator[StreamResult]:
+    """Render ``spec``'s stream of every episode (in ``workers`` processes when more than one), yielding each
+    result as it finishes. With one worker, ``progress`` advances frame by frame; with more, episode by episode."""
+    from rik.assets.workers import map_ids
+    from rik.sim.episode import read_meta
+
+    metas = {str(d): read_meta(d) for d in episodes}  # every episode readable before any work starts
+    cams = tuple(cameras) if cameras else None
+    if workers > 1 and len(episodes) > 1:
+        fn = partial(_render_one, spec, Path(renders), Path(variants), cams)
+        for _, result in map_ids(fn, catalog, list(metas), workers=workers, overlays=overlays):
+            if progress:
+                progress(result.frames)
+            yield result
+        return
+    for d in metas:
+        yield render_episode(catalog, Path(d), spec, renders=renders, variants=variants, cameras=cams,
+                             progress=progress)

@@ -1,0 +1,272 @@
+"""A Mitsuba 3 scene made from a compiled MuJoCo model, built once and posed in place for every frame.
+
+Geoms that MuJoCo draws (groups 0-2, not transparent) become triangle meshes in their geom frame: mesh geoms
+with MuJoCo's own vertex normals (so smooth and sharp edges shade as in MuJoCo), boxes with per-face metric
+texture coordinates (so wood grain has the same density on every board), other primitives from trimesh.
+Geoms welded to the world are placed once; every other geom is a ``shapegroup`` with an ``instance`` whose
+``to_world`` is set from ``geom_xpos``/``geom_xmat`` each frame (no reload, a few ms per update). Cameras copy
+MuJoCo's: the same pose (MuJoCo looks along -z with x right, Mitsuba along +z with x left), the same vertical
+field of view, the same image size.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rik.render.materials import finish_bsdf, lighting, plastic_bsdf
+from rik.schemas.finishes import Finish
+
+VISIBLE_GROUPS = (0, 1, 2)
+"""Geom groups MuJoCo's renderer shows by default (``mjvOption.geomgroup``)."""
+FLOOR_HALF_SIZE_M = 5.0
+"""Half-size of the rectangle that stands in for an infinite MuJoCo plane, m."""
+MAX_DEPTH = 6
+"""Longest light path of the path tracer (bounces + 1)."""
+MJ_TO_MI_CAMERA = np.diag([-1.0, 1.0, -1.0])
+PATH_TRACER = {"type": "path", "max_depth": MAX_DEPTH}
+DENOISER_GUIDES = {"type": "aov", "aovs": "albedo:albedo,normal:sh_normal"}
+"""Albedo and shading normals, the guides of the denoiser. A pass of their own at a few samples per pixel costs
+far less than wrapping the path tracer in the AOV integrator (measured: about twice the path tracer alone)."""
+
+
+@dataclass
+class PosedScene:
+    """A loaded Mitsuba scene plus what is needed to pose it from MuJoCo data."""
+
+    scene: Any
+    params: Any
+    moving_geoms: list[int]
+    """MuJoCo ids of the geoms drawn as instances, posed every frame."""
+    cameras: dict[str, int]
+    """MuJoCo camera name -> index of its Mitsuba sensor."""
+    size: tuple[int, int]
+    """Image (width, height), px."""
+    geoms: list[int] = field(default_factory=list)
+    """MuJoCo ids of every geom drawn."""
+
+
+def _rigid(pos: np.ndarray, mat: np.ndarray) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = np.asarray(mat).reshape(3, 3)
+    m[:3, 3] = pos
+    return m
+
+
+def _box(half: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+    """A box of half-sizes ``half``: 4 vertices per face (flat shading), texture coordinates in metres with u
+    along the box's longest side wherever that lies in the face (the grain of a board), else the longer side."""
+    longest = int(np.argmax(half))
+    verts, faces, uvs = [], [], []
+    for axis in range(3):
+        others = [a for a in range(3) if a != axis]
+        u_ax = longest if longest in others else max(others, key=lambda a: half[a])
+        v_ax = others[0] if others[1] == u_ax else others[1]
+        for sign in (1.0, -1.0):
+            base = len(verts)
+            corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
+            for cu, cv in corners:
+                p = np.zeros(3)
+                p[axis] = sign * half[axis]
+                p[u_ax] = cu * half[u_ax]
+                p[v_ax] = cv * half[v_ax]
+                verts.append(p)
+                uvs.append((p[u_ax], p[v_ax]))
+            # Counter-clockwise seen from outside: the face normal points along sign * axis.
+            n = np.zeros(3)
+            n[axis] = sign
+            e1 = verts[base + 1] - verts[base]
+            e2 = verts[base + 2] - verts[base]
+            tri = [(0, 1, 2), (0, 2, 3)] if np.dot(np.cross(e1, e2), n) > 0 else [(0, 2, 1), (0, 3, 2)]
+            faces += [(base + a, base + b, base + c) for a, b, c in tri]
+    return np.array(verts), np.array(faces), None, np.array(uvs)
+
+
+def _planar_uv(v: np.ndarray) -> np.ndarray:
+    """Texture coordinates in metres: u along the part's longest extent, v along the second."""
+    order = np.argsort(np.ptp(v, axis=0))[::-1]
+    return v[:, order[:2]]
+
+
+def _mesh_geom(model: Any, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+    """A mesh geom's triangles in its geom frame, one vertex per face corner with MuJoCo's normals."""
+    m = int(model.geom_dataid[g])
+    va, fa, fn = int(model.mesh_vertadr[m]), int(model.mesh_faceadr[m]), int(model.mesh_facenum[m])
+    faces = model.mesh_face[fa:fa + fn]
+    verts = model.mesh_vert[va + faces].reshape(-1, 3).astype(np.float64)
+    na = int(model.mesh_normaladr[m])
+    normals = model.mesh_normal[na + model.mesh_facenormal[fa:fa + fn]].reshape(-1, 3).astype(np.float64)
+    return verts, np.arange(3 * fn).reshape(fn, 3), normals, _planar_uv(verts)
+
+
+def _primitive(model: Any, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+    import mujoco
+    import trimesh
+
+    kind, size = int(model.geom_type[g]), np.asarray(model.geom_size[g], np.float64)
+    t = mujoco.mjtGeom
+    if kind == t.mjGEOM_BOX:
+        return _box(size)
+    if kind == t.mjGEOM_SPHERE:
+        mesh = trimesh.creation.icosphere(subdivisions=3, radius=size[0])
+    elif kind == t.mjGEOM_ELLIPSOID:
+        mesh = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+        mesh.apply_scale(size)
+    elif kind == t.mjGEOM_CAPSULE:
+        mesh = trimesh.creation.capsule(height=2 * size[1], radius=size[0], count=[24, 24])
+    elif kind == t.mjGEOM_CYLINDER:
+        mesh = trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=48)
+        v = np.asarray(mesh.vertices)
+        return v, np.asarray(mesh.faces), None, _planar_uv(v)
+    else:
+        raise ValueError(f"geom type {kind} is not drawn by rik's Mitsuba scene")
+    v = np.asarray(mesh.vertices)
+    return v, np.asarray(mesh.faces), np.asarray(mesh.vertex_normals), _planar_uv(v)
+
+
+def _mi_mesh(name: str, v: np.ndarray, f: np.ndarray, n: np.ndarray | None, uv: np.ndarray, bsdf: Any) -> Any:
+    import mitsuba as mi
+
+    props = mi.Properties()
+    props["bsdf"] = bsdf
+    mesh = mi.Mesh(name, len(v), len(f), has_vertex_normals=n is not None, has_vertex_texcoords=True, props=props)
+    p = mi.traverse(mesh)
+
+    def put(key: str, values: np.ndarray, dtype: Any) -> None:
+        p[key] = type(p[key])(np.ascontiguousarray(values, dtype).ravel())  # Dr.Jit's array type of this variant
+
+    put("vertex_positions", v, np.float32)
+    put("faces", f, np.uint32)
+    put("vertex_texcoords", uv, np.float32)
+    if n is not None:
+        put("vertex_normals", n, np.float32)
+    p.update()
+    return mesh
+
+
+def drawn_geoms(model: Any) -> list[int]:
+    """Ids of the geoms MuJoCo's renderer draws by default: groups 0-2, not fully transparent."""
+    out = []
+    for g in range(model.ngeom):
+        mat = int(model.geom_matid[g])
+        alpha = float(model.mat_rgba[mat][3]) if mat >= 0 else float(model.geom_rgba[g][3])
+        if int(model.geom_group[g]) in VISIBLE_GROUPS and alpha > 0.0:
+            out.append(g)
+    return out
+
+
+def geom_bsdf(model: Any, g: int, finishes: Mapping[str, Finish]) -> dict[str, Any]:
+    """The BSDF of a geom: its material's catalog finish (materials are named by finish id), else a plastic of
+    its MuJoCo colour."""
+    import mujoco
+
+    mat = int(model.geom_matid[g])
+    if mat >= 0:
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_MATERIAL, mat)
+        if name in finishes:
+            return finish_bsdf(finishes[name])
+        return plastic_bsdf(np.asarray(model.mat_rgba[mat]))
+    return plastic_bsdf(np.asarray(model.geom_rgba[g]))
+
+
+def _sensor(model: Any, cam: int, width: int, height: int, sampler: dict[str, Any]) -> dict[str, Any]:
+    return {"type": "perspective", "fov_axis": "y", "fov": float(model.cam_fovy[cam]),
+            "near_clip": 0.005, "far_clip": 100.0, "to_world": _camera_to_world(np.eye(4)),
+            "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"},
+                     "pixel_format": "rgb", "sample_border": False},
+            "sampler": sampler}
+
+
+def _camera_to_world(pose: np.ndarray) -> Any:
+    import mitsuba as mi
+
+    m = pose.copy()
+    m[:3, :3] = m[:3, :3] @ MJ_TO_MI_CAMERA
+    return mi.ScalarTransform4f(m.tolist())
+
+
+def _key_light_direction(model: Any) -> np.ndarray:
+    """Direction of the scene's brightest directional light (MuJoCo's ``key``), or straight down."""
+    best, direction = -1.0, np.array([0.0, 0.0, -1.0])
+    for i in range(model.nlight):
+        strength = float(np.sum(model.light_diffuse[i]))
+        if strength > best:
+            best, direction = strength, np.asarray(model.light_dir[i], np.float64)
+    return direction
+
+
+def build_posed_scene(model: Any, data: Any, finishes: Mapping[str, Finish], cameras: list[str],
+                      width: int, height: int, spp: int = 16, *, integrator: dict[str, Any] | None = None,
+                      floor: bool = True, lights: bool = True, pixel_centres: bool = False) -> PosedScene:
+    """Load the Mitsuba scene of ``model`` posed as in ``data`` (after ``mj_forward``), with one sensor per
+    MuJoCo camera in ``cameras``, rendered by ``integrator`` (default :data:`PATH_TRACER`). With
+    ``pixel_centres``, one ray through the centre of each pixel (as MuJoCo's rasteriser samples)."""
+    import mitsuba as mi
+    import mujoco
+
+    scene: dict[str, Any] = {"type": "scene"}
+    scene["integrator"] = integrator or PATH_TRACER
+    if lights:
+        scene.update(lighting(_key_light_direction(model)))
+    moving: list[int] = []
+    drawn = drawn_geoms(model)
+    bsdfs: dict[str, Any] = {}  # one instance per material: Dr.Jit traces every BSDF instance into the kernel
+    for g in drawn:
+        recipe = geom_bsdf(model, g, finishes)
+        key = repr(recipe)
+        if key not in bsdfs:
+            bsdfs[key] = mi.load_dict(recipe)
+        bsdf = bsdfs[key]
+        name = f"g{g}"
+        static = int(model.body_weldid[model.geom_bodyid[g]]) == 0
+        if int(model.geom_type[g]) == mujoco.mjtGeom.mjGEOM_PLANE:
+            if not floor:
+                continue
+            half = [float(s) if s > 0 else FLOOR_HALF_SIZE_M for s in model.geom_size[g][:2]]
+            pose = _rigid(data.geom_xpos[g], data.geom_xmat[g]) @ np.diag([*half, 1.0, 1.0])
+            scene[name] = {"type": "rectangle", "to_world": mi.ScalarTransform4f(pose.tolist()), "bsdf": bsdf}
+            continue
+        build = _mesh_geom if int(model.geom_type[g]) == mujoco.mjtGeom.mjGEOM_MESH else _primitive
+        v, f, n, uv = build(model, g)
+        if static:
+            pose = _rigid(data.geom_xpos[g], data.geom_xmat[g])
+            v = v @ pose[:3, :3].T + pose[:3, 3]
+            n = None if n is None else n @ pose[:3, :3].T
+            scene[name] = _mi_mesh(name, v, f, n, uv, bsdf)
+        else:
+            scene[f"{name}_shape"] = {"type": "shapegroup", "mesh": _mi_mesh(name, v, f, n, uv, bsdf)}
+            scene[name] = {"type": "instance", "shapegroup": {"type": "ref", "id": f"{name}_shape"}}
+            moving.append(g)
+    sampler = ({"type": "stratified", "sample_count": 1, "jitter": False} if pixel_centres
+               else {"type": "independent", "sample_count": spp})
+    sensors: dict[str, int] = {}
+    for i, cam in enumerate(cameras):
+        cid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, cam)
+        scene[f"cam_{i:02d}"] = _sensor(model, cid, width, height, sampler)
+        sensors[cam] = i
+    loaded = mi.load_dict(scene)
+    posed = PosedScene(loaded, mi.traverse(loaded), moving, sensors, (width, height), drawn)
+    pose_scene(posed, model, data)
+    return posed
+
+
+def pose_scene(posed: PosedScene, model: Any, data: Any) -> None:
+    """Move every instance and camera to its pose in ``data`` (after ``mj_forward``)."""
+    import mujoco
+
+    params = posed.params
+    for g in posed.moving_geoms:
+        params[f"g{g}.to_world"] = _rigid_transform(data.geom_xpos[g], data.geom_xmat[g])
+    for cam, i in posed.cameras.items():
+        cid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, cam)
+        params[f"cam_{i:02d}.to_world"] = _camera_to_world(_rigid(data.cam_xpos[cid], data.cam_xmat[cid]))
+    params.update()
+
+
+def _rigid_transform(pos: np.ndarray, mat: np.ndarray) -> Any:
+    import mitsuba as mi
+
+    return mi.ScalarTransform4f(_rigid(pos, mat).tolist())

@@ -1,0 +1,148 @@
+"""Where rendered image streams live, and how they are written so that an interrupted render resumes.
+
+A stream of one episode is a folder ``<renders>/<episode id>/<key>/`` holding ``<camera>/<frame:06d>.png`` for
+every camera and every recorded state, plus ``stream.json`` (what was rendered, how, from which states). The
+key names the stream and its settings, e.g. ``sim-256x256`` or ``rerendered-256x256-16spp-oidn``, so streams
+at other settings sit beside it. Frames are written into ``.<key>.partial/`` (each PNG through a temporary
+file and a rename) and the folder is renamed into place when every frame is there: a finished stream is never
+redone, an interrupted one resumes at its first missing frame (frames are deterministic, seeded by their
+index), and a stream of an episode recorded again (another states sha256) is rendered again.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from rik.errors import RikError
+from rik.paths import write_atomic
+
+DEFAULT_RENDERS = Path("renders")
+MANIFEST = "stream.json"
+StreamKind = Literal["sim", "rerendered"]
+
+
+@dataclass(frozen=True)
+class StreamSpec:
+    """What a stream is: which renderer, at what size and, for the re-render, quality."""
+
+    kind: StreamKind
+    width: int
+    height: int
+    spp: int = 16
+    """Samples per pixel (re-render only)."""
+    denoise: bool = True
+    """Intel Open Image Denoise with albedo and normal guides (re-render only)."""
+    variant: str = "auto"
+    """Mitsuba variant (re-render only); ``auto`` picks the fastest that works here. Not part of the key:
+    variants render the same image up to Monte Carlo noise."""
+
+    @property
+    def key(self) -> str:
+        size = f"{self.width}x{self.height}"
+        if self.kind == "sim":
+            return f"sim-{size}"
+        return f"rerendered-{size}-{self.spp}spp-{'oidn' if self.denoise else 'raw'}"
+
+
+def parse_resolution(text: str) -> tuple[int, int]:
+    """``256`` (square) or ``320x240`` (width x height) to (width, height) in pixels."""
+    try:
+        parts = [int(p) for p in str(text).lower().split("x")]
+    except ValueError:
+        parts = []
+    if len(parts) == 1:
+        parts = parts * 2
+    if len(parts) != 2 or min(parts) < 8 or max(parts) > 4096:
+        raise RikError(f"--res {text}: give a size like 256 or 320x240, 8 to 4096 pixels a side")
+    return parts[0], parts[1]
+
+
+def stream_dir(renders: Path, episode_id: str, spec: StreamSpec) -> Path:
+    return Path(renders) / episode_id / spec.key
+
+
+def frame_name(index: int) -> str:
+    return f"{index:06d}.png"
+
+
+def write_png(path: Path, image: np.ndarray) -> None:
+    """An 8-bit RGB PNG, written through a temporary file and a rename."""
+    from PIL import Image
+
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    Image.fromarray(np.ascontiguousarray(image, np.uint8)).save(tmp, format="PNG", compress_level=4)
+    os.replace(tmp, path)
+
+
+def read_manifest(directory: Path) -> dict[str, Any] | None:
+    """A finished stream's ``stream.json``, or None when the folder is not a finished stream."""
+    try:
+        return json.loads((Path(directory) / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def is_done(directory: Path, states_sha256: str) -> bool:
+    """Whether ``directory`` holds a finished stream of these states."""
+    manifest = read_manifest(directory)
+    return manifest is not None and manifest.get("states_sha256") == states_sha256
+
+
+class StreamWriter:
+    """Writes one stream's frames into its staging folder, skipping those already there, and publishes it."""
+
+    def __init__(self, final: Path, spec: StreamSpec, cameras: list[str], frames: int, states_sha256: str):
+        self.final, self.spec, self.cameras, self.frames = Path(final), spec, cameras, frames
+        self.sha = states_sha256
+        self.staging = self.final.with_name(f".{self.final.name}.partial")
+        marker = self.staging / ".states_sha256"
+        if self.staging.exists() and (not marker.is_file() or marker.read_text().strip() != states_sha256):
+            shutil.rmtree(self.staging)  # frames of other states: start again
+        for cam in cameras:
+            (self.staging / cam).mkdir(parents=True, exist_ok=True)
+        marker.write_text(states_sha256)
+
+    def missing(self) -> Iterator[int]:
+        """Indices of frames with at least one camera not written yet."""
+        for k in range(self.frames):
+            if not all((self.staging / cam / frame_name(k)).is_file() for cam in self.cameras):
+                yield k
+
+    def write(self, index: int, camera: str, image: np.ndarray) -> None:
+        write_png(self.staging / camera / frame_name(index), image)
+
+    def publish(self, info: dict[str, Any]) -> Path:
+        """Write the manifest and move the finished stream into place (replacing an outdated one)."""
+        manifest = {"stream": self.spec.kind, "key": self.spec.key, **asdict(self.spec), "cameras": self.cameras,
+                    "frames": self.frames, "states_sha256": self.sha, **info}
+        (self.staging / ".states_sha256").unlink(missing_ok=True)
+        write_atomic(self.staging / MANIFEST, json.dumps(manifest, indent=2) + "\n")
+        if self.final.exists():
+            old = self.final.with_name(f".{self.final.name}.old")
+            shutil.rmtree(old, ignore_errors=True)
+            os.replace(self.final, old)
+            os.replace(self.staging, self.final)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(self.staging, self.final)
+        return self.final
+
+
+def read_frame(directory: Path, camera: str, index: int) -> np.ndarray:
+    """One frame of a finished stream as an (H, W, 3) uint8 array."""
+    from PIL import Image
+
+    path = Path(directory) / camera / frame_name(index)
+    try:
+        with Image.open(path) as img:
+            return np.asarray(img.convert("RGB"))
+    except OSError as exc:
+        raise RikError(f"{path}: cannot read this frame ({exc}); render the stream again") from None
