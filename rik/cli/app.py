@@ -6,7 +6,7 @@ import sys
 
 import typer
 
-from rik.cli import assets, catalog, sim, variants
+from rik.cli import assets, catalog, render, rerender, sim, variants
 from rik.cli.common import CatalogOption, overlays
 from rik.errors import RikError
 
@@ -20,7 +20,8 @@ app = typer.Typer(
 app.add_typer(catalog.app, name="catalog")
 app.add_typer(assets.app, name="assets")
 app.add_typer(variants.app, name="variants")
-for _command in (sim.record, sim.teleop, sim.replay, sim.bench):
+for _command in (sim.record, sim.teleop, sim.replay, sim.bench, rerender.render, rerender.rerender,
+                 render.visual_gap):
     app.command()(_command)
 
 
