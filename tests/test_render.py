@@ -123,6 +123,20 @@ def test_denoising_brings_a_noisy_render_closer_to_a_converged_one(episode: Path
     assert err_clean < 0.5 * err_noisy
 
 
+def test_each_camera_renders_its_own_view(episode: Path, variants: Path) -> None:
+    from rik.render.renderers import MitsubaFrames
+
+    meta, table = read_episode(episode)
+    scene = episode_scene(CAT, episode, variants, meta)
+    scene.restore(states(table)[-1])
+    spec = StreamSpec("rerendered", 24, 16, spp=2, denoise=False)
+    both = MitsubaFrames(scene.model, scene.data, list(CAMERAS), spec, CAT.finishes).render_linear(scene.data, 3)
+    for cam in CAMERAS:
+        alone = MitsubaFrames(scene.model, scene.data, [cam], spec, CAT.finishes).render_linear(scene.data, 3)[cam]
+        np.testing.assert_array_equal(both[cam], alone)
+    assert not np.array_equal(both["front"], both["wrist"])
+
+
 @pytest.mark.parametrize("variant", [v for v in ("llvm_ad_rgb", "scalar_rgb") if v in available_variants()])
 def test_rerender_silhouettes_align_with_mujoco(episode: Path, variants: Path, variant: str) -> None:
     meta, table = read_episode(episode)

@@ -29,8 +29,9 @@ for _command in (sim.record, sim.teleop, sim.replay, sim.bench, rerender.render,
 def demo(catalog_paths: CatalogOption = None) -> None:
     """The main job on built-in defaults: validate the catalog and print its summary, then build a sample of
     assets (one handle of each type and a chest of drawers), measure their collision fidelity and run the finger
-    test on the two-point handle, then build and check three MuJoCo variants into variants/, and record one
-    scripted contact-rich episode of the first into episodes/ (checked to replay exactly)."""
+    test on the two-point handle, then build and check three MuJoCo variants into variants/, record one
+    scripted contact-rich episode of the first into episodes/ (checked to replay exactly), and render it into
+    renders/: the MuJoCo stream and its Mitsuba re-render, checked to align, side by side in a picture."""
     from rik.cli.assets import print_demo_assets
     from rik.cli.catalog import print_summary
     from rik.registry.index import catalog_index
@@ -41,7 +42,10 @@ def demo(catalog_paths: CatalogOption = None) -> None:
     from rik.cli.variants import print_demo_episode, print_demo_variants
 
     print_demo_variants(overlays(catalog_paths))
-    print_demo_episode(overlays(catalog_paths))
+    episode = print_demo_episode(overlays(catalog_paths))
+    from rik.cli.rerender import print_demo_renders
+
+    print_demo_renders(overlays(catalog_paths), episode)
 
 
 @app.callback()

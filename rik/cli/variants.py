@@ -64,8 +64,9 @@ def print_demo_variants(overlay_paths: list[Path], out: Path = Path("variants"))
 
 
 def print_demo_episode(overlay_paths: list[Path], out: Path = Path("episodes"), variants: Path = Path("variants")
-                       ) -> None:
-    """Record one contact-rich episode of the first demo variant into ``out`` and check that it replays exactly."""
+                       ) -> Path:
+    """Record one contact-rich episode of the first demo variant into ``out``, check that it replays exactly and
+    return its directory."""
     from rik.registry.load import load_catalog
     from rik.sim.record import record
     from rik.sim.replay import verify_episode
@@ -79,6 +80,7 @@ def print_demo_episode(overlay_paths: list[Path], out: Path = Path("episodes"), 
               f"{meta.steps / meta.fps:.1f} s; {'; '.join(meta.log)}); replay "
               f"{'exact' if check.exact else 'NOT exact'} over {check.rows} states")
     con.print("next: rik bench (the resistance benchmark), rik teleop VARIANT --device keyboard")
+    return out / meta.id
 
 
 def _select(cat: Any, base: list[str] | None, handle_type: list[HandleTypeOpt] | None, handle: list[str] | None,

@@ -217,8 +217,24 @@ class PairMetrics:
     """What was compared, in words."""
 
 
+class RowTable:
+    """A dataclass holding ``rows`` of :class:`PairMetrics`: lookup by name and the JSON form."""
+
+    rows: list[PairMetrics]
+
+    def row(self, name: str) -> PairMetrics:
+        """The row called ``name`` (``sim``, ``rerendered`` or :data:`FLOOR`); a KeyError when there is none."""
+        for r in self.rows:
+            if r.name == name:
+                return r
+        raise KeyError(name)
+
+    def to_dict(self) -> dict[str, object]:
+        return asdict(self)  # type: ignore[call-overload]
+
+
 @dataclass
-class SplitHalfResult:
+class SplitHalfResult(RowTable):
     """The rows of one encoder's table: every other set, then the floor last; serialises to JSON."""
 
     n_per_set: int
@@ -227,16 +243,6 @@ class SplitHalfResult:
     level: float
     seed: int
     rows: list[PairMetrics] = field(default_factory=list)
-
-    def row(self, name: str) -> PairMetrics:
-        """The row called ``name`` (a KeyError when there is none)."""
-        for r in self.rows:
-            if r.name == name:
-                return r
-        raise KeyError(name)
-
-    def to_dict(self) -> dict[str, object]:
-        return asdict(self)
 
 
 def _fid_gram(gaa: np.ndarray, gbb: np.ndarray, gab: np.ndarray) -> float:

@@ -47,6 +47,8 @@ class PosedScene:
     """Image (width, height), px."""
     geoms: list[int] = field(default_factory=list)
     """MuJoCo ids of every geom drawn."""
+    sensor_ids: dict[str, str] = field(default_factory=dict)
+    """MuJoCo camera name -> Mitsuba id of its sensor (the key of its parameters)."""
 
 
 def _rigid(pos: np.ndarray, mat: np.ndarray) -> np.ndarray:
@@ -242,13 +244,15 @@ def build_posed_scene(model: Any, data: Any, finishes: Mapping[str, Finish], cam
             moving.append(g)
     sampler = ({"type": "stratified", "sample_count": 1, "jitter": False} if pixel_centres
                else {"type": "independent", "sample_count": spp})
-    sensors: dict[str, int] = {}
+    sensor_ids: dict[str, str] = {}
     for i, cam in enumerate(cameras):
         cid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, cam)
-        scene[f"cam_{i:02d}"] = _sensor(model, cid, width, height, sampler)
-        sensors[cam] = i
+        sensor_ids[cam] = f"cam_{i:02d}"
+        scene[sensor_ids[cam]] = _sensor(model, cid, width, height, sampler)
     loaded = mi.load_dict(scene)
-    posed = PosedScene(loaded, mi.traverse(loaded), moving, sensors, (width, height), drawn)
+    order = [s.id() for s in loaded.sensors()]  # the scene's sensor list need not follow the dict's order
+    posed = PosedScene(loaded, mi.traverse(loaded), moving, {cam: order.index(sid) for cam, sid in sensor_ids.items()},
+                       (width, height), drawn, sensor_ids)
     pose_scene(posed, model, data)
     return posed
 
@@ -260,9 +264,9 @@ def pose_scene(posed: PosedScene, model: Any, data: Any) -> None:
     params = posed.params
     for g in posed.moving_geoms:
         params[f"g{g}.to_world"] = _rigid_transform(data.geom_xpos[g], data.geom_xmat[g])
-    for cam, i in posed.cameras.items():
+    for cam in posed.cameras:
         cid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, cam)
-        params[f"cam_{i:02d}.to_world"] = _camera_to_world(_rigid(data.cam_xpos[cid], data.cam_xmat[cid]))
+        params[f"{posed.sensor_ids[cam]}.to_world"] = _camera_to_world(_rigid(data.cam_xpos[cid], data.cam_xmat[cid]))
     params.update()
 
 

@@ -9,14 +9,14 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from rik.errors import RikError
 from rik.render.encoders import Encoder
-from rik.render.metrics import FLOOR, Interval, PairMetrics
+from rik.render.metrics import FLOOR, Interval, PairMetrics, RowTable
 
 RANDOM_NOTE = ("random weights: the encoder is randomly initialised (fixed seed), so these numbers are only a "
                "random-feature baseline; pass --encoder NAME:WEIGHTS for meaningful features")
@@ -25,7 +25,7 @@ Progress = Callable[[int, int, str], None]
 
 
 @dataclass
-class VisualGapResult:
+class VisualGapResult(RowTable):
     """One encoder's visual-gap table and how it was made; ``to_dict`` gives its JSON form."""
 
     encoder: str
@@ -45,16 +45,6 @@ class VisualGapResult:
     seed: int
     rows: list[PairMetrics] = field(default_factory=list)
     note: str = ""
-
-    def row(self, name: str) -> PairMetrics:
-        """The row called ``name`` (``sim``, ``rerendered`` or ``FLOOR``); a KeyError when absent."""
-        for r in self.rows:
-            if r.name == name:
-                return r
-        raise KeyError(name)
-
-    def to_dict(self) -> dict[str, object]:
-        return asdict(self)
 
 
 def visual_gap(real: Path, sim: Path | None = None, rerendered: Path | None = None,
