@@ -214,6 +214,9 @@ def _add_environment(spec: Any) -> None:
     spec.option.tolerance = 1e-8
     spec.visual.global_.offwidth = 1280
     spec.visual.global_.offheight = 960
+    # Shadow maps of 2048 px (MuJoCo's default is 4096): on a CPU rasteriser (Mesa llvmpipe) the 4096 map made
+    # every offscreen frame cost 0.14 s whatever its size; 2048 halves that and looks the same at camera sizes.
+    spec.visual.quality.shadowsize = 2048
     spec.visual.headlight.ambient = [0.3, 0.3, 0.3]
     spec.visual.headlight.diffuse = [0.5, 0.5, 0.5]
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
