@@ -192,6 +192,15 @@ def test_unavailable_llvm_is_a_clear_error(monkeypatch: pytest.MonkeyPatch, tmp_
         use_variant("llvm_ad_rgb")
 
 
+def test_episode_whose_variant_files_are_missing_is_rebuilt_first(episode: Path, variants: Path,
+                                                                  tmp_path: Path) -> None:
+    meta = json.loads((episode / "meta.json").read_text())
+    model = variants / meta["variant"] / "model.xml"
+    model.unlink()
+    result = render_episode(CAT, episode, StreamSpec("sim", 16, 16), renders=tmp_path, variants=variants)
+    assert model.is_file() and result.rendered == result.frames
+
+
 def test_episode_whose_variant_cannot_be_rebuilt(episode: Path, tmp_path: Path) -> None:
     copy = shutil.copytree(episode, tmp_path / "ep")
     meta = json.loads((copy / "meta.json").read_text())
