@@ -11,6 +11,8 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering; must be set before mujoco is first imported
+os.environ["HF_HUB_OFFLINE"] = "1"  # nothing may download at run time: tests make their own data
+os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1's banner
 
 
 @pytest.fixture(autouse=True, scope="session")

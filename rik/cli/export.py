@@ -1,0 +1,125 @@
+"""``rik export-lerobot``: recorded episodes to a LeRobot v3.0 dataset with the sim and re-rendered image
+streams. Only parsing and printing here; :mod:`rik.exporters.lerobot_export` does the work."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from rik.cli.common import CatalogOption, WorkersOpt, console, overlays, progress_bar
+from rik.cli.rerender import CamerasOpt, EpisodesArg, ResOpt
+from rik.cli.sim import VariantsOpt
+
+
+def quiet_writers() -> None:
+    """Silence what lerobot's stack prints per episode (datasets' and tqdm's bars, FFmpeg's notes, SVT-AV1's
+    banner): rik shows its own progress."""
+    os.environ.setdefault("SVT_LOG", "1")
+    os.environ.setdefault("TQDM_DISABLE", "1")
+    import av.logging
+
+    av.logging.set_level(av.logging.ERROR)
+    av.logging.set_libav_level(av.logging.ERROR)  # lerobot restores FFmpeg's own printing after each video
+
+
+def export_lerobot(
+        episodes: EpisodesArg,
+        out: Annotated[Path, typer.Option("--out", "-o", help="Folder of the dataset (must not exist, unless "
+                                          "--resume).", show_default=False)],
+        repo_id: Annotated[str, typer.Option("--repo-id", help="Dataset id, OWNER/NAME (e.g. local/rik-drawers).",
+                                             show_default=False)],
+        streams: Annotated[str, typer.Option("--streams", help="Comma-separated image streams: sim (MuJoCo), "
+                                             "rerendered (Mitsuba 3).")] = "sim,rerendered",
+        cameras: CamerasOpt = None, res: ResOpt = "256",
+        fps: Annotated[int | None, typer.Option("--fps", help="Dataset rate, Hz (default: the episodes' own; "
+                                                "other rates are resampled).", show_default=False)] = None,
+        codec: Annotated[str, typer.Option("--codec", help="Video codec: libsvtav1 (AV1, LeRobot's default), "
+                                           "h264 or hevc.")] = "libsvtav1",
+        spp: Annotated[int, typer.Option("--spp", min=1, help="Samples per pixel of the re-render.")] = 16,
+        denoise: Annotated[bool, typer.Option("--denoise/--no-denoise", help="Denoise the re-render.")] = True,
+        variant: Annotated[str, typer.Option("--variant", help="Mitsuba variant (auto, cuda_ad_rgb, llvm_ad_rgb, "
+                                             "scalar_rgb).")] = "auto",
+        shard_episodes: Annotated[int, typer.Option("--shard-episodes", min=1, help="Episodes per shard (the "
+                                                    "unit of resuming).")] = 16,
+        resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted export into --out.")] = False,
+        push_to_hub: Annotated[bool, typer.Option("--push-to-hub", help="Upload the finished dataset to the "
+                                                  "Hugging Face Hub as --repo-id (needs a login).")] = False,
+        renders: Annotated[Path, typer.Option("--renders", help="Root of rendered streams (reused; missing ones "
+                                              "are rendered).")] = Path("renders"),
+        workers: WorkersOpt = 1, variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
+    """Export recorded episodes to a LeRobot v3.0 dataset through lerobot's own writer: observation.state,
+    action, one video per camera and stream, a task string and rik's metadata per episode, a dataset card.
+    Renders missing image streams first; crash-safe (sharded, --resume); checks every episode's frame count."""
+    from rik.exporters.lerobot_export import ExportSpec
+    from rik.exporters.lerobot_export import export_lerobot as run
+    from rik.registry.load import load_catalog
+    from rik.render.streams import parse_resolution
+
+    quiet_writers()
+    width, height = parse_resolution(res)
+    spec = ExportSpec(repo_id, tuple(s.strip() for s in streams.split(",") if s.strip()),
+                      tuple(c.strip() for c in cameras.split(",") if c.strip()) if cameras else (), width, height,
+                      fps, codec, spp, denoise, variant, shard_episodes)
+    cat = load_catalog(overlays(catalog))
+    with progress_bar() as progress:
+        tasks: dict[str, int] = {}
+
+        def report(stage: str, done: int, total: int) -> None:
+            if stage not in tasks:
+                tasks[stage] = progress.add_task(stage, total=total, last="")
+            progress.update(tasks[stage], completed=done, total=total)
+
+        result = run(cat, episodes, out, spec, renders=renders, variants=variants, resume=resume, workers=workers,
+                     overlays=overlays(catalog), progress=report)
+    con = console()
+    con.print(f"dataset {result.root} ({result.repo_id}): {result.episodes} episodes, {result.frames} frames at "
+              f"{result.fps} Hz; shards written {result.shards_written}, reused {result.shards_skipped}")
+    con.print(f"features: {', '.join(result.features)}")
+    con.print("checked: loads offline with LeRobotDataset; " + result.checks["frame_counts"])
+    con.print(f'load it: LeRobotDataset("{result.repo_id}", root="{result.root}")')
+    if push_to_hub:
+        from rik.exporters.lerobot_export import push
+
+        con.print(f"pushed: {push(result.root, result.repo_id)}")
+
+
+DEMO_DATASET = Path("datasets/rik-demo")
+DEMO_REPO_ID = "local/rik-demo"
+
+
+def print_demo_export(overlay_paths: list[Path], episodes: list[Path], out: Path = DEMO_DATASET,
+                      renders: Path = Path("renders"), variants: Path = Path("variants")) -> None:
+    """Export the demo episodes (both streams, at the demo's render size) to a LeRobot dataset, load it back
+    with ``LeRobotDataset`` and print what it holds."""
+    import shutil
+
+    from rik.cli.rerender import DEMO_RES
+    from rik.exporters.lerobot_export import ExportSpec
+    from rik.exporters.lerobot_export import export_lerobot as run
+    from rik.registry.load import load_catalog
+
+    quiet_writers()
+    con = console()
+    for old in (out, out.with_name(f"{out.name}.partial")):
+        if old.exists():  # the demo's own earlier output
+            shutil.rmtree(old)
+    with con.status("exporting to a LeRobot v3.0 dataset (lerobot's writer, AV1 video) ..."):
+        result = run(load_catalog(overlay_paths), episodes, out, ExportSpec(DEMO_REPO_ID, width=DEMO_RES,
+                                                                            height=DEMO_RES),
+                     renders=renders, variants=variants)
+    con.print(f"dataset {result.root}: {result.episodes} episodes, {result.frames} frames at {result.fps} Hz, "
+              f"{len(result.features)} features; every episode's video frames checked against its rows")
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    ds = LeRobotDataset(DEMO_REPO_ID, root=out, video_backend="pyav")
+    item = ds[len(ds) // 2]
+    shapes = ", ".join(f"{k} {tuple(v.shape)}" for k, v in item.items() if hasattr(v, "shape") and v.ndim > 0)
+    ep = ds.meta.episodes[0]
+    con.print(f'loaded with LeRobotDataset("{DEMO_REPO_ID}", root="{out}"): {len(ds)} frames; one frame: {shapes}; '
+              f'task "{item["task"]}"')
+    con.print(f"episode 0 metadata: variant {ep['rik/variant']}, preset {ep['rik/preset']}, operator "
+              f"{ep['rik/operator']}, outcome {ep['rik/outcome']}, seed {ep['rik/seed']}; card: {out / 'README.md'}")
+    con.print("next: rik export-lerobot episodes/ --out DIR --repo-id OWNER/NAME (docs/lerobot.md)")

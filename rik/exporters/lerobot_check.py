@@ -1,0 +1,73 @@
+"""Checks of a written LeRobot dataset: every episode's decoded video frames equal its table rows (nobody else
+checks this, and lerobot's streaming encoder can drop frames silently), and it loads offline with its metadata."""
+
+from __future__ import annotations
+
+import json
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+from rik.errors import RikError
+
+TOLERANCE_S = 1e-4
+
+
+def _episodes_table(root: Path) -> list[dict[str, Any]]:
+    import pyarrow.parquet as pq
+
+    rows: list[dict[str, Any]] = []
+    for f in sorted((root / "meta" / "episodes").rglob("*.parquet")):
+        rows += pq.read_table(f).to_pylist()
+    return sorted(rows, key=lambda r: r["episode_index"])
+
+
+def _frame_times(path: Path) -> list[float]:
+    import av
+
+    with av.open(str(path)) as container:
+        stream = container.streams.video[0]
+        return sorted(float(frame.pts * stream.time_base) for frame in container.decode(stream))
+
+
+def check_frame_counts(root: Path) -> dict[str, int]:
+    """Decode every video file of the dataset at ``root`` and check that each episode has exactly as many frames
+    in its time range as rows in the table; returns frames decoded per video key. A RikError names the first
+    episode and key that disagree."""
+    info = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))
+    keys = [k for k, f in info["features"].items() if f.get("dtype") == "video"]
+    episodes = _episodes_table(root)
+    decoded: dict[str, int] = {}
+    for key in keys:
+        by_file: dict[tuple[int, int], list[dict[str, Any]]] = defaultdict(list)
+        for ep in episodes:
+            by_file[(ep[f"videos/{key}/chunk_index"], ep[f"videos/{key}/file_index"])].append(ep)
+        decoded[key] = 0
+        for (chunk, file), eps in sorted(by_file.items()):
+            path = root / info["video_path"].format(video_key=key, chunk_index=chunk, file_index=file)
+            times = _frame_times(path)
+            decoded[key] += len(times)
+            for ep in eps:
+                start, end = ep[f"videos/{key}/from_timestamp"], ep[f"videos/{key}/to_timestamp"]
+                count = sum(start - TOLERANCE_S <= t < end - TOLERANCE_S for t in times)
+                if count != ep["length"]:
+                    raise RikError(f"{path}: episode {ep['episode_index']} of '{key}' decodes to {count} frames but "
+                                   f"has {ep['length']} rows; the video is incomplete")
+    return decoded
+
+
+def check_dataset(root: Path, repo_id: str, episodes: int) -> dict[str, Any]:
+    """Load the dataset offline with ``LeRobotDataset``, check its episode count, rik's metadata columns and its
+    frame counts; returns a summary."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    ds = LeRobotDataset(repo_id, root=root, video_backend="pyav")
+    if ds.meta.total_episodes != episodes:
+        raise RikError(f"{root}: holds {ds.meta.total_episodes} episodes, {episodes} were exported")
+    columns = set(ds.meta.episodes.column_names)
+    missing = [c for c in ("rik/variant", "rik/outcome", "rik/seed") if c not in columns]
+    if missing:
+        raise RikError(f"{root}: meta/episodes lacks rik's columns {missing}")
+    decoded = check_frame_counts(root)
+    return {"episodes": ds.meta.total_episodes, "frames": ds.meta.total_frames, "fps": ds.meta.fps,
+            "video_frames_decoded": decoded, "frame_counts": "every episode's video frames equal its rows"}

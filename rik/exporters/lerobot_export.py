@@ -1,0 +1,288 @@
+"""``rik export-lerobot``: recorded episodes to a LeRobot v3.0 dataset, written by lerobot's own writer.
+
+Crash safety. Work goes into ``<out>.partial/`` (its ``plan.json`` says which episodes with which settings):
+episodes are cut into shards of ``shard_episodes``, each written as a dataset of its own and marked done
+(``DONE``) only after ``finalize()`` and a frame-count check; the finished shards are merged with lerobot's
+``aggregate_datasets``, the merge is checked and gets a dataset card, and only then is it renamed to ``<out>``.
+Running again with ``resume`` after a crash skips finished shards and redoes the unfinished one, so the result
+equals an uninterrupted run. lerobot 0.6.1 cannot recover a dataset whose writer was killed before
+``finalize()``, hence shards rather than one long writer.
+
+Traps of lerobot 0.6.1 avoided here (../shared/notes/research-lerobot.md): no batched encoding (crashes), no
+streaming encoder (drops frames under load), no ``vcodec="auto"`` (picks NVENC without a GPU), images always
+8-bit sRGB, episode metadata as ``meta/episodes`` columns rather than ``info.json`` keys (dropped on load).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rik.errors import RikError
+from rik.exporters.lerobot_frames import ROBOT_TYPE, EpisodeSource, episode_frames, episode_metadata, features
+from rik.paths import write_atomic
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+
+STREAMS = ("sim", "rerendered")
+CODECS = ("libsvtav1", "h264", "hevc")
+"""Video codecs offered: the software encoders of lerobot's PyAV build (never ``auto``: it picks NVENC)."""
+DONE = "DONE"
+PLAN = "plan.json"
+
+
+@dataclass(frozen=True)
+class ExportSpec:
+    """What an export writes."""
+
+    repo_id: str
+    streams: tuple[str, ...] = STREAMS
+    cameras: tuple[str, ...] = ()
+    """Cameras to export (empty: every camera of the scenes)."""
+    width: int = 256
+    height: int = 256
+    fps: int | None = None
+    """Dataset frame rate, Hz (None: the episodes' own rate, which must then agree)."""
+    codec: str = "libsvtav1"
+    spp: int = 16
+    denoise: bool = True
+    variant: str = "auto"
+    shard_episodes: int = 16
+
+
+@dataclass
+class ExportResult:
+    root: Path
+    repo_id: str
+    episodes: int
+    frames: int
+    fps: int
+    features: list[str]
+    shards_written: int
+    shards_skipped: int
+    checks: dict[str, Any] = field(default_factory=dict)
+
+
+def _check_spec(spec: ExportSpec) -> None:
+    for s in spec.streams:
+        if s not in STREAMS:
+            raise RikError(f"--streams: unknown stream '{s}' (streams: {', '.join(STREAMS)})")
+    if not spec.streams:
+        raise RikError("--streams: give at least one of " + ", ".join(STREAMS))
+    if spec.codec not in CODECS:
+        raise RikError(f"--codec: '{spec.codec}' is not offered (codecs: {', '.join(CODECS)})")
+    if "/" not in spec.repo_id or spec.repo_id.count("/") != 1 or not all(spec.repo_id.split("/")):
+        raise RikError(f"--repo-id '{spec.repo_id}': give it as OWNER/NAME, e.g. local/rik-drawers")
+    if spec.fps is not None and spec.fps < 1:
+        raise RikError(f"--fps {spec.fps}: must be at least 1")
+
+
+def _episode_fps(metas: dict[Path, Any], spec: ExportSpec) -> int:
+    rates = {m.fps for m in metas.values()}
+    if spec.fps is not None:
+        return spec.fps
+    if len(rates) > 1:
+        listing = ", ".join(f"{d.name}: {m.fps} Hz" for d, m in list(metas.items())[:4])
+        raise RikError(f"the episodes were recorded at different rates ({listing}, ...); pass --fps to resample "
+                       "them all to one")
+    return rates.pop()
+
+
+def _check_same_features(dirs: list[Path]) -> None:
+    """Every episode loads whole (sha256 checked) and records the action rik exports, before any work starts."""
+    from rik.exporters.lerobot_frames import ACTION_NAMES
+    from rik.sim.episode import read_episode
+
+    for d in dirs:
+        table = read_episode(d)[1]
+        width = len(table.column("action")[0])
+        if width != len(ACTION_NAMES):
+            raise RikError(f"{d / 'states.parquet'}: column 'action' has {width} numbers per row where the other "
+                           f"episodes have {len(ACTION_NAMES)} ({', '.join(ACTION_NAMES)}); export it to a separate "
+                           "dataset")
+
+
+def _plan(metas: dict[Path, Any], spec: ExportSpec, fps: int) -> dict[str, Any]:
+    return {"spec": {**asdict(spec), "fps": fps}, "episodes": [[m.id, m.states_sha256] for m in metas.values()]}
+
+
+def _shards(items: list[Path], size: int) -> list[list[Path]]:
+    return [items[i:i + size] for i in range(0, len(items), size)]
+
+
+def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[EpisodeSource], cameras: list[str],
+                spec: ExportSpec, fps: int, variants: Path) -> int:
+    """Write one shard dataset at ``root`` through lerobot's writer; returns its frame count. Marked done only
+    after ``finalize()`` and the frame-count check."""
+    from lerobot.configs import RGBEncoderConfig
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from rik.exporters.lerobot_check import check_frame_counts
+
+    if root.exists():
+        shutil.rmtree(root)  # an unfinished shard is redone from scratch
+    root.parent.mkdir(parents=True, exist_ok=True)
+    ds = LeRobotDataset.create(repo_id=repo_id, fps=fps, features=features(cameras, spec.streams, spec.width,
+                                                                             spec.height),
+                               root=root / "ds", robot_type=ROBOT_TYPE, use_videos=True, video_backend="pyav",
+                               rgb_encoder=RGBEncoderConfig(vcodec=spec.codec), image_writer_threads=4)
+    extra: dict[str, Any] = {}
+    save_meta = ds.meta.save_episode
+
+    def save_episode_with_rik_columns(index: int, length: int, tasks: list[str], stats: dict, metadata: dict
+                                      ) -> None:
+        save_meta(index, length, tasks, stats, {**metadata, **extra})
+
+    ds.meta.save_episode = save_episode_with_rik_columns  # the documented-in-issues way to add episode columns
+    frames_total = 0
+    try:
+        for source in sources:
+            meta, task, frames, count = episode_frames(catalog, source, cameras, fps, variants)
+            for frame in frames:
+                ds.add_frame({**frame, "task": task})
+            extra.clear()
+            extra.update(episode_metadata(meta))
+            ds.save_episode(parallel_encoding=False)  # in this process: one core each way on small machines
+            frames_total += count
+    finally:
+        ds.finalize()
+    check_frame_counts(root / "ds")
+    write_atomic(root / DONE, json.dumps([s.directory.name for s in sources]) + "\n")
+    return frames_total
+
+
+def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: ExportSpec, *,
+                   renders: Path = Path("renders"), variants: Path = Path("variants"), resume: bool = False,
+                   workers: int = 1, overlays: Sequence[Path] = (),
+                   progress: Callable[[str, int, int], None] | None = None) -> ExportResult:
+    """Export ``episodes`` (episode folders) to a LeRobot v3.0 dataset at ``out``; renders the image streams that
+    are missing first. ``progress(stage, done, total)`` reports stages ``render:<stream>``, ``shards``."""
+    from rik.render.episodes import render_episode
+    from rik.render.streams import StreamSpec
+    from rik.sim.episode import find_episodes, read_meta
+
+    _check_spec(spec)
+    out = Path(out)
+    partial_dir = out.with_name(f"{out.name}.partial")
+    if out.exists():
+        raise RikError(f"{out}: already exists; choose another --out (or delete it)" if not resume else
+                       f"{out}: the export is already complete (nothing to resume); choose another --out to export "
+                       "again")
+    if partial_dir.exists() and not resume:
+        raise RikError(f"{partial_dir}: an interrupted export is there; run again with --resume to continue it, or "
+                       "delete it")
+    dirs = find_episodes(list(episodes))
+    metas = {d: read_meta(d) for d in dirs}
+    _check_same_features(dirs)
+    fps = _episode_fps(metas, spec)
+    plan = _plan(metas, spec, fps)
+    if partial_dir.exists():
+        try:
+            old = json.loads((partial_dir / PLAN).read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            old = None
+        if old != json.loads(json.dumps(plan)):
+            raise RikError(f"{partial_dir}: the interrupted export there was of other episodes or settings; delete "
+                           "it, or run it again with the same ones")
+
+    # 1. The image streams, rendered where missing (resumable per frame), all at the export's size.
+    sources: list[EpisodeSource] = []
+    cameras: list[str] | None = list(spec.cameras) or None
+    stream_dirs: dict[Path, dict[str, Path]] = {d: {} for d in dirs}
+    for kind in spec.streams:
+        stream = StreamSpec(kind, spec.width, spec.height, spp=spec.spp, denoise=spec.denoise,  # type: ignore[arg-type]
+                            variant=spec.variant)
+        for n, d in enumerate(dirs):
+            r = render_episode(catalog, d, stream, renders=renders, variants=variants, cameras=cameras)
+            if cameras is None:
+                cameras = list(r.cameras)
+            stream_dirs[d][kind] = r.directory
+            if progress:
+                progress(f"render:{kind}", n + 1, len(dirs))
+    sources = [EpisodeSource(d, stream_dirs[d]) for d in dirs]
+    cams = cameras or []
+    partial_dir.mkdir(parents=True, exist_ok=True)  # only now: bad input found so far leaves nothing behind
+    write_atomic(partial_dir / PLAN, json.dumps(plan, indent=1) + "\n")
+
+    # 2. Shards, each finished and checked before it counts; finished ones are never redone.
+    shard_root = partial_dir / "shards"
+    by_dir = {s.directory: s for s in sources}
+    jobs, skipped = [], 0
+    for i, chunk in enumerate(_shards(dirs, max(1, spec.shard_episodes))):
+        root = shard_root / f"shard-{i:04d}"
+        names = [d.name for d in chunk]
+        try:
+            done = json.loads((root / DONE).read_text()) == names
+        except (OSError, ValueError):
+            done = False
+        if done:
+            skipped += 1
+            continue
+        jobs.append((root, f"{spec.repo_id}-shard-{i:04d}", [by_dir[d] for d in chunk], cams, spec, fps, variants))
+    if progress:
+        progress("shards", skipped, skipped + len(jobs))
+    if workers > 1 and len(jobs) > 1:
+        from rik.assets.workers import map_ids
+
+        job_of = {str(j[0]): j for j in jobs}
+        for n, _ in enumerate(map_ids(partial(_shard_by_name, job_of), catalog, list(job_of), workers=workers,
+                                      overlays=overlays)):
+            if progress:
+                progress("shards", skipped + n + 1, skipped + len(jobs))
+    else:
+        for n, job in enumerate(jobs):
+            write_shard(catalog, *job)
+            if progress:
+                progress("shards", skipped + n + 1, skipped + len(jobs))
+
+    # 3. Merge, check, card, then publish by renaming.
+    merged = partial_dir / "merged"
+    if merged.exists():
+        shutil.rmtree(merged)
+    shard_dirs = sorted(p for p in shard_root.iterdir() if p.is_dir())
+    _aggregate(spec.repo_id, [p / "ds" for p in shard_dirs], merged)
+    from rik.exporters.lerobot_card import write_card
+    from rik.exporters.lerobot_check import check_dataset
+
+    checks = check_dataset(merged, spec.repo_id, len(dirs))
+    write_card(catalog, merged, spec, fps, checks)
+    os.replace(merged, out)
+    shutil.rmtree(partial_dir, ignore_errors=True)
+    return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
+                        sorted(features(cams, spec.streams, spec.width, spec.height)), len(jobs), skipped, checks)
+
+
+def _shard_by_name(jobs: dict[str, tuple], catalog: Catalog, name: str) -> int:
+    return write_shard(catalog, *jobs[name])
+
+
+def _aggregate(repo_id: str, roots: list[Path], out: Path) -> None:
+    """Merge finished shard datasets with lerobot's ``aggregate_datasets``."""
+    from lerobot.datasets.aggregate import aggregate_datasets
+
+    aggregate_datasets([f"{repo_id}-part-{i}" for i in range(len(roots))], repo_id, roots=roots, aggr_root=out)
+
+
+def push(root: Path, repo_id: str, *, private: bool = False) -> str:
+    """Upload a finished export through lerobot's ``push_to_hub`` (files, then lerobot's card with rik's
+    description, then the ``v3.0`` tag); returns the dataset's URL. Offline or unauthorised: a RikError."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from rik.exporters.lerobot_card import card_fields
+
+    ds = LeRobotDataset(repo_id, root=root, video_backend="pyav")
+    try:
+        ds.push_to_hub(private=private, tags=["rik", "mujoco", "articulated-furniture"], license="apache-2.0",
+                       **card_fields(root))
+    except Exception as exc:  # huggingface_hub raises its own errors for offline mode, auth and network
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise RikError(f"{root}: cannot push {repo_id} to the Hugging Face Hub: {type(exc).__name__}: {first}"
+                       ) from None
+    return f"https://huggingface.co/datasets/{repo_id}"

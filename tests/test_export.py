@@ -1,0 +1,238 @@
+"""``rik export-lerobot``: the dataset loads offline with LeRobotDataset with both streams, rik's metadata and
+matching frame counts; a behaviour-cloning policy trains on it; a killed export resumes to the same dataset; bad
+input gets one line and leaves nothing behind."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rik.errors import RikError
+from rik.exporters.lerobot_export import ExportSpec, export_lerobot
+from rik.exporters.lerobot_frames import resample_indices
+from rik.registry import load_catalog
+from rik.sim.record import record
+
+CAT = load_catalog()
+BOW = "drawer-chest-80__two_point-bow-128__normal"
+KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
+REPO = "local/rik-test"
+SPEC = dict(width=32, height=24, spp=2, denoise=False, variant="scalar_rgb", codec="h264")
+KEYS = ("observation.images.front", "observation.images.wrist", "observation.images.front_rerendered",
+        "observation.images.wrist_rerendered")
+
+
+@pytest.fixture(scope="module")
+def work(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("export")
+    for variant, strategy, seed in ((BOW, "contact_rich", 0), (KNOB, "grasp_vertical", 1), (BOW, "grasp_vertical", 2)):
+        record(CAT, variant, strategy, seed=seed, out=root / "episodes", variants=root / "variants",
+               max_seconds=0.6)
+    return root
+
+
+@pytest.fixture(scope="module")
+def dataset(work: Path) -> Path:
+    out = work / "ds"
+    export_lerobot(CAT, [work / "episodes"], out, ExportSpec(REPO, shard_episodes=2, **SPEC),
+                   renders=work / "renders", variants=work / "variants")
+    return out
+
+
+def test_export_loads_with_both_streams_metadata_and_matching_counts(dataset: Path, work: Path) -> None:
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from rik.exporters.lerobot_check import check_frame_counts
+    from rik.sim.episode import find_episodes, read_meta
+
+    ds = LeRobotDataset(REPO, root=dataset, video_backend="pyav")
+    metas = {read_meta(d).id: read_meta(d) for d in find_episodes([work / "episodes"])}
+    assert ds.meta.total_episodes == 3 and ds.meta.fps == 20
+    for key in KEYS:
+        assert ds.meta.features[key]["dtype"] == "video" and tuple(ds.meta.features[key]["shape"]) == (24, 32, 3)
+    assert ds.meta.features["observation.state"]["names"][:3] == ["x", "y", "z"]
+    assert ds.meta.features["action"]["names"][-1] == "gripper"
+    for ep in ds.meta.episodes:
+        meta = metas[ep["rik/episode_id"]]
+        assert ep["length"] == meta.steps + 1
+        assert (ep["rik/variant"], ep["rik/outcome"], ep["rik/seed"]) == (meta.variant, meta.outcome, meta.seed)
+        assert ep["rik/handle_type"] == meta.handle_type and ep["rik/operator"] == meta.operator
+    decoded = check_frame_counts(dataset)
+    assert set(decoded) == set(KEYS) and all(n == ds.meta.total_frames for n in decoded.values())
+    item = ds[ds.meta.total_frames - 1]
+    for key in KEYS:
+        assert tuple(item[key].shape) == (3, 24, 32) and float(item[key].max()) > 0.05
+    assert item["task"] in {"open the drawer by its bow handle", "open the drawer by its mushroom knob"}
+    knob = LeRobotDataset(REPO, root=dataset, video_backend="pyav",
+                          episode_filter=lambda e: e["rik/handle_type"] == "knob")
+    assert knob.meta.total_episodes == 3 and len(knob) == metas[next(m for m in metas if "knob" in m)].steps + 1
+    card = (dataset / "README.md").read_text()
+    assert "observation.images.front_rerendered" in card and "Real-IKEA" in card and "| normal |" in card
+
+
+def test_behaviour_cloning_loss_goes_down(dataset: Path) -> None:
+    import torch
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    torch.manual_seed(0)
+    chunk = 4
+    ds = LeRobotDataset(REPO, root=dataset, video_backend="pyav",
+                        delta_timestamps={"action": [k / 20 for k in range(chunk)]})
+    loader = torch.utils.data.DataLoader(ds, batch_size=16, shuffle=True, num_workers=0,
+                                         generator=torch.Generator().manual_seed(0))
+    state_mean = torch.tensor(ds.meta.stats["observation.state"]["mean"], dtype=torch.float32)
+    state_std = torch.tensor(ds.meta.stats["observation.state"]["std"], dtype=torch.float32) + 1e-3
+    act_mean = torch.tensor(ds.meta.stats["action"]["mean"], dtype=torch.float32)
+    act_std = torch.tensor(ds.meta.stats["action"]["std"], dtype=torch.float32) + 1e-3
+    vision = torch.nn.Sequential(torch.nn.Conv2d(3, 8, 5, stride=2), torch.nn.ReLU(), torch.nn.AdaptiveAvgPool2d(1),
+                                 torch.nn.Flatten())
+    head = torch.nn.Sequential(torch.nn.Linear(8 + 14, 64), torch.nn.ReLU(), torch.nn.Linear(64, 7 * chunk))
+    params = list(vision.parameters()) + list(head.parameters())
+    opt = torch.optim.Adam(params, lr=3e-3)
+    losses = []
+    for _epoch in range(6):
+        for batch in loader:
+            feats = torch.cat([vision(batch["observation.images.front_rerendered"]),
+                               (batch["observation.state"] - state_mean) / state_std], dim=1)
+            target = (batch["action"] - act_mean) / act_std
+            assert target.shape[1:] == (chunk, 7)
+            loss = torch.nn.functional.mse_loss(head(feats).view(-1, chunk, 7), target)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            losses.append(float(loss))
+    assert np.mean(losses[-3:]) < 0.5 * np.mean(losses[:3])
+
+
+def _tables(root: Path) -> dict[str, list]:
+    import pyarrow.parquet as pq
+
+    out = {}
+    for sub in ("data", "meta/episodes"):
+        rows = []
+        for f in sorted((root / sub).rglob("*.parquet")):
+            rows += pq.read_table(f).to_pylist()
+        out[sub] = rows
+    out["info"] = json.loads((root / "meta" / "info.json").read_text())
+    return out
+
+
+def _frames(root: Path) -> dict[str, np.ndarray]:
+    import av
+
+    out = {}
+    for f in sorted((root / "videos").rglob("*.mp4")):
+        with av.open(str(f)) as c:
+            out[str(f.relative_to(root))] = np.stack([fr.to_ndarray(format="rgb24") for fr in c.decode(video=0)])
+    return out
+
+
+def test_killed_export_resumes_to_the_same_dataset(dataset: Path, work: Path, tmp_path: Path) -> None:
+    killed = tmp_path / "killed"
+    script = (f"from pathlib import Path; from rik.registry import load_catalog; "
+              f"from rik.exporters.lerobot_export import ExportSpec, export_lerobot; "
+              f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(killed)!r}), "
+              f"ExportSpec({REPO!r}, shard_episodes=1, **{SPEC!r}), renders=Path({str(work / 'renders')!r}), "
+              f"variants=Path({str(work / 'variants')!r}))")
+    proc = subprocess.Popen([sys.executable, "-c", script], env=os.environ.copy())
+    first = tmp_path / "killed.partial" / "shards" / "shard-0000" / "DONE"
+    deadline = time.time() + 300
+    while not first.exists() and proc.poll() is None and time.time() < deadline:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert first.exists() and not killed.exists(), "the export was not killed midway"
+    with pytest.raises(RikError, match=r"an interrupted export is there; run again with --resume"):
+        export_lerobot(CAT, [work / "episodes"], killed, ExportSpec(REPO, shard_episodes=1, **SPEC),
+                       renders=work / "renders", variants=work / "variants")
+    result = export_lerobot(CAT, [work / "episodes"], killed, ExportSpec(REPO, shard_episodes=1, **SPEC),
+                            renders=work / "renders", variants=work / "variants", resume=True)
+    assert result.shards_skipped >= 1 and result.shards_written >= 1
+    whole = tmp_path / "whole"
+    export_lerobot(CAT, [work / "episodes"], whole, ExportSpec(REPO, shard_episodes=1, **SPEC),
+                   renders=work / "renders", variants=work / "variants")
+    assert _tables(killed) == _tables(whole)
+    a, b = _frames(killed), _frames(whole)
+    assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+    assert not (tmp_path / "killed.partial").exists()
+
+
+def test_resampling_holds_the_latest_row() -> None:
+    assert resample_indices(5, 20, 20).tolist() == [0, 1, 2, 3, 4]
+    assert resample_indices(5, 20, 10).tolist() == [0, 2, 4]
+    assert resample_indices(3, 10, 20).tolist() == [0, 0, 1, 1, 2]
+
+
+def test_export_messages(rik, dataset: Path, work: Path, tmp_path: Path) -> None:
+    base = ["export-lerobot", str(work / "episodes"), "--repo-id", REPO, "--res", "32x24", "--renders",
+            str(work / "renders"), "--variants", str(work / "variants"), "--variant", "scalar_rgb", "--spp", "2",
+            "--no-denoise", "--codec", "h264"]
+
+    def run(*extra: str, out: Path | None = None):
+        target = out or tmp_path / "new"
+        result = rik(*base, "--out", str(target), *extra)
+        assert result.code == 2 and "Traceback" not in result.err, result.err
+        assert not target.exists() or target == dataset
+        return result.err.strip()
+
+    assert run(out=dataset) == f"rik: error: {dataset}: already exists; choose another --out (or delete it)"
+    assert run("--streams", "sim,photo") == "rik: error: --streams: unknown stream 'photo' (streams: sim, rerendered)"
+    assert run("--codec", "auto") == "rik: error: --codec: 'auto' is not offered (codecs: libsvtav1, h264, hevc)"
+    err = run("--cameras", "top")
+    assert err.startswith("rik: error: ") and err.endswith(": no camera 'top' in the scene (cameras: front, wrist)")
+    bad_repo = rik(*base[:3], "rikdata", *base[4:], "--out", str(tmp_path / "r"))
+    assert bad_repo.err.strip() == "rik: error: --repo-id 'rikdata': give it as OWNER/NAME, e.g. local/rik-drawers"
+    # Episodes at different rates, or with different recorded features.
+    mixed = tmp_path / "mixed"
+    for i, d in enumerate(sorted((work / "episodes").iterdir())[:2]):
+        shutil.copytree(d, mixed / d.name)
+        if i == 1:
+            meta = json.loads((mixed / d.name / "meta.json").read_text())
+            meta["fps"] = 10
+            (mixed / d.name / "meta.json").write_text(json.dumps(meta))
+    err = rik("export-lerobot", str(mixed), "--repo-id", REPO, "--out", str(tmp_path / "m")).err.strip()
+    assert err.startswith("rik: error: the episodes were recorded at different rates (") and "pass --fps" in err
+    import hashlib
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    path = mixed / d.name / "states.parquet"
+    table = pq.read_table(path)
+    shorter = pa.array([row[:6] for row in table.column("action").to_pylist()], pa.list_(pa.float64()))
+    pq.write_table(table.set_column(table.schema.get_field_index("action"), "action", shorter), path)
+    meta["fps"], meta["states_sha256"] = 20, hashlib.sha256(path.read_bytes()).hexdigest()
+    (mixed / d.name / "meta.json").write_text(json.dumps(meta))
+    err = rik("export-lerobot", str(mixed), "--repo-id", REPO, "--out", str(tmp_path / "m")).err.strip()
+    assert err == (f"rik: error: {path}: column 'action' has 6 numbers per row where the other episodes have 7 "
+                   "(target_x, target_y, target_z, target_pitch, target_yaw, target_roll, gripper); export it to a "
+                   "separate dataset")
+    # A corrupt episode: named, and nothing written.
+    corrupt = tmp_path / "corrupt"
+    shutil.copytree(sorted((work / "episodes").iterdir())[0], corrupt / "ep")
+    states = corrupt / "ep" / "states.parquet"
+    states.write_bytes(states.read_bytes()[:200])
+    err = rik("export-lerobot", str(corrupt), "--repo-id", REPO, "--out", str(tmp_path / "c")).err.strip()
+    assert err.startswith(f"rik: error: {states}") and "truncated or corrupt" in err
+    assert not (tmp_path / "c").exists() and not (tmp_path / "c.partial").exists()
+    missing = rik("export-lerobot", str(tmp_path / "none"), "--repo-id", REPO, "--out", str(tmp_path / "n"))
+    assert missing.code == 2 and "none: no such episode or directory" in missing.err
+
+
+def test_push_to_hub_reaches_the_upload_and_says_why_it_failed(dataset: Path) -> None:
+    from rik.exporters.lerobot_export import push
+
+    with pytest.raises(RikError) as err:
+        push(dataset, REPO)
+    msg = str(err.value)
+    assert msg.startswith(f"{dataset}: cannot push {REPO} to the Hugging Face Hub: ")
+    assert "offline" in msg.lower()
