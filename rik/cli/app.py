@@ -6,7 +6,7 @@ import sys
 
 import typer
 
-from rik.cli import assets, catalog, render, rerender, sim, variants
+from rik.cli import assets, catalog, export, render, rerender, sim, variants
 from rik.cli.common import CatalogOption, overlays
 from rik.errors import RikError
 
@@ -21,7 +21,7 @@ app.add_typer(catalog.app, name="catalog")
 app.add_typer(assets.app, name="assets")
 app.add_typer(variants.app, name="variants")
 for _command in (sim.record, sim.teleop, sim.replay, sim.bench, rerender.render, rerender.rerender,
-                 render.visual_gap):
+                 render.visual_gap, export.export_lerobot):
     app.command()(_command)
 
 
@@ -29,9 +29,10 @@ for _command in (sim.record, sim.teleop, sim.replay, sim.bench, rerender.render,
 def demo(catalog_paths: CatalogOption = None) -> None:
     """The main job on built-in defaults: validate the catalog and print its summary, then build a sample of
     assets (one handle of each type and a chest of drawers), measure their collision fidelity and run the finger
-    test on the two-point handle, then build and check three MuJoCo variants into variants/, record one
-    scripted contact-rich episode of the first into episodes/ (checked to replay exactly), and render it into
-    renders/: the MuJoCo stream and its Mitsuba re-render, checked to align, side by side in a picture."""
+    test on the two-point handle, then build and check three MuJoCo variants into variants/, record two
+    scripted contact-rich episodes of the first into episodes/ (checked to replay exactly), render them into
+    renders/ (the MuJoCo stream and its Mitsuba re-render, checked to align, side by side in a picture), export
+    them to a LeRobot v3.0 dataset in datasets/rik-demo and load it back with LeRobotDataset."""
     from rik.cli.assets import print_demo_assets
     from rik.cli.catalog import print_summary
     from rik.registry.index import catalog_index
@@ -42,10 +43,12 @@ def demo(catalog_paths: CatalogOption = None) -> None:
     from rik.cli.variants import print_demo_episode, print_demo_variants
 
     print_demo_variants(overlays(catalog_paths))
-    episode = print_demo_episode(overlays(catalog_paths))
+    episodes = print_demo_episode(overlays(catalog_paths))
+    from rik.cli.export import print_demo_export
     from rik.cli.rerender import print_demo_renders
 
-    print_demo_renders(overlays(catalog_paths), episode)
+    print_demo_renders(overlays(catalog_paths), episodes)
+    print_demo_export(overlays(catalog_paths), episodes)
 
 
 @app.callback()

@@ -92,37 +92,38 @@ DEMO_RES = 128
 """Image size of the demo's streams, px (small, so the re-render takes about a minute on two cores)."""
 
 
-def print_demo_renders(overlay_paths: list[Path], episode: Path, out: Path = Path("renders"),
+def print_demo_renders(overlay_paths: list[Path], episodes: list[Path], out: Path = Path("renders"),
                        variants: Path = Path("variants")) -> None:
-    """Render the demo episode's sim stream and its Mitsuba re-render, check their silhouettes agree on the
-    first state, and write the two side by side."""
+    """Render the demo episodes' sim streams and their Mitsuba re-renders, check that the two agree in
+    silhouette on the first episode's first state, and write the first episode's two streams side by side."""
     from rik.registry.load import load_catalog
     from rik.render.align import silhouette_iou
     from rik.render.episodes import render_episode
     from rik.render.sheet import contact_sheet
     from rik.render.streams import StreamSpec
-    from rik.sim.episode import read_episode, states
+    from rik.sim.episode import read_episode, read_meta, states
     from rik.sim.replay import episode_scene
 
     cat = load_catalog(overlay_paths)
     con = console()
-    streams = []
+    first = []
     for spec in (StreamSpec("sim", DEMO_RES, DEMO_RES), StreamSpec("rerendered", DEMO_RES, DEMO_RES)):
         with progress_bar() as progress:
-            meta = read_episode(episode)[0]
-            task = progress.add_task(f"{spec.key} frames", total=meta.steps + 1, last="")
-            r = render_episode(cat, episode, spec, renders=out, variants=variants,
-                               progress=lambda n, t=task: progress.update(t, advance=n))
-        streams.append(r)
-        con.print(f"stream {r.directory}: {r.frames} frames x {', '.join(r.cameras)}"
-                  + (f", {r.seconds_per_frame:.2f} s per frame" if r.rendered else " (already rendered)"))
-    meta, table = read_episode(episode)
-    scene = episode_scene(cat, episode, variants, meta)
+            task = progress.add_task(f"{spec.key} frames", total=sum(read_meta(e).steps + 1 for e in episodes),
+                                     last="")
+            results = [render_episode(cat, e, spec, renders=out, variants=variants,
+                                      progress=lambda n, t=task: progress.update(t, advance=n)) for e in episodes]
+        first.append(results[0])
+        for r in results:
+            con.print(f"stream {r.directory}: {r.frames} frames x {', '.join(r.cameras)}"
+                      + (f", {r.seconds_per_frame:.2f} s per frame" if r.rendered else " (already rendered)"))
+    meta, table = read_episode(episodes[0])
+    scene = episode_scene(cat, episodes[0], variants, meta)
     scene.restore(states(table)[0])
     ious = {cam: silhouette_iou(scene.model, scene.data, cam, DEMO_RES, DEMO_RES, cat.finishes)
-            for cam in streams[0].cameras}
+            for cam in first[0].cameras}
     con.print("alignment of the two streams, silhouette IoU at the first state: "
               + ", ".join(f"{cam} {v:.3f}" for cam, v in ious.items()))
-    png = contact_sheet([s.directory for s in streams], streams[1].directory.parent / "compare.png")
+    png = contact_sheet([s.directory for s in first], first[1].directory.parent / "compare.png")
     con.print(f"side by side: {png}")
     con.print("next: rik rerender episodes/ --res 256, rik visual-gap --real DIR --sim DIR --rerendered DIR")

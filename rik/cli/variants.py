@@ -63,24 +63,27 @@ def print_demo_variants(overlay_paths: list[Path], out: Path = Path("variants"))
               "rik variants build --all --preset normal")
 
 
-def print_demo_episode(overlay_paths: list[Path], out: Path = Path("episodes"), variants: Path = Path("variants")
-                       ) -> Path:
-    """Record one contact-rich episode of the first demo variant into ``out``, check that it replays exactly and
-    return its directory."""
+def print_demo_episode(overlay_paths: list[Path], out: Path = Path("episodes"), variants: Path = Path("variants"),
+                       episodes: int = 2) -> list[Path]:
+    """Record ``episodes`` contact-rich episodes (seeds 0, 1, ...) of the first demo variant into ``out``, check
+    that each replays exactly and return their directories."""
     from rik.registry.load import load_catalog
     from rik.sim.record import record
     from rik.sim.replay import verify_episode
 
     cat = load_catalog(overlay_paths)
     con = console()
-    with con.status("recording a scripted episode (MuJoCo) ..."):
-        meta = record(cat, DEMO_VARIANTS[0], "contact_rich", out=out, variants=variants)[0]
+    dirs = []
+    with con.status("recording scripted episodes (MuJoCo) ..."):
+        metas = record(cat, DEMO_VARIANTS[0], "contact_rich", episodes=episodes, out=out, variants=variants)
+    for meta in metas:
         check = verify_episode(cat, out / meta.id, variants)
-    con.print(f"episode {out / meta.id}: {meta.outcome} (opened {meta.final_opening:.0%} in "
-              f"{meta.steps / meta.fps:.1f} s; {'; '.join(meta.log)}); replay "
-              f"{'exact' if check.exact else 'NOT exact'} over {check.rows} states")
+        con.print(f"episode {out / meta.id}: {meta.outcome} (opened {meta.final_opening:.0%} in "
+                  f"{meta.steps / meta.fps:.1f} s; {'; '.join(meta.log)}); replay "
+                  f"{'exact' if check.exact else 'NOT exact'} over {check.rows} states")
+        dirs.append(out / meta.id)
     con.print("next: rik bench (the resistance benchmark), rik teleop VARIANT --device keyboard")
-    return out / meta.id
+    return dirs
 
 
 def _select(cat: Any, base: list[str] | None, handle_type: list[HandleTypeOpt] | None, handle: list[str] | None,
