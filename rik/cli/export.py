@@ -15,14 +15,9 @@ from rik.cli.sim import VariantsOpt
 
 
 def quiet_writers() -> None:
-    """Silence what lerobot's stack prints per episode (datasets' and tqdm's bars, FFmpeg's notes, SVT-AV1's
-    banner): rik shows its own progress."""
-    os.environ.setdefault("SVT_LOG", "1")
+    """Silence what lerobot's stack prints per episode (tqdm bars of datasets and aggregation; FFmpeg and SVT-AV1
+    are quieted by the writer itself): rik shows its own progress."""
     os.environ.setdefault("TQDM_DISABLE", "1")
-    import av.logging
-
-    av.logging.set_level(av.logging.ERROR)
-    av.logging.set_libav_level(av.logging.ERROR)  # lerobot restores FFmpeg's own printing after each video
 
 
 def export_lerobot(

@@ -117,6 +117,16 @@ def _shards(items: list[Path], size: int) -> list[list[Path]]:
     return [items[i:i + size] for i in range(0, len(items), size)]
 
 
+def quiet_encoders() -> None:
+    """Keep FFmpeg's per-video notes and SVT-AV1's banner off the terminal (in this process: lerobot restores
+    FFmpeg's own printing after each video, so the level is set where the encoding happens)."""
+    os.environ.setdefault("SVT_LOG", "1")
+    import av.logging
+
+    av.logging.set_level(av.logging.ERROR)
+    av.logging.set_libav_level(av.logging.ERROR)
+
+
 def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[EpisodeSource], cameras: list[str],
                 spec: ExportSpec, fps: int, variants: Path) -> int:
     """Write one shard dataset at ``root`` through lerobot's writer; returns its frame count. Marked done only
@@ -126,6 +136,7 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
 
     from rik.exporters.lerobot_check import check_frame_counts
 
+    quiet_encoders()
     if root.exists():
         shutil.rmtree(root)  # an unfinished shard is redone from scratch
     root.parent.mkdir(parents=True, exist_ok=True)
@@ -169,6 +180,7 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     from rik.sim.episode import find_episodes, read_meta
 
     _check_spec(spec)
+    quiet_encoders()
     out = Path(out)
     partial_dir = out.with_name(f"{out.name}.partial")
     if out.exists():
