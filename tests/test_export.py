@@ -166,6 +166,23 @@ def test_killed_export_resumes_to_the_same_dataset(dataset: Path, work: Path, tm
     assert not (tmp_path / "killed.partial").exists()
 
 
+def test_export_of_one_stream_and_camera_resampled(dataset: Path, work: Path, tmp_path: Path) -> None:
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from rik.sim.episode import find_episodes, read_meta
+
+    spec = ExportSpec(REPO, streams=("sim",), cameras=("front",), fps=10, **SPEC)
+    result = export_lerobot(CAT, [work / "episodes"], tmp_path / "ds10", spec, renders=work / "renders",
+                            variants=work / "variants")
+    ds = LeRobotDataset(REPO, root=tmp_path / "ds10", video_backend="pyav")
+    assert ds.meta.fps == 10 and sorted(k for k in ds.meta.features if k.startswith("observation.images")) == [
+        "observation.images.front"]
+    rows = {read_meta(d).id: len(resample_indices(read_meta(d).steps + 1, 20, 10))
+            for d in find_episodes([work / "episodes"])}
+    assert {e["rik/episode_id"]: e["length"] for e in ds.meta.episodes} == rows
+    assert result.frames == sum(rows.values()) and all(e["rik/source_fps"] == 20 for e in ds.meta.episodes)
+
+
 def test_resampling_holds_the_latest_row() -> None:
     assert resample_indices(5, 20, 20).tolist() == [0, 1, 2, 3, 4]
     assert resample_indices(5, 20, 10).tolist() == [0, 2, 4]
