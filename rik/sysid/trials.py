@@ -1,0 +1,675 @@
+"""Measured trials in: CSV or Parquet files, or a LeRobot dataset, read into SI numpy arrays and checked.
+
+Files (:func:`load_trials`)
+---------------------------
+``.csv`` (comma-separated, UTF-8, first line the header) or ``.parquet``/``.pq``. One row per sample; a file may
+hold several trials told apart by a ``trial`` column (its rows need not be contiguous; trials keep the order of
+their first row), and several files may be read at once. A column header is a name, then the unit in square
+brackets: ``time [ms]``, ``position [mm]``, ``force [N]``. Names are case-insensitive, units are not:
+
+=========  =======================  ======================================  ===========================
+quantity   column names             slide units                             hinge units
+=========  =======================  ======================================  ===========================
+time       ``time``, ``t``          ``s``, ``ms``                           ``s``, ``ms``
+position   ``position``, ``q``      ``m``, ``mm``, ``cm``                   ``rad``, ``deg``
+force      ``force``, ``torque``,   ``N``, ``kN``                           ``N·m``, ``Nm``, ``N*m``,
+           ``f``                                                            ``N·mm``, ``Nmm``, ``N*mm``
+velocity   ``velocity``, ``qd``     ``m/s``, ``mm/s``, ``cm/s`` (optional)  ``rad/s``, ``deg/s`` (optional)
+trial      ``trial``                none (optional; any values)             none
+=========  =======================  ======================================  ===========================
+
+Position is the joint coordinate (0 closed, positive opening, as in :class:`rik.schemas.joints.JointSpec`); force
+is the applied force (slide) or torque (hinge) along it. Other columns are ignored. A trial without a ``trial``
+column is named after its file's stem.
+
+Messages name rows as the 0-based index among the file's data rows (what pandas or pyarrow show); CSV rows add
+their line number in the file (the header is line 1).
+
+Checks
+------
+Every value finite (no NaN, inf, empty cell); time strictly increasing within a trial; at least ``min_samples``
+samples (default :data:`MIN_SAMPLES`); the position spanning at least ``min_motion`` (default
+:data:`MIN_MOTION`: 1 mm or 0.5°); the force spanning at least ``min_force_range`` (default
+:data:`MIN_FORCE_RANGE`: 0.01 N or 0.001 N·m). A failure raises :class:`TrialError`: one line naming the file,
+trial and column at fault and what would be valid.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import json
+import math
+import re
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from rik.errors import RikError
+from rik.schemas.joints import JointType
+from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
+
+MIN_SAMPLES = 50
+"""Fewest samples a trial may have: below this no derivative or fit is meaningful."""
+MIN_MOTION = {JointType.slide: 1e-3, JointType.hinge: math.radians(0.5)}
+"""Smallest position range (max − min) of a trial, m (slide: 1 mm) or rad (hinge: 0.5°)."""
+MIN_FORCE_RANGE = {JointType.slide: 0.01, JointType.hinge: 0.001}
+"""Smallest force range (max − min) of a trial, N (slide) or N·m (hinge): below it the force is constant."""
+
+ROLES = ("time", "position", "force", "velocity")
+COLUMN_NAMES = {"time": ("time", "t"), "position": ("position", "q"), "force": ("force", "torque", "f"),
+                "velocity": ("velocity", "qd")}
+"""Accepted column names of each quantity (case-insensitive)."""
+TRIAL_COLUMN = "trial"
+SUFFIXES = {".csv": "csv", ".parquet": "parquet", ".pq": "parquet"}
+
+TIME_UNITS = {"s": 1.0, "ms": 1e-3}
+POSITION_UNITS = {JointType.slide: {"m": 1.0, "mm": 1e-3, "cm": 1e-2},
+                  JointType.hinge: {"rad": 1.0, "deg": math.pi / 180}}
+FORCE_UNITS = {JointType.slide: {"N": 1.0, "kN": 1e3},
+               JointType.hinge: {"N·m": 1.0, "Nm": 1.0, "N*m": 1.0, "N·mm": 1e-3, "Nmm": 1e-3, "N*mm": 1e-3}}
+VELOCITY_UNITS = {j: {f"{u}/s": s for u, s in units.items()} for j, units in POSITION_UNITS.items()}
+"""Unit name → factor to SI, per joint type."""
+
+_KIND = {("position", JointType.slide): "a length unit", ("position", JointType.hinge): "an angle unit",
+         ("force", JointType.slide): "a force unit", ("force", JointType.hinge): "a torque unit",
+         ("velocity", JointType.slide): "a linear velocity unit",
+         ("velocity", JointType.hinge): "an angular velocity unit"}
+_HEADER = re.compile(r"^\s*(?P<name>[^\[\]]*?)\s*(?:\[(?P<unit>[^\[\]]*)\])?\s*$")
+
+
+class TrialError(RikError):
+    """Measured data is unreadable or unusable. The message names the file, the trial and the column at
+    fault (those known) and what would be valid."""
+
+    def __init__(self, file: str | Path, trial: str | None, column: str | None, problem: str):
+        self.file, self.trial, self.column, self.problem = str(file), trial, column, problem
+        parts = [str(file)]
+        if trial is not None:
+            parts.append(f"trial '{trial}'")
+        if column is not None:
+            parts.append(f"column '{column}'")
+        super().__init__(", ".join(parts) + f": {problem}")
+
+
+@dataclass(frozen=True, eq=False)
+class Trial:
+    """One measured trial in SI units of its joint type; arrays are read-only and of equal length."""
+
+    meta: TrialMeta
+    t: np.ndarray
+    """Time, s, strictly increasing (not necessarily uniform; not shifted to start at 0)."""
+    q: np.ndarray
+    """Joint position, m (slide) or rad (hinge); 0 closed, positive opening."""
+    f: np.ndarray
+    """Applied force, N (slide), or torque, N·m (hinge), along the joint."""
+    qd: np.ndarray | None = None
+    """Measured velocity, m/s or rad/s, if the data had one."""
+
+    def __post_init__(self) -> None:
+        for name in ("t", "q", "f", "qd"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            array = np.array(value, dtype=np.float64)
+            if array.shape != (self.meta.samples,):
+                raise ValueError(f"Trial.{name} has shape {array.shape}, expected ({self.meta.samples},)")
+            array.flags.writeable = False
+            object.__setattr__(self, name, array)
+
+    @property
+    def name(self) -> str:
+        return self.meta.name
+
+    @property
+    def source(self) -> str:
+        return self.meta.source
+
+    @property
+    def joint(self) -> JointType:
+        return self.meta.joint
+
+    @property
+    def samples(self) -> int:
+        return self.meta.samples
+
+
+# ---------------------------------------------------------------------------------------------------- units
+
+def _choices(units: Iterable[str]) -> str:
+    names = list(units)
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + f" or {names[-1]}"
+
+
+def _table(role: str) -> dict[JointType, dict[str, float]]:
+    return {"position": POSITION_UNITS, "force": FORCE_UNITS, "velocity": VELOCITY_UNITS}[role]
+
+
+def _accepted(role: str, joint: JointType) -> str:
+    """What the units of ``role`` may be, as a phrase: "a slide's position is in m, mm or cm"."""
+    if role == "time":
+        return f"time is in {_choices(TIME_UNITS)}"
+    word = "torque" if role == "force" and joint is JointType.hinge else role
+    return f"a {joint.value}'s {word} is in {_choices(_table(role)[joint])}"
+
+
+def unit_scale(role: str, unit: str | None, joint: JointType, header: str) -> float:
+    """Factor from ``unit`` to SI for quantity ``role`` of a ``joint``; raises ValueError with the problem (the
+    caller adds file and column) for a missing, unknown or mismatched unit."""
+    if not unit:
+        example = next(iter(TIME_UNITS if role == "time" else _table(role)[joint]))
+        name = header.strip() or role
+        raise ValueError(f"no unit; write the header as '{name} [unit]' (e.g. '{name} [{example}]'): "
+                         f"{_accepted(role, joint)}")
+    if role == "time":
+        if unit in TIME_UNITS:
+            return TIME_UNITS[unit]
+        raise ValueError(f"unknown unit '{unit}'; {_accepted(role, joint)}")
+    table = _table(role)
+    if unit in table[joint]:
+        return table[joint][unit]
+    for other in JointType:
+        if other is not joint and unit in table[other]:
+            raise ValueError(f"'{unit}' is {_KIND[role, other]} but the joint is a {joint.value}; "
+                             f"{_accepted(role, joint)}")
+    raise ValueError(f"unknown unit '{unit}'; {_accepted(role, joint)}")
+
+
+def joint_type(joint: str | JointType) -> JointType:
+    """``slide`` or ``hinge`` as a :class:`JointType`; anything else is a :class:`RikError`."""
+    try:
+        return JointType(joint)
+    except ValueError:
+        raise RikError(f"unknown joint type '{joint}'; use 'slide' or 'hinge'") from None
+
+
+# ------------------------------------------------------------------------------------------- raw file tables
+
+@dataclass
+class _Column:
+    """One column's values in the declared unit, with the cells that were empty (CSV) or null (Parquet)."""
+
+    values: np.ndarray
+    empty: np.ndarray
+
+
+@dataclass
+class _Raw:
+    """A file's table before any check: headers, a reader of numeric columns, and row labels for messages."""
+
+    file: str
+    headers: list[str]
+    numbers: Callable[[str], _Column]
+    labels: Callable[[str], list[str]]
+    lines: np.ndarray | None
+    """CSV: the file line of each data row; Parquet: None."""
+    rows: int
+
+    def where(self, row: int) -> str:
+        return f"row {row} (line {self.lines[row]})" if self.lines is not None else f"row {row}"
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def _read_csv(path: Path) -> _Raw:
+    file = str(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError:
+        raise TrialError(file, None, None, "not a UTF-8 text file; expected CSV with a header line") from None
+    reader = csv.reader(text.splitlines())
+    header: list[str] | None = None
+    cells: list[list[str]] = []
+    lines: list[int] = []
+    try:
+        for row in reader:
+            if not row or all(not c.strip() for c in row):
+                continue
+            if header is None:
+                header = [c.strip() for c in row]
+                continue
+            if len(row) != len(header):
+                raise TrialError(file, None, None, f"malformed CSV: line {reader.line_num} has {len(row)} fields "
+                                                   f"but the header has {len(header)}")
+            cells.append(row)
+            lines.append(reader.line_num)
+    except csv.Error as exc:
+        raise TrialError(file, None, None, f"malformed CSV at line {reader.line_num}: {exc}") from None
+    if header is None:
+        raise TrialError(file, None, None, "empty file; the first line must be a header such as "
+                                           "'time [s],position [m],force [N]'")
+    index = {h: i for i, h in enumerate(header)}
+    line_array = np.asarray(lines, dtype=np.int64)
+
+    def strings(h: str) -> list[str]:
+        return [row[index[h]].strip() for row in cells]
+
+    def numbers(h: str) -> _Column:
+        text_values = strings(h)
+        empty = np.array([s == "" for s in text_values], dtype=bool)
+        try:
+            values = np.array(["nan" if e else s for s, e in zip(text_values, empty, strict=True)], dtype=np.float64)
+        except ValueError:
+            row = next(i for i, s in enumerate(text_values) if s and not _is_float(s))
+            raise TrialError(file, None, h, f"malformed CSV: row {row} (line {lines[row]}) holds "
+                                            f"'{text_values[row]}', not a number") from None
+        return _Column(values.reshape(len(cells)), empty)
+
+    return _Raw(file, header, numbers, strings, line_array, len(cells))
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _read_parquet(path: Path) -> _Raw:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    file = str(path)
+    try:
+        table = pq.read_table(path)
+    except (pa.ArrowException, OSError) as exc:
+        raise TrialError(file, None, None, f"not a readable Parquet file ({_first_line(exc)})") from None
+
+    def numbers(h: str) -> _Column:
+        column = table.column(h)
+        kind = column.type
+        if not (pa.types.is_integer(kind) or pa.types.is_floating(kind) or pa.types.is_decimal(kind)):
+            raise TrialError(file, None, h, f"holds {kind} values, not numbers")
+        empty = column.is_null().to_numpy(zero_copy_only=False).astype(bool)
+        values = column.cast(pa.float64()).to_numpy(zero_copy_only=False).astype(np.float64)
+        return _Column(values, empty)
+
+    def labels(h: str) -> list[str]:
+        return ["" if v is None else str(v) for v in table.column(h).to_pylist()]
+
+    return _Raw(file, list(table.column_names), numbers, labels, None, table.num_rows)
+
+
+def _read(path: Path) -> _Raw:
+    kind = SUFFIXES.get(path.suffix.lower())
+    if kind is None:
+        raise TrialError(path, None, None, f"unknown file type '{path.suffix}'; use .csv, .parquet or .pq")
+    if not path.is_file():
+        raise TrialError(path, None, None, "no such file")
+    return _read_csv(path) if kind == "csv" else _read_parquet(path)
+
+
+# ------------------------------------------------------------------------------------------ column matching
+
+def _parse_header(header: str) -> tuple[str, str | None]:
+    """(lower-case name, unit or None) of a header such as ``Position [mm]``."""
+    match = _HEADER.match(header)
+    if match is None:
+        return header.strip().lower(), None
+    unit = match["unit"]
+    return match["name"].lower(), (unit.strip() if unit is not None else None)
+
+
+def _find_columns(raw: _Raw, joint: JointType) -> tuple[dict[str, str], dict[str, str], dict[str, float], str | None]:
+    """Headers, declared units and SI factors of each quantity, and the trial column's header (or None)."""
+    found: dict[str, str] = {}
+    trial: str | None = None
+    for header in raw.headers:
+        name, _ = _parse_header(header)
+        if name == TRIAL_COLUMN:
+            trial = header
+            continue
+        for role, names in COLUMN_NAMES.items():
+            if name in names:
+                if role in found:
+                    raise TrialError(raw.file, None, header, f"a second {role} column (besides "
+                                                             f"'{found[role]}'); keep one")
+                found[role] = header
+    for role in ("time", "position", "force"):
+        if role not in found:
+            names = " or ".join(n for n in COLUMN_NAMES[role] if not (role == "force" and n == _other_word(joint)))
+            columns = ", ".join(f"'{h}'" for h in raw.headers)
+            word = "torque" if role == "force" and joint is JointType.hinge else role
+            unit = next(iter(TIME_UNITS if role == "time" else _table(role)[joint]))
+            raise TrialError(raw.file, None, word, f"missing; the file needs a {word} column named {names} with "
+                                                   f"its unit, e.g. '{word} [{unit}]' (columns: {columns})")
+    units: dict[str, str] = {}
+    scales: dict[str, float] = {}
+    for role, header in found.items():
+        name, unit = _parse_header(header)
+        try:
+            scales[role] = unit_scale(role, unit, joint, name)
+        except ValueError as exc:
+            raise TrialError(raw.file, None, header, str(exc)) from None
+        units[role] = unit or ""
+    return found, units, scales, trial
+
+
+def _other_word(joint: JointType) -> str:
+    """The force column name that does not fit the joint (``torque`` for a slide, ``force`` for a hinge): still
+    accepted, but not suggested."""
+    return "torque" if joint is JointType.slide else "force"
+
+
+# ---------------------------------------------------------------------------------------------- trial checks
+
+@dataclass(frozen=True)
+class _Thresholds:
+    min_samples: int
+    min_motion: float
+    """m or rad"""
+    min_force_range: float
+    """N or N·m"""
+
+
+def _thresholds(joint: JointType, min_samples: int, min_motion: float | None,
+                min_force_range: float | None) -> _Thresholds:
+    return _Thresholds(min_samples, MIN_MOTION[joint] if min_motion is None else min_motion,
+                       MIN_FORCE_RANGE[joint] if min_force_range is None else min_force_range)
+
+
+def _num(x: float) -> str:
+    return f"{x:.6g}"
+
+
+@dataclass
+class _Source:
+    """A trial's data as read (declared units) with everything a message needs."""
+
+    file: str
+    name: str
+    joint: JointType
+    columns: dict[str, str]
+    units: dict[str, str]
+    scales: dict[str, float]
+    values: dict[str, np.ndarray]
+    empty: dict[str, np.ndarray]
+    where: Callable[[int], str]
+    """Sample index in the trial → its row label in the file."""
+
+    def error(self, role: str | None, problem: str) -> TrialError:
+        return TrialError(self.file, self.name, self.columns[role] if role else None, problem)
+
+
+def _check_finite(src: _Source) -> None:
+    first: tuple[int, int, str] | None = None
+    for order, role in enumerate(ROLES):
+        if role not in src.values:
+            continue
+        bad = np.flatnonzero(~np.isfinite(src.values[role]) | src.empty[role])
+        if bad.size and (first is None or (bad[0], order) < first[:2]):
+            first = (int(bad[0]), order, role)
+    if first is None:
+        return
+    i, _, role = first
+    value = src.values[role][i]
+    what = "empty" if src.empty[role][i] else ("NaN" if np.isnan(value) else ("inf" if value > 0 else "-inf"))
+    raise src.error(role, f"{src.where(i)} is {what}; every value must be a finite number")
+
+
+def _check_time(src: _Source) -> None:
+    t = src.values["time"]
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if not bad.size:
+        return
+    i = int(bad[0]) + 1
+    unit = src.units["time"]
+    if t[i] == t[i - 1]:
+        problem = f"time repeats at {src.where(i)}: {_num(t[i])} {unit} twice"
+    else:
+        problem = f"time goes back at {src.where(i)}: {_num(t[i])} {unit} after {_num(t[i - 1])} {unit}"
+    raise src.error("time", problem + "; time must increase strictly within a trial")
+
+
+def _check_range(src: _Source, role: str, minimum_si: float) -> None:
+    values = src.values[role]
+    lo, hi = float(values.min()), float(values.max())
+    unit = src.units[role]
+    minimum = minimum_si / src.scales[role]
+    if (hi - lo) * src.scales[role] >= minimum_si:
+        return
+    if role == "position":
+        raise src.error(role, f"no motion: the position spans {_num(hi - lo)} {unit} (from {_num(lo)} to "
+                              f"{_num(hi)} {unit}); a trial must move at least {_num(minimum)} {unit}")
+    word = "torque" if src.joint is JointType.hinge else "force"
+    raise src.error(role, f"constant {word}: it spans {_num(hi - lo)} {unit} (from {_num(lo)} to {_num(hi)} "
+                          f"{unit}); a trial's {word} must vary by at least {_num(minimum)} {unit}")
+
+
+def _build(src: _Source, limits: _Thresholds) -> Trial:
+    """Check a trial's data (in the order of the module docstring) and convert it to SI."""
+    _check_finite(src)
+    _check_time(src)
+    n = len(src.values["time"])
+    if n < limits.min_samples:
+        raise src.error(None, f"only {n} samples; a trial needs at least {limits.min_samples}")
+    _check_range(src, "position", limits.min_motion)
+    _check_range(src, "force", limits.min_force_range)
+    si = {role: src.values[role] * src.scales[role] for role in src.values}
+    meta = TrialMeta(
+        name=src.name, source=src.file, joint=src.joint, samples=n, duration=float(si["time"][-1] - si["time"][0]),
+        units=TrialUnits(**{role: src.units[role] for role in src.values}),
+        columns=TrialColumns(**{role: src.columns[role] for role in src.values}))
+    return Trial(meta, si["time"], si["position"], si["force"], si.get("velocity"))
+
+
+# ------------------------------------------------------------------------------------------------ files in
+
+def _file_trials(raw: _Raw, joint: JointType, limits: _Thresholds) -> list[Trial]:
+    columns, units, scales, trial_header = _find_columns(raw, joint)
+    data = {role: raw.numbers(header) for role, header in columns.items()}
+    if raw.rows == 0:
+        raise TrialError(raw.file, None, None, "no data rows below the header")
+    if trial_header is None:
+        groups = [(Path(raw.file).stem, np.arange(raw.rows))]
+    else:
+        names = np.asarray(raw.labels(trial_header), dtype=object)
+        missing = np.flatnonzero(names == "")
+        if missing.size:
+            raise TrialError(raw.file, None, trial_header, f"{raw.where(int(missing[0]))} is empty; every row "
+                                                           "needs a trial name")
+        _, first = np.unique(names.astype(str), return_index=True)
+        groups = [(str(names[i]), np.flatnonzero(names == names[i])) for i in sorted(first)]
+    trials = []
+    for name, rows in groups:
+        src = _Source(raw.file, name, joint, columns, units, scales,
+                      {role: col.values[rows] for role, col in data.items()},
+                      {role: col.empty[rows] for role, col in data.items()},
+                      lambda i, rows=rows: raw.where(int(rows[i])))
+        trials.append(_build(src, limits))
+    return trials
+
+
+def load_trials(paths: str | Path | Sequence[str | Path], joint: Literal["slide", "hinge"] | JointType, *,
+                min_samples: int = MIN_SAMPLES, min_motion: float | None = None,
+                min_force_range: float | None = None) -> list[Trial]:
+    """Every trial in the CSV or Parquet ``paths`` (see the module docstring for the format), in SI units.
+
+    ``min_motion`` (m or rad) and ``min_force_range`` (N or N·m) default to :data:`MIN_MOTION` and
+    :data:`MIN_FORCE_RANGE` of the joint type. Raises :class:`TrialError` (a :class:`RikError`) naming the file,
+    trial and column of the first problem."""
+    kind = joint_type(joint)
+    limits = _thresholds(kind, min_samples, min_motion, min_force_range)
+    files = [paths] if isinstance(paths, (str, Path)) else list(paths)
+    if not files:
+        raise RikError("no trial files given; pass one or more .csv or .parquet files")
+    trials: list[Trial] = []
+    for path in files:
+        trials += _file_trials(_read(Path(path)), kind, limits)
+    return trials
+
+
+# --------------------------------------------------------------------------------------------- LeRobot in
+
+@dataclass(frozen=True)
+class _FeatureRef:
+    """A number inside a LeRobot feature: the column ``key`` and the flat ``index`` within its value."""
+
+    text: str
+    key: str
+    index: int
+    size: int
+
+
+_REF = re.compile(r"^\s*(?P<key>[^\[\]]+?)\s*(?:\[\s*(?P<sel>[^\[\]]+?)\s*\])?\s*$")
+
+
+def _feature_names(feature: dict[str, Any], size: int) -> list[str]:
+    names = feature.get("names")
+    if isinstance(names, dict):
+        names = next((v for v in names.values() if isinstance(v, list) and len(v) == size), None)
+    if isinstance(names, list) and len(names) == size and all(isinstance(n, str) for n in names):
+        return names
+    return []
+
+
+def _feature_ref(text: str, features: dict[str, Any], info_file: str) -> _FeatureRef:
+    """Parse ``key``, ``key[3]`` or ``key[name]`` against the dataset's features."""
+    match = _REF.match(text)
+    key = match["key"] if match else text
+    if key not in features:
+        close = difflib.get_close_matches(key, list(features), n=2, cutoff=0.6)
+        hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+        raise TrialError(info_file, None, text, f"no feature '{key}' in the dataset{hint}")
+    feature = features[key]
+    size = int(np.prod(feature.get("shape") or [1]))
+    sel = match["sel"] if match else None
+    if sel is None:
+        if size != 1:
+            raise TrialError(info_file, None, text, f"'{key}' holds {size} values; name one as '{key}[index]' "
+                                                    f"or '{key}[name]'")
+        return _FeatureRef(text, key, 0, 1)
+    names = _feature_names(feature, size)
+    if sel.lstrip("-").isdigit():
+        index = int(sel)
+        if not 0 <= index < size:
+            raise TrialError(info_file, None, text, f"index {index} is out of range; '{key}' holds {size} values "
+                                                    f"(0 to {size - 1})")
+        return _FeatureRef(text, key, index, size)
+    if sel in names:
+        return _FeatureRef(text, key, names.index(sel), size)
+    listed = ", ".join(names) if names else "none; use an index"
+    raise TrialError(info_file, None, text, f"'{key}' has no value named '{sel}' (names: {listed})")
+
+
+def _read_info(root: Path) -> tuple[str, dict[str, Any]]:
+    info_file = root / "meta" / "info.json"
+    if not info_file.is_file():
+        raise TrialError(root, None, None, "not a LeRobot dataset (no meta/info.json)")
+    try:
+        info = json.loads(info_file.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise TrialError(info_file, None, None, f"not valid JSON ({_first_line(exc)})") from None
+    if not isinstance(info, dict) or not isinstance(info.get("features"), dict) or not info.get("fps"):
+        raise TrialError(info_file, None, None, "malformed LeRobot info: needs 'fps' and 'features'")
+    return str(info_file), info
+
+
+def _ref_values(table: Any, ref: _FeatureRef, file: str) -> tuple[np.ndarray, np.ndarray]:
+    """(values, null mask) of one referenced number, per row of a data file's table."""
+    import pyarrow as pa
+
+    if ref.key not in table.column_names:
+        raise TrialError(file, None, ref.text, f"no column '{ref.key}' in the data file")
+    column = table.column(ref.key).combine_chunks()
+    rows = len(column)
+    if pa.types.is_list(column.type) or pa.types.is_fixed_size_list(column.type) \
+            or pa.types.is_large_list(column.type):
+        null = column.is_null().to_numpy(zero_copy_only=False).astype(bool)
+        flat = column.flatten().cast(pa.float64()).to_numpy(zero_copy_only=False)
+        if null.any() or flat.size != rows * ref.size:
+            raise TrialError(file, None, ref.text, f"rows do not all hold {ref.size} values as info.json says")
+        return flat.reshape(rows, ref.size)[:, ref.index].astype(np.float64), np.zeros(rows, dtype=bool)
+    null = column.is_null().to_numpy(zero_copy_only=False).astype(bool)
+    return column.cast(pa.float64()).to_numpy(zero_copy_only=False).astype(np.float64), null
+
+
+def _lerobot_file(path: Path, refs: dict[str, _FeatureRef], fps: float) -> tuple[dict[str, Any], np.ndarray]:
+    """The referenced columns of one data file (plus time) and its episode index per row."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    file = str(path)
+    try:
+        table = pq.read_table(path)
+    except (pa.ArrowException, OSError) as exc:
+        raise TrialError(file, None, None, f"not a readable Parquet file ({_first_line(exc)})") from None
+    if "episode_index" not in table.column_names:
+        raise TrialError(file, None, "episode_index", "missing; a LeRobot data file has one per row")
+    episodes = table.column("episode_index").to_numpy(zero_copy_only=False).astype(np.int64)
+    columns = {role: _ref_values(table, ref, file) for role, ref in refs.items()}
+    if "timestamp" in table.column_names:
+        columns["time"] = _ref_values(table, _FeatureRef("timestamp", "timestamp", 0, 1), file)
+    elif "frame_index" in table.column_names:
+        frames, null = _ref_values(table, _FeatureRef("frame_index", "frame_index", 0, 1), file)
+        columns["time"] = (frames / fps, null)
+    else:
+        raise TrialError(file, None, "timestamp", "missing (and no frame_index); LeRobot data files have both")
+    return columns, episodes
+
+
+def load_lerobot_trials(root: str | Path, joint: Literal["slide", "hinge"] | JointType, *, position: str,
+                        position_unit: str, force: str, force_unit: str, velocity: str | None = None,
+                        velocity_unit: str | None = None, episodes: Iterable[int] | None = None,
+                        min_samples: int = MIN_SAMPLES, min_motion: float | None = None,
+                        min_force_range: float | None = None) -> list[Trial]:
+    """One trial per episode of the LeRobot v3.0 dataset in folder ``root`` (the folder holding ``meta/`` and
+    ``data/``), read with pyarrow from ``data/**/*.parquet`` (lerobot itself is not imported).
+
+    ``position``, ``force`` and ``velocity`` name a number in the dataset: a scalar feature (``key``), or one
+    value of a vector feature by index (``observation.state[3]``) or by its name in the feature's ``names``
+    (``observation.state[front_qpos]``). LeRobot records no units, so ``position_unit``, ``force_unit`` and
+    ``velocity_unit`` declare them (the units of the file table in the module docstring). Time is the
+    ``timestamp`` column, s (else ``frame_index / fps``). Trials are named ``episode_<index>``, in index order;
+    ``episodes`` keeps only those indices. Checks and thresholds are those of :func:`load_trials`."""
+    kind = joint_type(joint)
+    limits = _thresholds(kind, min_samples, min_motion, min_force_range)
+    root = Path(root)
+    info_file, info = _read_info(root)
+    declared = {"position": (position, position_unit), "force": (force, force_unit)}
+    if velocity is not None:
+        declared["velocity"] = (velocity, velocity_unit)
+    refs = {role: _feature_ref(text, info["features"], info_file) for role, (text, _) in declared.items()}
+    scales = {"time": 1.0}
+    for role, (text, unit) in declared.items():
+        if not unit:
+            raise TrialError(root, None, text, f"no unit; pass {role}_unit: {_accepted(role, kind)}")
+        try:
+            scales[role] = unit_scale(role, unit, kind, role)
+        except ValueError as exc:
+            raise TrialError(root, None, text, str(exc)) from None
+    files = sorted((root / "data").glob("**/*.parquet"))
+    if not files:
+        raise TrialError(root, None, None, "no data/**/*.parquet files; not a LeRobot v3.0 dataset")
+    wanted = None if episodes is None else {int(e) for e in episodes}
+    found: dict[int, tuple[str, dict[str, Any], np.ndarray]] = {}
+    for path in files:
+        columns, index = _lerobot_file(path, refs, float(info["fps"]))
+        for ep in np.unique(index):
+            if wanted is not None and int(ep) not in wanted:
+                continue
+            if int(ep) in found:
+                raise TrialError(path, f"episode_{ep}", "episode_index", f"the episode is also in "
+                                                                         f"{found[int(ep)][0]}; one file per episode")
+            found[int(ep)] = (str(path), columns, np.flatnonzero(index == ep))
+    if wanted is not None and (missing := sorted(wanted - set(found))):
+        raise TrialError(root, None, "episode_index", f"no episode {missing[0]} in the dataset")
+    units = {"time": "s", **{role: unit for role, (_, unit) in declared.items()}}
+    names = {"time": "timestamp", **{role: ref.text for role, ref in refs.items()}}
+    trials = []
+    for ep in sorted(found):
+        file, columns, rows = found[ep]
+        src = _Source(file, f"episode_{ep}", kind, names, units, scales,
+                      {role: columns[role][0][rows] for role in columns},
+                      {role: columns[role][1][rows] for role in columns},
+                      lambda i, rows=rows: f"row {int(rows[i])}")
+        trials.append(_build(src, limits))
+    return trials
