@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 
 def cache_dir() -> Path:
@@ -19,4 +20,14 @@ def write_atomic(path: Path, text: str) -> None:
     writing the same file do not share a temporary."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def write_png(path: Path, pixels: Any, compress_level: int = 6) -> None:
+    """Write an (H, W, 3) uint8 image as PNG through a temporary file and a rename (like :func:`write_atomic`)."""
+    import numpy as np
+    from PIL import Image
+
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    Image.fromarray(np.ascontiguousarray(pixels, np.uint8)).save(tmp, format="PNG", compress_level=compress_level)
     os.replace(tmp, path)

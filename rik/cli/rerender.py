@@ -35,8 +35,9 @@ def _run(episodes: list[Path], kind: str, res: str, cameras: str | None, out: Pa
 
         use_variant(spec.variant)  # an unsupported or unavailable variant fails before any work
     dirs = find_episodes(episodes)
-    by_id = {read_meta(d).id: d for d in dirs}
-    total = sum(read_meta(d).steps + 1 for d in dirs)
+    metas = {d: read_meta(d) for d in dirs}
+    by_id = {m.id: d for d, m in metas.items()}
+    total = sum(m.steps + 1 for m in metas.values())
     cams = [c.strip() for c in cameras.split(",") if c.strip()] if cameras else None
     cat = load_catalog(overlays(catalog))
     con = console()

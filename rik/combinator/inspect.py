@@ -101,7 +101,8 @@ def render_variant(catalog: Catalog, key: VariantKey, png: Path, *, out: Path = 
         raise RikError(f"--open must be between 0 and 1 (a fraction of each joint's range), got {open_fraction}")
     os.environ.setdefault("MUJOCO_GL", "egl")
     import mujoco
-    from PIL import Image
+
+    from rik.paths import write_png
 
     directory = out / key.id
     with tempfile.TemporaryDirectory(prefix="rik-show-") as tmp:
@@ -119,7 +120,5 @@ def render_variant(catalog: Catalog, key: VariantKey, png: Path, *, out: Path = 
             renderer.update_scene(data, camera="front")
             pixels = renderer.render()
     png.parent.mkdir(parents=True, exist_ok=True)
-    tmp_png = png.with_name(f".{png.name}.{os.getpid()}.tmp.png")
-    Image.fromarray(pixels).save(tmp_png)
-    os.replace(tmp_png, png)
+    write_png(png, pixels)
     return png

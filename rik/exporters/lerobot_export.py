@@ -25,13 +25,21 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
-from rik.exporters.lerobot_frames import ROBOT_TYPE, EpisodeSource, episode_frames, episode_metadata, features
+from rik.exporters.lerobot_frames import (
+    ROBOT_TYPE,
+    STREAM_SUFFIX,
+    EpisodeSource,
+    episode_frames,
+    episode_metadata,
+    features,
+)
 from rik.paths import write_atomic
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
 
-STREAMS = ("sim", "rerendered")
+STREAMS = tuple(STREAM_SUFFIX)
+"""The image streams an export can hold: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
 CODECS = ("libsvtav1", "h264", "hevc")
 """Video codecs offered: the software encoders of lerobot's PyAV build (never ``auto``: it picks NVENC)."""
 DONE = "DONE"
@@ -78,7 +86,7 @@ def _check_spec(spec: ExportSpec) -> None:
         raise RikError("--streams: give at least one of " + ", ".join(STREAMS))
     if spec.codec not in CODECS:
         raise RikError(f"--codec: '{spec.codec}' is not offered (codecs: {', '.join(CODECS)})")
-    if "/" not in spec.repo_id or spec.repo_id.count("/") != 1 or not all(spec.repo_id.split("/")):
+    if spec.repo_id.count("/") != 1 or not all(spec.repo_id.split("/")):
         raise RikError(f"--repo-id '{spec.repo_id}': give it as OWNER/NAME, e.g. local/rik-drawers")
     if spec.fps is not None and spec.fps < 1:
         raise RikError(f"--fps {spec.fps}: must be at least 1")
@@ -205,7 +213,6 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                            "it, or run it again with the same ones")
 
     # 1. The image streams, rendered where missing (resumable per frame), all at the export's size.
-    sources: list[EpisodeSource] = []
     cameras: list[str] | None = list(spec.cameras) or None
     stream_dirs: dict[Path, dict[str, Path]] = {d: {} for d in dirs}
     for kind in spec.streams:

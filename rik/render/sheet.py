@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rik.paths import write_png
 from rik.render.streams import read_frame, read_manifest
 
 GAP_PX = 4
@@ -33,7 +34,5 @@ def contact_sheet(streams: list[Path], out: Path, rows: int = 3, cameras: list[s
         for c, tile in enumerate(row):
             sheet.paste(Image.fromarray(tile), (c * (w + GAP_PX), label_h + r * (h + GAP_PX)))
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.tmp")
-    sheet.save(tmp, format="PNG")
-    tmp.replace(out)
+    write_png(out, np.asarray(sheet))
     return out

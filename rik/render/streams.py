@@ -22,7 +22,7 @@ from typing import Any, Literal
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import write_atomic
+from rik.paths import write_atomic, write_png
 
 DEFAULT_RENDERS = Path("renders")
 MANIFEST = "stream.json"
@@ -73,15 +73,6 @@ def frame_name(index: int) -> str:
     return f"{index:06d}.png"
 
 
-def write_png(path: Path, image: np.ndarray) -> None:
-    """An 8-bit RGB PNG, written through a temporary file and a rename."""
-    from PIL import Image
-
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    Image.fromarray(np.ascontiguousarray(image, np.uint8)).save(tmp, format="PNG", compress_level=4)
-    os.replace(tmp, path)
-
-
 def read_manifest(directory: Path) -> dict[str, Any] | None:
     """A finished stream's ``stream.json``, or None when the folder is not a finished stream."""
     try:
@@ -117,7 +108,7 @@ class StreamWriter:
                 yield k
 
     def write(self, index: int, camera: str, image: np.ndarray) -> None:
-        write_png(self.staging / camera / frame_name(index), image)
+        write_png(self.staging / camera / frame_name(index), image, compress_level=4)
 
     def publish(self, info: dict[str, Any]) -> Path:
         """Write the manifest and move the finished stream into place (replacing an outdated one)."""
