@@ -17,13 +17,14 @@ from __future__ import annotations
 
 import math
 from enum import StrEnum
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import Field, ValidationInfo, field_validator
 
 from rik.schemas.common import CatalogId, Frozen, Provenance, Real, Vec3
 
 NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 
 
 class JointType(StrEnum):
@@ -74,6 +75,95 @@ class Spring(Frozen):
     """Joint position where the spring exerts no force (m or rad)."""
 
 
+class Stiction(Frozen):
+    """Static friction above the Coulomb level, fading with speed (Stribeck): an extra friction force of
+    ``breakaway * exp(-(v / stribeck_velocity)^2)`` against the motion."""
+
+    kind: Literal["stiction"] = "stiction"
+    breakaway: NonNeg
+    """Static minus kinetic friction at rest: N (slide) or N·m (hinge)."""
+    stribeck_velocity: Positive
+    """Speed over which the extra friction fades: m/s or rad/s."""
+
+
+class SoftClose(Frozen):
+    """A soft-close damper: viscous damping acting only within ``zone`` of the closed position (and, by default,
+    only while closing): force ``-damping * v`` there."""
+
+    kind: Literal["soft_close"] = "soft_close"
+    zone: Positive
+    """Length of the zone from closed: m or rad."""
+    damping: NonNeg
+    """N·s/m or N·m·s/rad."""
+    closing_only: bool = True
+    """True: the damper acts only while closing (v < 0), as real soft-close pistons do."""
+
+
+class SelfClose(Frozen):
+    """A self-closing (pull-in) spring in the last ``zone`` before closed: force ``-stiffness * (zone - q)``
+    for q < zone, pulling closed, in both directions of motion and at rest (it also holds the front shut)."""
+
+    kind: Literal["self_close"] = "self_close"
+    zone: Positive
+    """Length of the zone from closed: m or rad."""
+    stiffness: NonNeg
+    """N/m or N·m/rad; the pull at closed is ``stiffness * zone``."""
+
+
+class MagneticCatch(Frozen):
+    """A magnetic catch: an attraction towards closed, ``-force / (1 + q / decay)^2``."""
+
+    kind: Literal["magnetic_catch"] = "magnetic_catch"
+    force: NonNeg
+    """Pull at contact (q = 0): N or N·m."""
+    decay: Positive
+    """Distance over which the pull falls to a quarter: m or rad."""
+
+
+class Tilt(Frozen):
+    """Gravity along the joint: a tilted drawer runner (a constant ``force``) or an out-of-plumb hinge
+    (``force * cos q + sine * sin q``). Positive values push the front open."""
+
+    kind: Literal["tilt"] = "tilt"
+    force: Real
+    """Force at closed: N (slide) or N·m (hinge)."""
+    sine: Real = 0.0
+    """Hinges only: the coefficient of sin q, N·m (0 for slides)."""
+
+
+class DirectionFriction(Frozen):
+    """Friction that differs with the direction of motion: ``extra`` on top of the Coulomb friction in one
+    direction only."""
+
+    kind: Literal["direction_friction"] = "direction_friction"
+    extra: NonNeg
+    """Additional friction in ``direction``: N or N·m."""
+    direction: Literal["opening", "closing"] = "closing"
+
+
+class QuadraticDamping(Frozen):
+    """Fluid-like damping growing with the square of speed: force ``-coefficient * v * |v|``."""
+
+    kind: Literal["quadratic_damping"] = "quadratic_damping"
+    coefficient: NonNeg
+    """N·s²/m² (slide) or N·m·s²/rad² (hinge)."""
+
+
+class LoadFriction(Frozen):
+    """Friction growing with the extension (a cantilevered drawer loads its runners more the further it is out):
+    ``per_extension * q`` on top of the Coulomb friction."""
+
+    kind: Literal["load_friction"] = "load_friction"
+    per_extension: NonNeg
+    """Additional friction per unit of joint position: N/m (slide) or N·m/rad (hinge)."""
+
+
+JointEffect = Annotated[Stiction | SoftClose | SelfClose | MagneticCatch | Tilt | DirectionFriction
+                        | QuadraticDamping | LoadFriction, Field(discriminator="kind")]
+"""An effect beyond damping, Coulomb friction and a linear spring, as identified by ``rik sysid`` (the closer
+spring of the library is :class:`Spring`)."""
+
+
 class JointResistance(Frozen):
     """Passive resistance of one joint type, in MuJoCo's terms (``damping``, ``frictionloss``, ``armature``)."""
 
@@ -84,9 +174,21 @@ class JointResistance(Frozen):
     armature: NonNeg = 0.0
     """Added inertia of the mechanism: kg (slide) or kg·m² (hinge)."""
     spring: Spring | None = None
+    effects: tuple[JointEffect, ...] = ()
+    """Effects beyond damping, friction and the spring (at most one of each kind), e.g. from ``rik sysid``."""
     provenance: Provenance
     notes: str = ""
     """Source, or the derivation of the values."""
+
+
+    @field_validator("effects")
+    @classmethod
+    def _one_of_each(cls, effects: tuple) -> tuple:
+        kinds = [e.kind for e in effects]
+        repeated = sorted({k for k in kinds if kinds.count(k) > 1})
+        if repeated:
+            raise ValueError(f"at most one effect of each kind, got {', '.join(repeated)} more than once")
+        return effects
 
 
 class ResistancePreset(Frozen):
