@@ -4,11 +4,32 @@ Every variant's resistance lives in a joint default class per preset and joint t
 ``normal_hinge``: Menagerie's convention), and each front's joint takes its class and adds only its own axis,
 anchor and range. Everything that decides how a joint feels is set here and nowhere else, so extensions of the
 joint model (springs acting in a zone, one-way damping, stiction: the calibration work of ``rik sysid``) change
-this module only: effects MuJoCo has natively become attributes of the class; effects it lacks become entries
-of :attr:`JointModel.runtime_effects`, which rik's simulator applies each step.
+this module only: effects MuJoCo has natively become attributes of the class or passive actuators on each front's
+joint; effects it lacks become entries of :attr:`JointModel.runtime_effects`, which rik's simulator applies each
+step.
 
 MuJoCo 4 spells damping and stiffness as polynomials (three coefficients: linear, quadratic, cubic); rik's
-presets set the linear term.
+presets set the linear term, and the library's ``quadratic_damping`` the quadratic one.
+
+Where each effect of :data:`rik.schemas.joints.JointEffect` goes (:func:`rik.sim.effects.is_native`):
+
+- ``quadratic_damping``: the class's ``damping[1]``;
+- ``self_close``: a passive actuator on the front's joint, ``general`` with gain 0, ``biastype="affine"``,
+  ``biasprm="-k·z k 0"`` and ``forcerange="-k·z 0"``: F = clamp(k (q - z), -k·z, 0);
+- ``tilt`` on a slide: a passive actuator with the constant bias ``biasprm="force 0 0"``;
+- ``direction_friction``: a passive actuator with a clamped velocity bias, ``biasprm="0 0 -K"`` and
+  ``forcerange="0 Δ"`` (closing) or ``"-Δ 0"`` (opening), K = Δ / :data:`DIRECTION_FRICTION_SPEED`:
+  Coulomb friction on top of ``frictionloss`` in one direction, regularised below that speed;
+- the others: :attr:`JointModel.runtime_effects`, applied around each step by
+  :class:`rik.sim.effects.RuntimeEffects` (``stiction`` and ``load_friction`` through the joint's
+  ``frictionloss``, ``soft_close`` through its damping, ``magnetic_catch`` and a hinge's ``tilt`` through
+  ``qfrc_applied``).
+
+Passive actuators are per front joint, named ``<joint>/effect/<kind>``; their control (MuJoCo's affine actuators
+have one) is ignored (gain 0). An effect of zero magnitude adds nothing. ``stiction`` is not native although
+MuJoCo 4's ``dcmotor input="none"`` with ``lugre`` models it: LuGre needs a bristle stiffness and damping the
+library does not have, is unstable with zero Coulomb level and bristle damping, and breaks away below its static
+level unless the bristle damping is tuned to the moving mass (checked on a 2 kg slide at 2 ms, implicitfast).
 """
 
 from __future__ import annotations
@@ -21,6 +42,18 @@ if TYPE_CHECKING:
 
 LIMIT_MARGIN = 0.0
 """Joint-limit margin (m or rad): limits engage at the range's ends."""
+DIRECTION_FRICTION_SPEED = {"slide": 1e-3, "hinge": 2.5e-3}
+"""Speed (m/s, rad/s) over which direction-dependent friction ramps from 0 to its full value, natively (a clamped
+velocity bias of gain ``extra / speed``) and at run time alike: the law is regularised below it. 2.5 mrad/s is
+1 mm/s at a handle 0.4 m from the hinge. (Here, with everything that shapes the MJCF, so that variants' spec
+hashes follow it.)"""
+
+
+def native_kind(kind: str, joint_type: JointType | str) -> bool:
+    """True when MuJoCo expresses effects of ``kind`` on a joint of ``joint_type`` in the MJCF itself."""
+    if kind == "tilt":
+        return getattr(joint_type, "value", joint_type) == "slide"
+    return kind in ("quadratic_damping", "self_close", "direction_friction")
 
 
 @dataclass(frozen=True)
@@ -34,15 +67,30 @@ class JointModel:
     armature: float
     stiffness: float = 0.0
     springref: float = 0.0
+    damping_quadratic: float = 0.0
+    """``damping[1]``: N·s²/m² or N·m·s²/rad² (the library's ``quadratic_damping``)."""
+    actuator_effects: tuple[dict[str, Any], ...] = field(default=())
+    """Native effects written as passive actuators on each front joint (``effect.model_dump()``)."""
     runtime_effects: tuple[dict[str, Any], ...] = field(default=())
-    """Effects MuJoCo cannot express natively, for the simulator to apply per step (none in rik's presets yet)."""
+    """Effects MuJoCo cannot express natively (``effect.model_dump()``), for the simulator to apply per step."""
 
 
 def joint_model(resistance: JointResistance, joint_type: JointType) -> JointModel:
     """The MuJoCo joint model of a preset's resistance for one joint type."""
     spring = resistance.spring
+    quadratic = 0.0
+    actuators: list[dict[str, Any]] = []
+    runtime: list[dict[str, Any]] = []
+    for effect in resistance.effects:
+        if effect.kind == "quadratic_damping":
+            quadratic += effect.coefficient
+        elif native_kind(effect.kind, joint_type):
+            actuators.append(effect.model_dump(mode="json"))
+        else:
+            runtime.append(effect.model_dump(mode="json"))
     return JointModel(joint_type.value, resistance.damping, resistance.frictionloss, resistance.armature,
-                      spring.stiffness if spring else 0.0, spring.reference if spring else 0.0)
+                      spring.stiffness if spring else 0.0, spring.reference if spring else 0.0, quadratic,
+                      tuple(actuators), tuple(runtime))
 
 
 def joint_class(preset_id: str, joint_type: JointType | str) -> str:
@@ -61,6 +109,7 @@ def add_joint_classes(spec: Any, preset: ResistancePreset, joint_types: list[Joi
         joint = default.joint
         joint.type = mujoco.mjtJoint.mjJNT_SLIDE if model.type == "slide" else mujoco.mjtJoint.mjJNT_HINGE
         joint.damping[0] = model.damping
+        joint.damping[1] = model.damping_quadratic
         joint.frictionloss = model.frictionloss
         joint.armature = model.armature
         joint.stiffness[0] = model.stiffness
@@ -76,3 +125,43 @@ def add_front_joint(body: Any, name: str, joint: JointSpec, default: Any) -> Any
     the anchor is the joint's position) and range."""
     return body.add_joint(name=name, default=default, pos=list(joint.anchor), axis=list(joint.axis),
                           range=list(joint.range))
+
+
+def effect_actuator_name(joint_name: str, kind: str) -> str:
+    """The name of the passive actuator that carries effect ``kind`` on a joint (``drawer-1/effect/self_close``)."""
+    return f"{joint_name}/effect/{kind}"
+
+
+def add_effect_actuators(spec: Any, joint_name: str, model: JointModel) -> list[Any]:
+    """Add the passive actuators of ``model``'s native effects (:attr:`JointModel.actuator_effects`) to the joint
+    ``joint_name``; returns them (none for effects of zero magnitude)."""
+    import mujoco
+
+    added = []
+    for effect in model.actuator_effects:
+        kind = effect["kind"]
+        if kind == "self_close":
+            k, zone = float(effect["stiffness"]), float(effect["zone"])
+            bias, limits = [-k * zone, k, 0.0], (-k * zone, 0.0)
+        elif kind == "tilt":
+            bias, limits = [float(effect["force"]), 0.0, 0.0], None
+        elif kind == "direction_friction":
+            extra = float(effect["extra"])
+            gain = extra / DIRECTION_FRICTION_SPEED[model.type]
+            bias = [0.0, 0.0, -gain]
+            limits = (0.0, extra) if effect["direction"] == "closing" else (-extra, 0.0)
+        else:  # pragma: no cover - joint_model sends only these here
+            raise ValueError(f"effect '{kind}' has no passive actuator")
+        if not any(bias) or (limits is not None and limits[0] == limits[1]):
+            continue  # zero magnitude: no force (and MuJoCo refuses an empty force range)
+        act = spec.add_actuator(name=effect_actuator_name(joint_name, kind), target=joint_name,
+                                trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        act.gainprm[0] = 0.0
+        act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        act.biasprm[:3] = bias
+        if limits is not None:
+            act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            act.forcerange = list(limits)
+        added.append(act)
+    return added

@@ -9,7 +9,11 @@ Layout of a model (MuJoCo Menagerie's conventions):
 - in each front a body ``<front>/handle`` at the handle's mount frame, with the visual mesh, the CoACD hulls and
   the sites ``<front>/handle`` (mount frame) and ``<front>/grasp`` (centre of the handle's bounding box: the
   middle of a loop); each front also carries ``<front>/mount`` (its allowed mount rectangle, a box site);
-- a text element ``rik.variant`` with the variant's ids and fronts as JSON, so tools can read a model alone.
+- a passive actuator ``<front>/effect/<kind>`` per native joint effect of the preset (self-closing zone springs,
+  a slide's tilt, direction-dependent friction; :mod:`rik.combinator.joints`);
+- a text element ``rik.variant`` with the variant's ids and fronts as JSON, so tools can read a model alone; a
+  front whose preset has effects MuJoCo lacks lists them as ``runtime_effects`` (``effect.model_dump()``), which
+  rik's simulator applies each step (:class:`rik.sim.effects.RuntimeEffects`).
 
 Boards are box geoms (exact). Handle meshes are written as STL files under ``meshes/`` and referenced by
 relative paths. Masses and inertias are explicit: boards from their volume and a density per finish kind,
@@ -25,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 from rik.assets.base_units import Panel
 from rik.combinator.ids import VariantKey
-from rik.combinator.joints import add_front_joint, add_joint_classes
+from rik.combinator.joints import add_effect_actuators, add_front_joint, add_joint_classes, joint_model
 from rik.combinator.placement import HandlePlacement, front_motion, place_handle
 
 if TYPE_CHECKING:
@@ -54,6 +58,8 @@ class FrontLayout:
     motion: str
     placement: HandlePlacement
     joint_range: tuple[float, float]
+    runtime_effects: tuple[dict[str, Any], ...] = ()
+    """The preset's effects on this front's joint that the simulator applies per step."""
 
 
 @dataclass
@@ -84,7 +90,9 @@ class VariantModel:
                 "handle_type": self.handle_type, "preset": self.key.preset,
                 "fronts": [{"id": f.id, "kind": f.kind, "motion": f.motion, "joint": f.id,
                             "handle_body": f"{f.id}/handle", "grasp_site": f"{f.id}/grasp",
-                            "placement": f.placement.rule, "edge": f.placement.edge} for f in self.fronts]}
+                            "placement": f.placement.rule, "edge": f.placement.edge,
+                            **({"runtime_effects": list(f.runtime_effects)} if f.runtime_effects else {})}
+                           for f in self.fronts]}
 
 
 # ---- geometry helpers -------------------------------------------------------------------------------------------
@@ -298,6 +306,7 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
     classes["visual"].geom.group = 2
     classes["collision"].geom.group = 3
     joint_classes = add_joint_classes(spec, preset, catalog.joint_types(unit))
+    joint_models = {t.value: joint_model(preset.for_joint(t), t) for t in catalog.joint_types(unit)}
 
     files: dict[str, bytes] = {}
     vertices: dict[str, int] = {}
@@ -328,6 +337,8 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
         placement = place_handle(unit, front, handle, handle_type, overhang)
         body = root.add_body(name=front.id)
         add_front_joint(body, front.id, front.joint, joint_classes[front.joint.type.value])
+        jmodel = joint_models[front.joint.type.value]
+        add_effect_actuators(spec, front.id, jmodel)
         material = _material(spec, catalog, front.finish, materials)
         if plans:
             boxes = _panel_boxes(plans[front.id])
@@ -349,7 +360,8 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
         hbody.add_site(name=f"{front.id}/handle", group=SITE_GROUP, size=[0.003, 0.003, 0.003])
         hbody.add_site(name=f"{front.id}/grasp", group=SITE_GROUP, pos=((bounds[0] + bounds[1]) / 2).tolist(),
                        size=[0.004, 0.004, 0.004], rgba=[1.0, 0.2, 0.2, 0.6])
-        fronts.append(FrontLayout(front.id, front.kind, front_motion(front), placement, tuple(front.joint.range)))
+        fronts.append(FrontLayout(front.id, front.kind, front_motion(front), placement, tuple(front.joint.range),
+                                  jmodel.runtime_effects))
     model = VariantModel(key, spec, files, vertices, fronts, handle_type.value, bounds, unit, recess)
     spec.add_text(name="rik.variant", data=json.dumps(model.info(), separators=(",", ":")))
     return model

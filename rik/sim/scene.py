@@ -13,6 +13,11 @@ Solver settings (what keeps a pinch on hundreds of convex parts stable):
   damping are integrated implicitly, so stiff servos stay stable at the step that the checks validated;
 - **pads with stiffer contact** (solref 4 ms, solimp 0.95-0.99) and torsional friction (condim 4), so a knob
   held in a pinch does not spin about the contact normal.
+
+The gripper's servos are addressed by name (their control addresses), since a variant's own passive actuators
+(native joint effects) come first in the model. Joint effects MuJoCo lacks (the variant's ``runtime_effects``)
+are applied around every physics step, on every front that has them (:class:`rik.sim.effects.RuntimeEffects`);
+they leave no trace in the state, so replays stay exact.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from rik.errors import RikError
+from rik.sim.effects import RuntimeEffects
 from rik.sim.gripper import BASE_JOINTS, GRIPPER_PREFIX, HAND_E, GripperSpec, jaw_target
 
 CONTROL_FPS = 20
@@ -69,6 +75,12 @@ class SimScene:
     gripper_geoms: frozenset[int] = frozenset()
     front_bodies: frozenset[int] = frozenset()
     tcp_site: int = -1
+    arm_ctrl: np.ndarray = field(default_factory=lambda: np.arange(6))
+    """Control addresses of the base servos (x, y, z, pitch, yaw, roll)."""
+    jaw_ctrl: int = 6
+    """Control address of the jaw servo."""
+    effects: tuple[RuntimeEffects, ...] = ()
+    """Runtime joint effects of the variant's fronts, applied around each physics step."""
 
     @property
     def substeps(self) -> int:
@@ -149,8 +161,8 @@ class SimScene:
         self.data.qvel[:] = 0.0
         opening = min(max(jaw_target(self.gripper, grip), 0.0), self.gripper.stroke)
         self.data.qpos[self.finger_qpos] = opening / 2
-        self.data.ctrl[:6] = pose
-        self.data.ctrl[6] = opening
+        self.data.ctrl[self.arm_ctrl] = pose
+        self.data.ctrl[self.jaw_ctrl] = opening
         mujoco.mj_forward(self.model, self.data)
 
     def step(self, action: np.ndarray) -> None:
@@ -159,13 +171,18 @@ class SimScene:
         import mujoco
 
         action = np.asarray(action, dtype=np.float64)
-        self.data.ctrl[:6] = action[:6]
+        m, d, jaw, effects = self.model, self.data, self.jaw_ctrl, self.effects
+        d.ctrl[self.arm_ctrl] = action[:6]
         goal = jaw_target(self.gripper, float(action[6]))
-        dmax = 2.0 * self.gripper.finger_speed * self.model.opt.timestep
+        dmax = 2.0 * self.gripper.finger_speed * m.opt.timestep
         for _ in range(self.substeps):
-            c = float(self.data.ctrl[6])
-            self.data.ctrl[6] = c + min(max(goal - c, -dmax), dmax)
-            mujoco.mj_step(self.model, self.data)
+            c = float(d.ctrl[jaw])
+            d.ctrl[jaw] = c + min(max(goal - c, -dmax), dmax)
+            for e in effects:
+                e.apply(d)
+            mujoco.mj_step(m, d)
+            for e in effects:
+                e.undo(d)
 
     def state(self) -> np.ndarray:
         """The full integration state (``mj_getState`` with ``mjSTATE_INTEGRATION``): time, positions,
@@ -245,6 +262,7 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     """Compile the scene of the variant built in ``variant_dir`` (its ``model.xml``), operating ``front``."""
     import mujoco
 
+    from rik.sim.effects import front_effects
     from rik.sim.gripper import add_gripper
 
     file = Path(variant_dir) / "model.xml"
@@ -284,10 +302,23 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     gripper_bodies = {name2id(mujoco.mjtObj.mjOBJ_BODY, GRIPPER_PREFIX + b) for b in ("base", *FINGERS)}
     gripper_geoms = frozenset(g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in gripper_bodies)
     front_bodies = frozenset({body, handle_body})
+    arm_ctrl = np.array([_ctrl_adr(model, GRIPPER_PREFIX + j) for j in BASE_JOINTS])
+    jaw_ctrl = _ctrl_adr(model, GRIPPER_PREFIX + "jaw")
     scene = SimScene(model, data, info, front_info, gripper, Path(variant_dir), control_fps, base_qpos, finger_qpos,
-                     gripper_geoms, front_bodies, name2id(mujoco.mjtObj.mjOBJ_SITE, GRIPPER_PREFIX + "tcp"))
+                     gripper_geoms, front_bodies, name2id(mujoco.mjtObj.mjOBJ_SITE, GRIPPER_PREFIX + "tcp"),
+                     arm_ctrl, jaw_ctrl, front_effects(model, info["fronts"]))
     scene.set_pose(start_pose(scene))
     return scene
+
+
+def _ctrl_adr(model: Any, actuator: str) -> int:
+    """The address in ``data.ctrl`` of the (single) control of the actuator named ``actuator``."""
+    import mujoco
+
+    i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator)
+    if i < 0:  # pragma: no cover - add_gripper always adds it
+        raise RikError(f"the scene has no actuator '{actuator}'")
+    return int(model.actuator_ctrladr[i])
 
 
 def base_for_tcp(gripper: GripperSpec, tcp: np.ndarray, angles: np.ndarray) -> np.ndarray:
