@@ -31,3 +31,24 @@ def write_png(path: Path, pixels: Any, compress_level: int = 6) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     Image.fromarray(np.ascontiguousarray(pixels, np.uint8)).save(tmp, format="PNG", compress_level=compress_level)
     os.replace(tmp, path)
+
+
+def pyplot() -> Any:
+    """matplotlib's pyplot on the headless Agg backend (imported on first use)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_figure(fig: Any, path: Path, dpi: int = 120) -> Path:
+    """Save a matplotlib figure as PNG (no timestamp metadata, so reruns are byte-identical) through a temporary
+    file and a rename, and close it."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    fig.savefig(tmp, dpi=dpi, format="png", metadata={"Software": None})
+    pyplot().close(fig)
+    os.replace(tmp, path)
+    return path

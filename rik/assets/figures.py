@@ -8,6 +8,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from rik.paths import pyplot as _pyplot
+from rik.paths import save_figure as _save
+
 if TYPE_CHECKING:
     import numpy as np
     import trimesh
@@ -20,25 +23,6 @@ HEAT_MAX_MM = 5.0
 """Top of the colour scale, mm: the same for every handle, so pictures compare; larger deviations saturate."""
 HEAT_POINTS = 6000
 """Points drawn per heatmap panel (a random subset of the samples)."""
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig, path: Path, dpi: int) -> None:
-    import os
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    fig.savefig(tmp, dpi=dpi, format="png", metadata={"Software": None})
-    _pyplot().close(fig)
-    os.replace(tmp, path)
 
 
 def _frame(ax, points: np.ndarray, zoom: float = 1.0) -> None:

@@ -185,12 +185,9 @@ def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
 def sweep_plot(rows: Sequence[dict[str, Any]], png: Path) -> Path:
     """Success rate against the friction-capacity ratio (2 x pad friction x grip force / joint resistance), one
     line per strategy."""
-    import matplotlib
+    from rik.paths import pyplot, save_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
+    fig, ax = pyplot().subplots(figsize=(6.4, 4.0), dpi=120)
     for s in dict.fromkeys(r["strategy"] for r in rows):
         pts: dict[float, list[int]] = {}
         for r in rows:
@@ -206,12 +203,7 @@ def sweep_plot(rows: Sequence[dict[str, Any]], png: Path) -> Path:
     ax.legend(frameon=False)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    png.parent.mkdir(parents=True, exist_ok=True)
-    tmp = png.with_name(f".{png.name}.tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(png)
-    return png
+    return save_figure(fig, png)
 
 
 def sweep_markdown(rows: Sequence[dict[str, Any]]) -> str:

@@ -1,11 +1,15 @@
-"""Measured joint trajectories: baseline fit, residual diagnosis, the effect library, the extended joint model.
+"""Model discovery from measured joint trajectories: what the simulation gets wrong, the cause, the extended joint
+model and the gain on held-out data (``rik sysid``; docs/sysid.md).
 
-Built so far:
+- :mod:`rik.sysid.trials`: measured trials in (CSV, Parquet, a LeRobot v3.0 dataset), units declared in the column
+  headers and converted to SI, every bad input refused with a one-line :class:`~rik.errors.RikError`;
+- :mod:`rik.sysid.preprocess`: resampling, Savitzky–Golay derivatives, the force-to-position delay, masks;
+- :mod:`rik.sysid.effects`: the effect library as regressors with physical readings;
+- :mod:`rik.sysid.fit`: equation-error fits of the baseline and of each effect, scored on held-out trials;
+- :mod:`rik.sysid.select`: selection by held-out gain, BIC and physical sign; indistinguishable pairs;
+- :mod:`rik.sysid.discover`: the pipeline end to end, with MuJoCo re-simulation (:mod:`rik.sysid.resim`);
+- :mod:`rik.sysid.report`: report.md, plots and summary.json; :mod:`rik.sysid.preset`: the fitted joint as a
+  user-catalog preset;
+- :mod:`rik.sysid.generate`: ground-truth data with a hidden effect (``rik sysid simulate`` and the tests).
 
-- :mod:`rik.sysid.trials`: measured trials in (CSV, Parquet, a LeRobot v3.0 dataset), units declared in the
-  column headers and converted to SI, every bad input refused with a one-line :class:`~rik.errors.RikError`;
-- :mod:`rik.sysid.preprocess`: uniform resampling, Savitzky–Golay smoothing and derivatives, force-to-position
-  delay, and the moving, opening, closing, sticking and near-limit masks.
-
-The fit, the diagnosis and the effect library come next; see ../shared/DESIGN.md. Heavy libraries (scipy,
-pyarrow, mujoco) are imported inside functions, never here."""
+Heavy libraries (scipy, pyarrow, mujoco, matplotlib) are imported inside functions, never here."""

@@ -14,7 +14,9 @@ Steps of :func:`preprocess`, all in SI units of the joint (m or rad, N or N·m, 
 3. **Delay** between force and position. Positive delay: the position is recorded later than the force, so the
    force at time t is paired with the position at t + delay. Unless ``delay_s`` is given, it is the lag, on a
    grid of whole samples within ±``max_delay_s`` (default 0.1 s), whose shifted ``f_smooth`` is best explained
-   by least squares on the moving samples by ``[acceleration, velocity, sign(velocity), position, 1]``: mass,
+   by least squares on the moving samples away from the range's ends (within ``limit_margin`` of the observed or
+   given limits, widened by one window: an end stop's impact is in no model) by
+   ``[acceleration, velocity, sign(velocity), position, 1]``: mass,
    damping, Coulomb friction, a spring and a bias, enough for the alignment even where the model is not the
    final one. The delay is applied in whole samples (a given ``delay_s`` is rounded to one): force and motion
    are shifted against each other and the samples left without a partner are dropped.
@@ -207,6 +209,15 @@ def masks(q: np.ndarray, qd: np.ndarray, f: np.ndarray, *, moving_velocity: floa
     }
 
 
+def touching(q: np.ndarray, limits: tuple[float, float], margin: float, widen: int) -> np.ndarray:
+    """Samples within ``margin`` of a range end (m or rad), widened by ``widen`` samples on each side: where an
+    end stop's contact force, smeared by smoothing, is in the signals."""
+    near = (q <= limits[0] + margin) | (q >= limits[1] - margin)
+    if not near.any() or widen <= 0:
+        return near
+    return np.convolve(near.astype(float), np.ones(2 * widen + 1), mode="same") > 0
+
+
 def observed_limits(trials: Sequence[Trial]) -> tuple[float, float]:
     """The lowest and highest measured position over ``trials``, m or rad: limits for :func:`preprocess` that
     one trial alone may not reach."""
@@ -266,7 +277,9 @@ def preprocess(trial: Trial, rate_hz: float | None = None, *, window_s: float = 
     qdd = savgol(q_raw, window, polyorder, 2, rate)
     f_smooth = savgol(f_raw, window, polyorder, 0, rate)
     if delay_s is None:
-        lag, used = best_lag(q, qd, qdd, f_smooth, np.abs(qd) >= moving_velocity, lag_max)
+        bounds = (float(q_raw.min()), float(q_raw.max())) if limits is None else limits
+        usable = (np.abs(qd) >= moving_velocity) & ~touching(q_raw, bounds, limit_margin, window)
+        lag, used = best_lag(q, qd, qdd, f_smooth, usable, lag_max)
         if used < MIN_DELAY_SAMPLES:
             raise TrialError(trial.source, trial.name, trial.meta.columns.position,
                              f"only {used} moving samples (|velocity| ≥ {moving_velocity:g} {_SPEED[joint]}) to "

@@ -1,0 +1,239 @@
+"""Equation-error fits of the baseline joint model and of each effect of the library, scored on held-out data.
+
+The rows a fit uses are the *moving* samples of the preprocessed trials (|v| at least :data:`FIT_VELOCITY`, lower
+than preprocessing's moving mask so that the low-speed friction of stiction is seen) away from the range's ends:
+samples within :data:`CONTACT_MARGIN` of a limit, and those within one smoothing window of such a sample, are left
+out, because the end stop's contact force is in no model (its impact smears over the window). Forces are the
+smoothed ones (``f_smooth``), filtered like the derivatives.
+
+Errors are the root mean square of ``F_measured − F_model`` (N or N·m), on the training rows and on the held-out
+rows; BIC is ``n·ln(RSS/n) + p·ln(n)`` on the training rows. A family's hyperparameter is searched on its grid,
+then refined by a bounded 1-D search between the best grid point's neighbours (variable projection: for each
+value the coefficients are a linear least-squares solution).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rik.errors import RikError
+from rik.schemas.joints import JointType
+from rik.sysid.effects import FAMILIES, Baseline, Effect, Family, Motion, baseline_features
+from rik.sysid.preprocess import Prepared, touching
+
+FIT_VELOCITY = {JointType.slide: 0.004, JointType.hinge: 0.01}
+"""Lowest speed from which a sample enters the fit: m/s (4 mm/s) or rad/s (about 0.6°/s); raised to
+:data:`NOISE_SIGMAS` times the velocity's noise (see :func:`velocity_noise`) where that is higher."""
+NOISE_SIGMAS = 4.0
+"""A sample moves when its speed exceeds this many standard deviations of the velocity noise: a front at rest
+with noisy position readings must not count as moving (its friction direction would be a coin toss)."""
+CONTACT_MARGIN = {JointType.slide: 0.001, JointType.hinge: math.radians(0.5)}
+"""Distance to a range end within which a sample counts as touching the stop: m or rad."""
+HELDOUT_FRACTION = 0.3
+"""Share of a single trial's duration held out (its end) when there is only one trial."""
+MIN_ROWS = 30
+"""Fewest rows a fit (training or held-out) needs."""
+
+
+@dataclass(frozen=True, eq=False)
+class Rows:
+    """Samples the equation error is evaluated at, concatenated over trials (SI, equal lengths)."""
+
+    joint: JointType
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    f: np.ndarray
+    """Smoothed applied force, N or N·m."""
+    trial: np.ndarray
+    """Index of each row's trial in :attr:`names`."""
+    names: tuple[str, ...]
+
+    def __len__(self) -> int:
+        return len(self.q)
+
+    def take(self, mask: np.ndarray) -> Rows:
+        """The rows where ``mask`` holds."""
+        return Rows(self.joint, self.t[mask], self.q[mask], self.qd[mask], self.qdd[mask], self.f[mask],
+                    self.trial[mask], self.names)
+
+    @property
+    def motion(self) -> Motion:
+        return Motion(self.q, self.qd)
+
+
+@dataclass(frozen=True, eq=False)
+class Split:
+    """Training and held-out rows, and which trials (or which part of a single trial) went where."""
+
+    train: Rows
+    heldout: Rows
+    heldout_trials: tuple[int, ...]
+    """Indices of the held-out trials; with one trial, ``(0,)`` and :attr:`heldout_from` says from when."""
+    heldout_from: float | None = None
+    """With a single trial: the time, s, from which it is held out."""
+
+
+def velocity_noise(p: Prepared) -> float:
+    """Standard deviation of the noise the position's noise puts on the Savitzky–Golay velocity, m/s or rad/s:
+    the position noise, estimated from what smoothing removed (corrected for the share the filter keeps), times
+    the norm of the derivative filter."""
+    from scipy.signal import savgol_coeffs
+
+    window, order = p.settings.window_samples, p.settings.polyorder
+    smooth = savgol_coeffs(window, order)
+    sigma_q = float(np.std(p.q_raw - p.q)) / math.sqrt(max(1.0 - float(smooth[window // 2]), 1e-6))
+    return sigma_q * float(np.linalg.norm(savgol_coeffs(window, order, deriv=1, delta=p.dt)))
+
+
+def fit_velocity(prepared: Sequence[Prepared]) -> float:
+    """The speed from which samples enter the fit: :data:`FIT_VELOCITY` or :data:`NOISE_SIGMAS` times the median
+    velocity noise of the trials, whichever is higher; m/s or rad/s."""
+    joint = prepared[0].trial.joint
+    noise = float(np.median([velocity_noise(p) for p in prepared]))
+    return max(FIT_VELOCITY[joint], NOISE_SIGMAS * noise)
+
+
+def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, margin: float | None = None,
+             limits: tuple[float, float] | None = None) -> Rows:
+    """The fit rows of every trial (see the module docstring). ``velocity`` default :func:`fit_velocity`;
+    ``limits`` default: the lowest and highest position over all trials."""
+    joint = prepared[0].trial.joint
+    velocity = fit_velocity(prepared) if velocity is None else velocity
+    margin = CONTACT_MARGIN[joint] if margin is None else margin
+    if limits is None:
+        limits = (min(float(p.q_raw.min()) for p in prepared), max(float(p.q_raw.max()) for p in prepared))
+    parts = []
+    for i, p in enumerate(prepared):
+        keep = (np.abs(p.qd) >= velocity) & ~touching(p.q_raw, limits, margin, p.settings.window_samples // 2)
+        parts.append((p.t[keep], p.q[keep], p.qd[keep], p.qdd[keep], p.f_smooth[keep], np.full(keep.sum(), i)))
+    cols = [np.concatenate(c) for c in zip(*parts, strict=True)]
+    return Rows(joint, *cols[:5], cols[5].astype(int), tuple(p.trial.name for p in prepared))
+
+
+def split_rows(rows: Rows, prepared: Sequence[Prepared], heldout: Sequence[int] | None = None) -> Split:
+    """Training and held-out rows: the trials ``heldout`` (default: the last quarter of the trials, at least
+    one) or, with a single trial, its last :data:`HELDOUT_FRACTION` of time."""
+    n = len(prepared)
+    if n == 1:
+        p = prepared[0]
+        start = float(p.t[0] + (1.0 - HELDOUT_FRACTION) * (p.t[-1] - p.t[0]))
+        late = rows.t >= start
+        split = Split(rows.take(~late), rows.take(late), (0,), start)
+    else:
+        chosen = tuple(sorted(set(heldout))) if heldout is not None else tuple(range(n - max(1, n // 4), n))
+        if not chosen or any(not 0 <= i < n for i in chosen) or len(chosen) == n:
+            raise RikError(f"held-out trials must be some but not all of the {n} trials (0 to {n - 1}), "
+                           f"got {list(heldout or [])}")
+        out = np.isin(rows.trial, chosen)
+        split = Split(rows.take(~out), rows.take(out), chosen)
+    for part, rows_ in (("training", split.train), ("held-out", split.heldout)):
+        if len(rows_) < MIN_ROWS:
+            raise RikError(f"only {len(rows_)} moving samples away from the range's ends in the {part} data "
+                           f"(trials {', '.join(rows.names)}), at least {MIN_ROWS} needed: record longer or "
+                           f"more strokes")
+    return split
+
+
+# --------------------------------------------------------------------------------------------------- fitting
+
+@dataclass(frozen=True, eq=False)
+class Fit:
+    """One model fitted by equation error: the baseline alone (``family`` None) or with one effect."""
+
+    family: Family | None
+    hyper: float | None
+    theta: np.ndarray
+    """Coefficients: M, b, Fc, then the effect's."""
+    baseline: Baseline
+    """Inertia, damping and friction (adjusted where the effect's reading moves the friction level)."""
+    effect: Effect | None
+    problem: str | None
+    """Why the fitted effect is unphysical, or None."""
+    parameters: int
+    rss: float
+    n: int
+    rmse_train: float
+    rmse_heldout: float
+    residual_train: np.ndarray = field(repr=False)
+    residual_heldout: np.ndarray = field(repr=False)
+
+    @property
+    def kind(self) -> str:
+        return self.family.kind if self.family else "baseline"
+
+    @property
+    def bic(self) -> float:
+        return self.n * math.log(max(self.rss, 1e-300) / self.n) + self.parameters * math.log(self.n)
+
+    def predict(self, rows: Rows) -> np.ndarray:
+        """Modelled applied force at ``rows``, N or N·m."""
+        return design(rows, self.family, self.hyper) @ self.theta
+
+
+def design(rows: Rows, family: Family | None, hyper: float | None) -> np.ndarray:
+    """The regressor matrix of the baseline plus ``family`` (at ``hyper``) at ``rows``."""
+    base = baseline_features(rows.q, rows.qd, rows.qdd)
+    if family is None:
+        return base
+    return np.hstack([base, family.features(rows.motion, hyper, rows.joint)])
+
+
+def _solve(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
+    scale = np.maximum(np.abs(x).max(axis=0), 1e-12)
+    theta, *_ = np.linalg.lstsq(x / scale, y, rcond=None)
+    theta = theta / scale
+    r = y - x @ theta
+    return theta, float(r @ r)
+
+
+def _rss_at(rows: Rows, family: Family, hyper: float) -> float:
+    return _solve(design(rows, family, hyper), rows.f)[1]
+
+
+def best_hyper(rows: Rows, family: Family) -> float:
+    """The hyperparameter minimising the training RSS: grid, then bounded refinement in log space."""
+    from scipy.optimize import minimize_scalar
+
+    grid = family.grid(rows.joint)
+    rss = np.array([_rss_at(rows, family, h) for h in grid])
+    k = int(np.argmin(rss))
+    lo, hi = np.log(grid[max(k - 1, 0)]), np.log(grid[min(k + 1, len(grid) - 1)])
+    if hi <= lo:
+        return float(grid[k])
+    res = minimize_scalar(lambda u: _rss_at(rows, family, math.exp(u)), bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-3})
+    return float(math.exp(res.x)) if res.fun <= rss[k] else float(grid[k])
+
+
+def fit_model(split: Split, family: Family | None) -> Fit:
+    """Fit the baseline plus ``family`` on the training rows and score it on the held-out rows."""
+    rows = split.train
+    hyper = best_hyper(rows, family) if family is not None and family.grid is not None else None
+    x = design(rows, family, hyper)
+    theta, rss = _solve(x, rows.f)
+    base = Baseline(float(theta[0]), float(theta[1]), float(theta[2]))
+    effect, problem = None, None
+    if family is not None:
+        effect, base, problem = family.reading(theta[3:], hyper, base, rows.joint)
+    elif base.inertia <= 0 or base.friction < 0:
+        problem = f"the baseline fit is unphysical (inertia {base.inertia:.3g}, friction {base.friction:.3g})"
+    residual_train = rows.f - x @ theta
+    residual_heldout = split.heldout.f - design(split.heldout, family, hyper) @ theta
+    params = x.shape[1] + (hyper is not None)
+    return Fit(family, hyper, theta, base, effect, problem, params, rss, len(rows),
+               _rms(residual_train), _rms(residual_heldout), residual_train, residual_heldout)
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(x * x))) if len(x) else math.nan
+
+
+def fit_all(split: Split, families: Sequence[Family] = FAMILIES) -> tuple[Fit, list[Fit]]:
+    """The baseline fit and one fit per family of the library."""
+    return fit_model(split, None), [fit_model(split, f) for f in families]

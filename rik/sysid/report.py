@@ -1,0 +1,280 @@
+"""The report of a discovery: ``report.md`` with plots, and ``summary.json`` (what ``rik sysid apply`` reads).
+
+Plots (PNG, matplotlib Agg):
+
+- ``residual_time.png``: the baseline's force residual against time, one panel per trial (held-out ones marked),
+  with the extended model's residual over it;
+- ``residual_position.png``: the baseline residual against position, opening and closing apart (binned means
+  over the scattered samples), where zone effects (soft-close, self-close, magnet) show;
+- ``residual_velocity.png``: the baseline residual against velocity, where friction laws (stiction, quadratic
+  damping, direction-dependent friction) show;
+- ``resimulated.png``: measured position of each held-out trial and its MuJoCo re-simulation with the baseline
+  and with the extended joint.
+
+The report directory is written whole or not at all: into a hidden sibling first, then renamed into place.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rik.paths import pyplot, save_figure, write_atomic
+from rik.schemas.joints import JointType, Spring
+from rik.sysid.discover import Discovery, describe
+from rik.sysid.fit import Fit, Rows, design
+from rik.sysid.select import MIN_BIC_DROP, MIN_GAIN
+
+SUMMARY = "summary.json"
+REPORT = "report.md"
+FORMAT = 1
+"""Version of ``summary.json``'s layout."""
+_UNITS = {JointType.slide: {"position": "m", "force": "N", "plot_pos": ("mm", 1e3), "plot_vel": ("mm/s", 1e3)},
+          JointType.hinge: {"position": "rad", "force": "N·m", "plot_pos": ("°", 180 / np.pi),
+                            "plot_vel": ("°/s", 180 / np.pi)}}
+
+
+def _residuals(fit: Fit, rows: Rows) -> np.ndarray:
+    return rows.f - design(rows, fit.family, fit.hyper) @ fit.theta
+
+
+def _effect_dict(effect: Any) -> dict[str, Any] | None:
+    if effect is None:
+        return None
+    data = effect.model_dump(mode="json")
+    return {"kind": "spring", **data} if isinstance(effect, Spring) else data
+
+
+def summary(d: Discovery) -> dict[str, Any]:
+    """The JSON summary of a discovery (SI units; see :data:`FORMAT`)."""
+    sel = d.selection
+    chosen = sel.chosen
+    base = sel.baseline.baseline
+    resistance = d.extended_resistance or d.baseline_resistance
+    units = _UNITS[d.joint]
+    fb, fe = d.force_rmse
+    pb, pe = d.position_rmse
+    return {
+        "format": FORMAT,
+        "joint": d.joint.value,
+        "units": {"position": units["position"], "force": units["force"]},
+        "cause": d.sentence(),
+        "verdict": "effect" if chosen else "none",
+        "effect": chosen.fit.kind if chosen else None,
+        "alternatives": [s.fit.kind for s in sel.alternatives],
+        "separation": list(sel.separation),
+        "trials": {"names": list(d.rows.names), "heldout": [d.rows.names[i] for i in d.split.heldout_trials],
+                   "heldout_from_s": d.split.heldout_from},
+        "preprocessing": {"rate_hz": d.prepared[0].settings.rate_hz, "window_s": d.prepared[0].settings.window_s,
+                          "delay_s": d.delay_s, "fit_velocity": d.fit_velocity, "limits": list(d.limits),
+                          "rows_train": len(d.split.train), "rows_heldout": len(d.split.heldout)},
+        "baseline": {"inertia": base.inertia, "damping": base.damping, "frictionloss": base.friction},
+        "inertia": (chosen.fit.baseline.inertia if chosen else base.inertia),
+        "resistance": resistance.model_dump(mode="json"),
+        "errors": {"force_rmse": {"baseline": fb, "extended": fe},
+                   "position_rmse": {"baseline": pb, "extended": pe}},
+        "thresholds": {"min_gain": MIN_GAIN, "min_bic_drop": MIN_BIC_DROP},
+        "candidates": [{"kind": s.fit.kind, "title": s.fit.family.title, "hyper": s.fit.hyper,
+                        "effect": _effect_dict(s.fit.effect), "gain": s.gain, "bic_drop": s.bic_drop,
+                        "rmse_train": s.fit.rmse_train, "rmse_heldout": s.fit.rmse_heldout,
+                        "parameters": s.fit.parameters, "verdict": s.verdict} for s in sel.scores],
+    }
+
+
+# ------------------------------------------------------------------------------------------------------ plots
+
+def _all_rows(d: Discovery) -> tuple[Rows, np.ndarray, np.ndarray | None, np.ndarray]:
+    """All fit rows (training then held-out), the baseline's and the chosen model's residuals, held-out flags."""
+    sel = d.selection
+    parts = (d.split.train, d.split.heldout)
+    rows = Rows(d.joint, *(np.concatenate([getattr(p, k) for p in parts]) for k in ("t", "q", "qd", "qdd", "f",
+                                                                                    "trial")), d.rows.names)
+    held = np.concatenate([np.zeros(len(parts[0]), bool), np.ones(len(parts[1]), bool)])
+    chosen = sel.chosen.fit if sel.chosen else None
+    return rows, _residuals(sel.baseline, rows), _residuals(chosen, rows) if chosen else None, held
+
+
+def _binned(x: np.ndarray, y: np.ndarray, bins: int = 30) -> tuple[np.ndarray, np.ndarray]:
+    if len(x) < 2:
+        return x, y
+    edges = np.linspace(x.min(), x.max(), bins + 1)
+    idx = np.clip(np.digitize(x, edges) - 1, 0, bins - 1)
+    centres, means = [], []
+    for b in range(bins):
+        m = idx == b
+        if m.sum() >= 5:
+            centres.append(0.5 * (edges[b] + edges[b + 1]))
+            means.append(float(y[m].mean()))
+    return np.array(centres), np.array(means)
+
+
+def plot_residual_time(d: Discovery, path: Path) -> Path:
+    rows, rb, re, held = _all_rows(d)
+    plt = pyplot()
+    n = len(d.rows.names)
+    fig, axes = plt.subplots(n, 1, figsize=(9, 1.8 * n + 0.6), sharey=True, squeeze=False)
+    unit = _UNITS[d.joint]["force"]
+    for i, ax in enumerate(axes[:, 0]):
+        m = rows.trial == i
+        ax.plot(rows.t[m], rb[m], ".", ms=1.5, color="tab:red", label="baseline")
+        if re is not None:
+            ax.plot(rows.t[m], re[m], ".", ms=1.5, color="tab:blue", label="extended")
+        ax.axhline(0, color="grey", lw=0.6)
+        tag = " (held out)" if held[m].any() and not (~held[m]).any() else (" (end held out)" if held[m].any()
+                                                                            else "")
+        ax.set_title(f"{d.rows.names[i]}{tag}", fontsize=8, loc="left")
+        ax.set_ylabel(f"residual [{unit}]", fontsize=7)
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[0, 0].legend(fontsize=7, markerscale=6, loc="upper right")
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def plot_residual_position(d: Discovery, path: Path) -> Path:
+    rows, rb, re, _ = _all_rows(d)
+    plt = pyplot()
+    label, scale = _UNITS[d.joint]["plot_pos"]
+    unit = _UNITS[d.joint]["force"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
+    for ax, name, mask in ((axes[0], "opening", rows.qd > 0), (axes[1], "closing", rows.qd < 0)):
+        x = rows.q[mask] * scale
+        ax.plot(x, rb[mask], ".", ms=1.2, color="tab:red", alpha=0.25)
+        ax.plot(*_binned(x, rb[mask]), "-", color="tab:red", lw=1.8, label="baseline, binned mean")
+        if re is not None:
+            ax.plot(*_binned(x, re[mask]), "-", color="tab:blue", lw=1.8, label="extended, binned mean")
+        ax.axhline(0, color="grey", lw=0.6)
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel(f"position [{label}]")
+    axes[0].set_ylabel(f"force residual [{unit}]")
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def plot_residual_velocity(d: Discovery, path: Path) -> Path:
+    rows, rb, re, _ = _all_rows(d)
+    plt = pyplot()
+    label, scale = _UNITS[d.joint]["plot_vel"]
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    x = rows.qd * scale
+    ax.plot(x, rb, ".", ms=1.2, color="tab:red", alpha=0.25)
+    for sign in (1, -1):
+        m = np.sign(rows.qd) == sign
+        ax.plot(*_binned(x[m], rb[m], 20), "-", color="tab:red", lw=1.8,
+                label="baseline, binned mean" if sign > 0 else None)
+        if re is not None:
+            ax.plot(*_binned(x[m], re[m], 20), "-", color="tab:blue", lw=1.8,
+                    label="extended, binned mean" if sign > 0 else None)
+    ax.axhline(0, color="grey", lw=0.6)
+    ax.set_xlabel(f"velocity [{label}]")
+    ax.set_ylabel(f"force residual [{_UNITS[d.joint]['force']}]")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def plot_resimulated(d: Discovery, path: Path) -> Path:
+    plt = pyplot()
+    label, scale = _UNITS[d.joint]["plot_pos"]
+    n = max(len(d.resimulated), 1)
+    fig, axes = plt.subplots(n, 1, figsize=(9, 2.2 * n + 0.6), squeeze=False)
+    for ax, r in zip(axes[:, 0], d.resimulated, strict=False):
+        ax.plot(r.t, r.q * scale, color="black", lw=1.4, label="measured")
+        ax.plot(r.t, r.baseline * scale, color="tab:red", lw=1.0, label="baseline joint")
+        if r.extended is not None:
+            ax.plot(r.t, r.extended * scale, color="tab:blue", lw=1.0, label="extended joint")
+        ax.set_title(f"{r.trial}: re-simulated from the measured state every {d.resim_window_s:g} s, driven by the "
+                     f"measured force", fontsize=8, loc="left")
+        ax.set_ylabel(f"position [{label}]")
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[0, 0].legend(fontsize=7)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+PLOTS = {"residual_time.png": plot_residual_time, "residual_position.png": plot_residual_position,
+         "residual_velocity.png": plot_residual_velocity, "resimulated.png": plot_resimulated}
+
+
+# --------------------------------------------------------------------------------------------------- markdown
+
+def markdown(d: Discovery, data: dict[str, Any]) -> str:
+    """The report's text."""
+    sel = d.selection
+    u = _UNITS[d.joint]
+    pos_label, pos_scale = u["plot_pos"]
+    base = sel.baseline.baseline
+    inertia = "kg" if d.joint is JointType.slide else "kg·m²"
+    damp = "N·s/m" if d.joint is JointType.slide else "N·m·s/rad"
+    lines = [f"# rik sysid report ({d.joint.value} joint)", "", f"**{d.sentence()}**", ""]
+    if sel.alternatives or sel.separation:
+        lines += ["## What this data cannot decide", ""]
+        for text in sel.separation:
+            lines.append(f"- {text[0].upper()}{text[1:]}.")
+        lines.append("")
+    pb, pe = d.position_rmse
+    fb, fe = d.force_rmse
+    lines += ["## Held-out errors", "",
+              f"| model | force RMSE [{u['force']}] | re-simulated position RMSE [{pos_label}] |", "|---|---:|---:|",
+              f"| baseline (inertia, damping, friction) | {fb:.4g} | {pb * pos_scale:.4g} |"]
+    if fe is not None:
+        lines.append(f"| extended ({sel.chosen.fit.family.title}) | {fe:.4g} | "
+                     f"{(pe * pos_scale if pe is not None else float('nan')):.4g} |")
+    lines += ["", f"Held out: {', '.join(data['trials']['heldout'])}"
+              + (f" from {d.split.heldout_from:.2f} s on" if d.split.heldout_from is not None else "")
+              + f" ({len(d.split.heldout)} moving samples; {len(d.split.train)} for fitting). Re-simulation: MuJoCo, "
+              f"the joint materialised as variants get it, driven by the measured force and restarted from the "
+              f"measured state every {d.resim_window_s:g} s.", "",
+              "## Baseline fit (rik's joint model)", "",
+              f"inertia {base.inertia:.4g} {inertia}, damping {base.damping:.4g} {damp}, friction "
+              f"{base.friction:.4g} {u['force']}; training RMSE {sel.baseline.rmse_train:.4g} {u['force']}.", "",
+              "![residual against time](residual_time.png)", "",
+              "![residual against position](residual_position.png)", "",
+              "![residual against velocity](residual_velocity.png)", "",
+              "![re-simulated held-out trials](resimulated.png)", "",
+              "## Candidates", "",
+              f"Each is the baseline plus one effect, fitted on the training data. It passes with a held-out gain of "
+              f"at least {MIN_GAIN:.0%}, a BIC drop of at least {MIN_BIC_DROP:g} and physical parameters.", "",
+              "| effect | fitted | held-out gain | BIC drop | verdict |", "|---|---|---:|---:|---|"]
+    for s in sel.scores:
+        lines.append(f"| {s.fit.family.title} | {describe(s.fit.effect, d.joint)} | {s.gain:.1%} | "
+                     f"{s.bic_drop:.0f} | {s.verdict} |")
+    lines += ["", "## Data", "",
+              f"{len(d.rows.names)} trials ({', '.join(d.rows.names)}) at {data['preprocessing']['rate_hz']:g} Hz; "
+              f"force-to-position delay {d.delay_s * 1e3:.1f} ms (one for all trials); samples enter the fit above "
+              f"{d.fit_velocity * pos_scale:.3g} {pos_label}/s (4 times the velocity noise, at least the default) and "
+              f"away from the range's ends ({d.limits[0] * pos_scale:.3g} to {d.limits[1] * pos_scale:.3g} "
+              f"{pos_label}).", "",
+              "Make it a preset: `rik sysid apply DIR --as-preset NAME --catalog CATALOG_DIR`, with this report's "
+              "directory as DIR.", ""]
+    return "\n".join(lines)
+
+
+def write_report(d: Discovery, directory: Path) -> Path:
+    """Write ``report.md``, ``summary.json`` and the plots into ``directory`` (replaced whole if it exists)."""
+    directory = Path(directory)
+    stage = directory.with_name(f".{directory.name}.partial")
+    shutil.rmtree(stage, ignore_errors=True)
+    stage.mkdir(parents=True)
+    try:
+        data = summary(d)
+        for name, plot in PLOTS.items():
+            plot(d, stage / name)
+        write_atomic(stage / SUMMARY, json.dumps(data, indent=2) + "\n")
+        write_atomic(stage / REPORT, markdown(d, data))
+        if directory.exists():
+            old = directory.with_name(f".{directory.name}.old")
+            shutil.rmtree(old, ignore_errors=True)
+            directory.rename(old)
+            stage.rename(directory)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            stage.rename(directory)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    return directory
