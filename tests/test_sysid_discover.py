@@ -29,7 +29,7 @@ HINGE_KINDS = ("soft_close", "tilt", "direction_friction", "quadratic_damping", 
 
 def _truth(kind: str | None, joint: JointType, seed: int) -> GroundTruth:
     truth = random_truth(kind, joint, np.random.default_rng(seed))
-    if kind == "stiction":  # keep the Stribeck speed above the noise floor (about 15 mm/s at 0.2 mm noise)
+    if kind == "stiction" and joint is JointType.slide:  # Stribeck speed above the noise floor (~15 mm/s)
         effect = truth.effect
         truth = GroundTruth(truth.joint, truth.mass, truth.damping, truth.frictionloss, truth.range,
                             Stiction(breakaway=effect.breakaway, stribeck_velocity=0.02 + 0.005 * seed))

@@ -1,0 +1,81 @@
+"""Speed of model discovery: ``rik sysid fit`` on 3 trials of 12 s at 200 Hz (target: at most 10 s on 2 cores).
+
+Set-up, not timed: ``rik sysid simulate``'s generator makes 3 trials of a drawer with a hidden soft-close damper
+(and, for a second case, none), written as CSV. Timed, best of ``--repeats`` after one warm-up, in one process:
+
+- load: reading and checking the CSVs (:func:`rik.sysid.trials.load_trials`);
+- preprocess: window choice, delay estimate and the final smoothing of every trial
+  (:func:`rik.sysid.discover.prepare_all`);
+- fit and select: the baseline and the 9 effect families (grid and refinement each) and the selection;
+- re-simulate: MuJoCo multiple shooting of the held-out trial with the baseline and the extended joint;
+- report: the four plots, report.md and summary.json;
+
+and the total of what ``rik sysid fit`` runs, with its ratio to the 10 s target.
+
+Run: ``uv run python benchmarks/sysid_speed.py [--repeats 3]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def _best(fn, repeats: int) -> tuple[float, object]:
+    best, out = float("inf"), None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - start)
+    return best, out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+
+    from rik.sysid.discover import discover, prepare_all
+    from rik.sysid.fit import all_rows, fit_all, fit_velocity, split_rows
+    from rik.sysid.generate import random_truth, simulate_trials, write_trials
+    from rik.sysid.report import write_report
+    from rik.sysid.select import select
+    from rik.sysid.trials import load_trials
+
+    with tempfile.TemporaryDirectory() as tmp:
+        for kind in ("soft_close", None):
+            truth = random_truth(kind, "slide", np.random.default_rng(0))
+            paths = write_trials(simulate_trials(truth, n_trials=3, seed=0), Path(tmp) / str(kind), truth)
+            discover(load_trials(paths, "slide"))  # warm-up: imports, scipy, mujoco
+
+            t_load, trials = _best(lambda p=paths: load_trials(p, "slide"), args.repeats)
+            t_prep, (prepared, _) = _best(lambda t=trials: prepare_all(t), args.repeats)
+
+            def fit_select(prepared=prepared):
+                rows = all_rows(prepared, velocity=fit_velocity(prepared))
+                split = split_rows(rows, prepared)
+                return select(*fit_all(split))
+
+            t_fit, selection = _best(fit_select, args.repeats)
+            t_all, found = _best(lambda t=trials: discover(t), args.repeats)
+            t_plain, _ = _best(lambda t=trials: discover(t, resimulate=False), args.repeats)
+            t_report, _ = _best(lambda f=found, k=kind: write_report(f, Path(tmp) / f"report-{k}"), args.repeats)
+            total = t_load + t_all + t_report
+            chosen = selection.chosen.fit.kind if selection.chosen else "none"
+            print(f"hidden effect: {kind or 'none'}; chosen: {chosen}; 3 trials x 12 s at 200 Hz, best of "
+                  f"{args.repeats}")
+            print(f"  load            {t_load:7.3f} s")
+            print(f"  preprocess      {t_prep:7.3f} s")
+            print(f"  fit and select  {t_fit:7.3f} s")
+            print(f"  re-simulate     {t_all - t_plain:7.3f} s")
+            print(f"  discover total  {t_all:7.3f} s   (preprocess + fit + select + re-simulate)")
+            print(f"  report          {t_report:7.3f} s")
+            print(f"  rik sysid fit   {total:7.3f} s   = {total / 10.0:.2f} x the 10 s target")
+
+
+if __name__ == "__main__":
+    main()
