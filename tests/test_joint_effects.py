@@ -309,3 +309,16 @@ def test_scene_with_effects_records_replays_exactly_and_opens(measured: tuple[Pa
     assert metas[0].outcome == "S"
     check = verify_episode(catalog, tmp_path / metas[0].id, variants)
     assert check.exact and check.rows == metas[0].steps + 1
+
+
+def test_variant_checks_and_report_count_the_effects(measured: tuple[Path, Path]) -> None:
+    """The test pull is sized with the effects that resist opening from closed (friction 5 N + stiction 2 N +
+    self-closing pull 100 N/m x 0.02 m + magnet 3 N = 12 N), and report.json lists the runtime effects."""
+    import json
+
+    _, variants = measured
+    report = json.loads((variants / VARIANT / "report.json").read_text())
+    front = report["fronts"][0]
+    assert front["force_to_open_n"] == pytest.approx(12.0, abs=0.05)
+    assert [e["kind"] for e in front["runtime_effects"]] == ["stiction", "magnetic_catch", "soft_close"]
+    assert report["status"] == "valid"

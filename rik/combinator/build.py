@@ -236,6 +236,7 @@ def make_report(catalog: Catalog, checked: CheckedVariant, digest: str, build_se
                "placement": {"rule": f.placement.rule, "u_m": round(f.placement.u, 6), "v_m": round(f.placement.v, 6),
                              "rotation_deg": f.placement.rotation, "edge": f.placement.edge,
                              "pos_m": [round(c, 6) for c in f.placement.pos]},
+               **({"runtime_effects": list(f.runtime_effects)} if f.runtime_effects else {}),
                **pull.get(f.id, {})} for f in variant.fronts]
     failed = checked.failed
     return {

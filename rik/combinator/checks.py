@@ -71,6 +71,8 @@ class ModelContext:
     data: Any
     metrics: dict[str, Any] = field(default_factory=dict)
     """Timings and forces the checks measure, for the report."""
+    runtime_effects: dict[int, Any] | None = field(default=None, repr=False)
+    """Appliers of the fronts' runtime joint effects by dof address (built on first use by :meth:`effects`)."""
 
     def joint(self, front: str) -> tuple[int, int, int]:
         """(joint id, qpos address, dof address) of a front's joint."""
@@ -78,6 +80,14 @@ class ModelContext:
 
         jid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, front)
         return jid, int(self.model.jnt_qposadr[jid]), int(self.model.jnt_dofadr[jid])
+
+    def effects(self) -> dict[int, Any]:
+        """Appliers of the fronts' runtime joint effects (the effects MuJoCo lacks), by dof address."""
+        if self.runtime_effects is None:
+            from rik.sim.effects import front_effects
+
+            self.runtime_effects = {e.dof: e for e in front_effects(self.model, self.variant.info()["fronts"])}
+        return self.runtime_effects
 
     def body_label(self, geom: int) -> str:
         """Who a geom belongs to, in words: ``carcass``, a front's id, or ``<front>/handle``."""
@@ -374,12 +384,15 @@ def check_rest_stable(ctx: ModelContext) -> CheckResult:
 
 def force_to_open(ctx: ModelContext, layout: FrontLayout) -> tuple[float, float]:
     """The quasi-static force (N) along the handle's path that opens a front anywhere in its range (friction,
-    plus gravity and springs where they resist), and the handle's lever arm at closed (m; 1 for slides)."""
+    plus gravity, springs and the joint's effects where they resist: passive actuators such as a self-closing
+    spring, and the runtime effects' forces and extra friction when just opening), and the handle's lever arm at
+    closed (m; 1 for slides)."""
     import mujoco
     import numpy as np
 
     m, d = ctx.model, ctx.data
     _, qadr, dof = ctx.joint(layout.id)
+    effects = ctx.effects().get(dof)
     need, lever0 = 0.0, 1.0
     for k in range(SWEEP_SAMPLES + 1):
         q = layout.joint_range[1] * k / SWEEP_SAMPLES
@@ -390,7 +403,12 @@ def force_to_open(ctx: ModelContext, layout: FrontLayout) -> tuple[float, float]
         lever = float(np.linalg.norm(_grasp_velocity(ctx, layout.id)))
         if k == 0:
             lever0 = lever
-        load = max(0.0, float(d.qfrc_bias[dof] - d.qfrc_passive[dof])) + float(m.dof_frictionloss[dof])
+        resisting = float(d.qfrc_bias[dof] - d.qfrc_passive[dof] - d.qfrc_actuator[dof])
+        friction = float(m.dof_frictionloss[dof])
+        if effects:
+            resisting -= effects.force(q, 1e-9)
+            friction = effects.frictionloss(q, 1e-9)
+        load = max(0.0, resisting) + friction
         need = max(need, load / max(lever, 1e-6))
     return need, lever0
 
@@ -417,8 +435,13 @@ def check_opens_under_pull(ctx: ModelContext) -> CheckResult:
     for _, _, dof, generalised, _ in pulls:
         d.qfrc_applied[dof] = generalised
     waiting = list(pulls)
+    effects = tuple(ctx.effects().values())
     for step in range(round(PULL_SECONDS / m.opt.timestep)):
+        for e in effects:
+            e.apply(d)
         mujoco.mj_step(m, d)
+        for e in effects:
+            e.undo(d)
         for item in [p for p in waiting if d.qpos[p[1]] >= p[4]]:
             forces[item[0].id]["seconds_to_open"] = round((step + 1) * m.opt.timestep, 4)
             waiting.remove(item)

@@ -186,7 +186,7 @@ def discover(trials: Sequence[Trial], *, heldout: Sequence[int] | None = None, r
     prepared, delay = prepare_all(trials, rate_hz=rate_hz, window_s=window_s, delay_s=delay_s)
     velocity = fit_velocity(prepared)
     rows = all_rows(prepared, velocity=velocity)
-    limits = (min(float(p.q_raw.min()) for p in prepared), max(float(p.q_raw.max()) for p in prepared))
+    limits = (min(float(p.q.min()) for p in prepared), max(float(p.q.max()) for p in prepared))
     split = split_rows(rows, prepared, heldout)
     baseline, fits = fit_all(split)
     selection = select(baseline, fits)

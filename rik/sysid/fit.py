@@ -1,10 +1,11 @@
 """Equation-error fits of the baseline joint model and of each effect of the library, scored on held-out data.
 
-The rows a fit uses are the *moving* samples of the preprocessed trials (|v| at least :data:`FIT_VELOCITY`, lower
-than preprocessing's moving mask so that the low-speed friction of stiction is seen) away from the range's ends:
-samples within :data:`CONTACT_MARGIN` of a limit, and those within one smoothing window of such a sample, are left
-out, because the end stop's contact force is in no model (its impact smears over the window). Forces are the
-smoothed ones (``f_smooth``), filtered like the derivatives.
+The rows a fit uses are the *moving* samples of the preprocessed trials (|v| above :func:`fit_velocity`: at least
+:data:`FIT_VELOCITY`, raised to :data:`NOISE_SIGMAS` times the velocity noise) away from the range's ends: samples
+within :data:`CONTACT_MARGIN` of a limit, and those within half a smoothing window of an arrival there, are left
+out, because the end stop's contact force is in no model and smoothing smears an impact over the window
+(:func:`rik.sysid.preprocess.touching`). Forces are the smoothed ones (``f_smooth``), filtered like the
+derivatives.
 
 Errors are the root mean square of ``F_measured − F_model`` (N or N·m), on the training rows and on the held-out
 rows; BIC is ``n·ln(RSS/n) + p·ln(n)`` on the training rows. A family's hyperparameter is searched on its grid,
@@ -102,15 +103,15 @@ def fit_velocity(prepared: Sequence[Prepared]) -> float:
 def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, margin: float | None = None,
              limits: tuple[float, float] | None = None) -> Rows:
     """The fit rows of every trial (see the module docstring). ``velocity`` default :func:`fit_velocity`;
-    ``limits`` default: the lowest and highest position over all trials."""
+    ``limits`` default: the lowest and highest smoothed position over all trials."""
     joint = prepared[0].trial.joint
     velocity = fit_velocity(prepared) if velocity is None else velocity
     margin = CONTACT_MARGIN[joint] if margin is None else margin
     if limits is None:
-        limits = (min(float(p.q_raw.min()) for p in prepared), max(float(p.q_raw.max()) for p in prepared))
+        limits = (min(float(p.q.min()) for p in prepared), max(float(p.q.max()) for p in prepared))
     parts = []
     for i, p in enumerate(prepared):
-        keep = (np.abs(p.qd) >= velocity) & ~touching(p.q_raw, limits, margin, p.settings.window_samples // 2)
+        keep = (np.abs(p.qd) >= velocity) & ~touching(p.q, limits, margin, p.settings.window_samples // 2)
         parts.append((p.t[keep], p.q[keep], p.qd[keep], p.qdd[keep], p.f_smooth[keep], np.full(keep.sum(), i)))
     cols = [np.concatenate(c) for c in zip(*parts, strict=True)]
     return Rows(joint, *cols[:5], cols[5].astype(int), tuple(p.trial.name for p in prepared))

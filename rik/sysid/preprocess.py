@@ -210,12 +210,16 @@ def masks(q: np.ndarray, qd: np.ndarray, f: np.ndarray, *, moving_velocity: floa
 
 
 def touching(q: np.ndarray, limits: tuple[float, float], margin: float, widen: int) -> np.ndarray:
-    """Samples within ``margin`` of a range end (m or rad), widened by ``widen`` samples on each side: where an
-    end stop's contact force, smeared by smoothing, is in the signals."""
+    """Samples within ``margin`` of a range end (m or rad), and those within ``widen`` samples of an arrival
+    there: an end stop's impact force is in no model, and smoothing smears it over the window around the
+    arrival (leaving the stop is gradual: the contact force falls to zero before the front moves off, so the
+    samples after a departure stay). Pass the smoothed position and limits from it: the raw position's extremes
+    lie several noise deviations beyond the stop."""
     near = (q <= limits[0] + margin) | (q >= limits[1] - margin)
     if not near.any() or widen <= 0:
         return near
-    return np.convolve(near.astype(float), np.ones(2 * widen + 1), mode="same") > 0
+    arrivals = near & ~np.concatenate([[False], near[:-1]])
+    return near | (np.convolve(arrivals.astype(float), np.ones(2 * widen + 1), mode="same") > 0)
 
 
 def observed_limits(trials: Sequence[Trial]) -> tuple[float, float]:
@@ -277,8 +281,8 @@ def preprocess(trial: Trial, rate_hz: float | None = None, *, window_s: float = 
     qdd = savgol(q_raw, window, polyorder, 2, rate)
     f_smooth = savgol(f_raw, window, polyorder, 0, rate)
     if delay_s is None:
-        bounds = (float(q_raw.min()), float(q_raw.max())) if limits is None else limits
-        usable = (np.abs(qd) >= moving_velocity) & ~touching(q_raw, bounds, limit_margin, window)
+        bounds = (float(q.min()), float(q.max())) if limits is None else limits
+        usable = (np.abs(qd) >= moving_velocity) & ~touching(q, bounds, limit_margin, window)
         lag, used = best_lag(q, qd, qdd, f_smooth, usable, lag_max)
         if used < MIN_DELAY_SAMPLES:
             raise TrialError(trial.source, trial.name, trial.meta.columns.position,
