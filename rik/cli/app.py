@@ -33,7 +33,9 @@ def demo(catalog_paths: CatalogOption = None) -> None:
     test on the two-point handle, then build and check three MuJoCo variants into variants/, record two
     scripted contact-rich episodes of the first into episodes/ (checked to replay exactly), render them into
     renders/ (the MuJoCo stream and its Mitsuba re-render, checked to align, side by side in a picture), export
-    them to a LeRobot v3.0 dataset in datasets/rik-demo and load it back with LeRobotDataset."""
+    them to a LeRobot v3.0 dataset in datasets/rik-demo and load it back with LeRobotDataset; finally find the
+    hidden effect in simulated measurements of a drawer (sysid-data/, report in sysid-report/) and make the fitted
+    joint a preset (sysid-catalog/)."""
     from rik.cli.assets import print_demo_assets
     from rik.cli.catalog import print_summary
     from rik.registry.index import catalog_index
@@ -50,6 +52,9 @@ def demo(catalog_paths: CatalogOption = None) -> None:
 
     print_demo_renders(overlays(catalog_paths), episodes)
     print_demo_export(overlays(catalog_paths), episodes)
+    from rik.cli.sysid import print_demo_sysid
+
+    print_demo_sysid(overlays(catalog_paths))
 
 
 @app.callback()

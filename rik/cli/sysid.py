@@ -112,3 +112,36 @@ def apply(report: Annotated[Path, typer.Argument(help="A report directory of rik
     con = console()
     con.print(f"preset '{as_preset}' → {file}")
     con.print(f"build variants with it: rik variants build --catalog {catalog_dir} --preset {as_preset} ...")
+
+
+DEMO_DATA, DEMO_REPORT, DEMO_CATALOG = Path("sysid-data"), Path("sysid-report"), Path("sysid-catalog")
+DEMO_PRESET = "demo-measured"
+
+
+def print_demo_sysid(overlay_paths: list[Path]) -> None:
+    """The demo's model discovery: simulated measurements of a drawer with a hidden soft-close damper into
+    sysid-data/, the fit and its report into sysid-report/, the fitted joint as a preset in sysid-catalog/."""
+    import shutil
+
+    import numpy as np
+
+    from rik.sysid.discover import discover
+    from rik.sysid.generate import random_truth, simulate_trials, write_trials
+    from rik.sysid.preset import apply_report
+    from rik.sysid.report import write_report
+
+    con = console()
+    for old in (DEMO_DATA, DEMO_CATALOG):
+        if old.exists():  # the demo's own earlier output
+            shutil.rmtree(old)
+    with con.status("model discovery on simulated measurements of a drawer ..."):
+        truth = random_truth("soft_close", "slide", np.random.default_rng(0))
+        trials = simulate_trials(truth, n_trials=4, seed=0)
+        write_trials(trials, DEMO_DATA, truth)
+        found = discover(trials)
+        write_report(found, DEMO_REPORT)
+        preset = apply_report(DEMO_REPORT, DEMO_PRESET, DEMO_CATALOG, overlays=overlay_paths)
+    con.print(f"{len(trials)} measured trials of a drawer with a hidden effect ({DEMO_DATA}/; the truth in "
+              f"{DEMO_DATA / 'truth.json'}): {found.sentence()}")
+    con.print(f"report {DEMO_REPORT / 'report.md'}; preset '{DEMO_PRESET}' in {preset} (use it with --catalog "
+              f"{DEMO_CATALOG} --preset {DEMO_PRESET})")
