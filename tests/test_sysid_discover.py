@@ -4,9 +4,9 @@ the library's, sensor noise, a 10 ms delay, strokes, slow strokes, holds, releas
 must name the effect, recover its key parameters and report a held-out gain; with no effect it must say so.
 
 What the data cannot support is stated, not hidden: stiction is named only when its Stribeck speed lies above
-the fit's velocity noise floor (the test draws it there and checks the floor), and on doors at the default
-0.2° position noise neither stiction nor a magnetic catch (a few millimetres at the handle, inside the contact
-margin) is identifiable, so the hinge runs cover the other effects.
+the fit's velocity noise floor (the test draws it there on drawers and checks the floor); on doors at the
+default 0.2° position noise the generator's Stribeck speeds (0.03–0.08 rad/s) lie under the 0.1 rad/s floor, so
+the hinge runs cover the other effects (docs/sysid.md has the measured cases).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from rik.sysid.effects import INDISTINGUISHABLE
 from rik.sysid.generate import EFFECT_KINDS, GroundTruth, ground_truth_force, random_truth, simulate_trials
 
 SEEDS = (0, 1, 2)
-HINGE_KINDS = ("soft_close", "self_close", "tilt", "direction_friction", "quadratic_damping", "load_friction",
+HINGE_KINDS = ("soft_close", "self_close", "magnetic_catch", "tilt", "direction_friction", "quadratic_damping", "load_friction",
                "spring")
 
 
@@ -78,8 +78,8 @@ def _check_parameters(truth: GroundTruth, d) -> None:
         assert _close(f.zone, e.zone, 0.2), (f.zone, e.zone)
         gain = (f.damping, e.damping) if kind == "soft_close" else (f.stiffness, e.stiffness)
         assert _close(*gain, 0.35), gain
-    elif kind == "magnetic_catch":  # amplitude and decay trade off: compare the pull a few millimetres out
-        q = np.linspace(0.002, 0.01, 9)
+    elif kind == "magnetic_catch":  # amplitude and decay trade off: compare the pull just off closed
+        q = np.linspace(0.002, 0.01, 9) if truth.joint is JointType.slide else np.linspace(0.01, 0.03, 9)
         assert _law_error(truth, d, q, np.zeros_like(q)) < 0.5
     elif kind == "tilt":
         q = np.linspace(0.0, upper, 21)
