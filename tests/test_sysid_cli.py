@@ -65,6 +65,25 @@ def test_apply_writes_a_preset(rik, simulated: Path, tmp_path: Path) -> None:
     assert preset.hinge == load_catalog([]).preset("normal").hinge
 
 
+def test_fit_reads_a_lerobot_dataset(rik, tmp_path: Path) -> None:
+    """Trials recorded as LeRobot episodes (position in the state vector, in mm; force in the action) fit like CSVs."""
+    from test_sysid_data import lerobot_dataset
+
+    truth = random_truth("tilt", JointType.slide, np.random.default_rng(1))
+    trials = simulate_trials(truth, n_trials=3, seed=1, duration_s=10.0)
+    episodes = {i: {"q": 1e3 * tr.q, "qd": np.zeros_like(tr.q), "f": tr.f} for i, tr in enumerate(trials)}
+    lerobot_dataset(tmp_path / "ds", episodes, fps=200)
+    res = rik("sysid", "fit", str(tmp_path / "ds"), "--position", "observation.state[front_qpos]",
+              "--position-unit", "mm", "--force", "action[push]", "--force-unit", "N", "--report", str(tmp_path / "r"))
+    assert res.code == 0, res.err
+    assert "The simulation misses gravity along the joint" in res.out
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["trials"]["names"] == ["episode_0", "episode_1", "episode_2"]
+    assert summary["resistance"]["effects"][0]["force"] == pytest.approx(truth.effect.force, rel=0.15)
+    err = _bad(rik, "sysid", "fit", str(tmp_path / "ds"))
+    assert err == f"rik: error: {tmp_path / 'ds'}: a LeRobot dataset needs --position and --force naming its features"
+
+
 def _bad(rik, *args: str) -> str:
     res = rik(*args)
     assert res.code == 2 and "Traceback" not in res.err and res.err.count("\n") == 1, res.err
