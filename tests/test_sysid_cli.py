@@ -65,6 +65,21 @@ def test_apply_writes_a_preset(rik, simulated: Path, tmp_path: Path) -> None:
     assert preset.hinge == load_catalog([]).preset("normal").hinge
 
 
+def test_two_effects_end_to_end(rik, tmp_path: Path) -> None:
+    data, report = tmp_path / "data", tmp_path / "report"
+    res = rik("sysid", "simulate", "--effect", "soft_close", "--second", "self_close", "--seed", "2", "--out",
+              str(data))
+    assert res.code == 0 and "soft_close and self_close hidden" in res.out, res.err
+    assert rik("sysid", "fit", *map(str, sorted(data.glob("*.csv"))), "--report", str(report)).code == 0
+    summary = json.loads((report / "summary.json").read_text())
+    assert summary["effects"] == ["soft_close", "self_close"] and summary["pairs"][0]["verdict"] == "pass"
+    assert [e["kind"] for e in summary["resistance"]["effects"]] == ["soft_close", "self_close"]
+    assert "Pairs of effects, scored against the best single effect" in (report / "report.md").read_text()
+    assert rik("sysid", "apply", str(report), "--as-preset", "soft-runner", "--catalog-dir", str(tmp_path / "c")).code == 0
+    kinds = [e.kind for e in load_catalog([tmp_path / "c"]).preset("soft-runner").slide.effects]
+    assert kinds == ["soft_close", "self_close"]
+
+
 def test_fit_reads_a_lerobot_dataset(rik, tmp_path: Path) -> None:
     """Trials recorded as LeRobot episodes (position in the state vector, in mm; force in the action) fit like CSVs."""
     from test_sysid_data import lerobot_dataset

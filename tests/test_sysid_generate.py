@@ -4,7 +4,9 @@ ranges, and bad arguments."""
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import json
 import math
 
 import numpy as np
@@ -367,6 +369,160 @@ def test_random_truths_stay_in_their_declared_ranges(joint: JointType) -> None:
             if kind == "tilt" and joint is SLIDE:
                 assert truth.effect.sine == 0.0
     assert random_truth("spring", joint, np.random.default_rng(0), mass=3.0).mass == 3.0
+
+
+# ---------------------------------------------------------------------------------------------- two effects
+
+SOFT_CLOSE_RUNNER = GroundTruth(SLIDE, 6.0, 4.0, 3.0, (0.0, 0.4), SoftClose(zone=0.05, damping=100.0),
+                                SelfClose(zone=0.03, stiffness=400.0))
+
+
+def _singles(truth: GroundTruth) -> tuple[GroundTruth, GroundTruth]:
+    """The two one-effect truths of a two-effect ``truth``."""
+    return dataclasses.replace(truth, second=None), dataclasses.replace(truth, effect=truth.second, second=None)
+
+
+def test_two_effect_truth_round_trips_and_old_files_load(tmp_path) -> None:
+    truth = SOFT_CLOSE_RUNNER
+    assert truth.kind == "soft_close" and truth.kinds == ("soft_close", "self_close")
+    assert truth.effects == (truth.effect, truth.second)
+    data = truth.to_json()
+    assert data["second"] == {"kind": "self_close", "zone": 0.03, "stiffness": 400.0}
+    assert GroundTruth.from_json(data) == truth
+    spring = dataclasses.replace(truth, second=Spring(stiffness=20.0, reference=-0.05))
+    assert spring.kinds == ("soft_close", "spring") and GroundTruth.from_json(spring.to_json()) == spring
+    # a one-effect truth is written as before (no "second") and a file without "second" loads
+    single = dataclasses.replace(truth, second=None)
+    assert "second" not in single.to_json() and single.kinds == ("soft_close",) and DRAWER.kinds == ()
+    old = {k: v for k, v in data.items() if k != "second"}
+    (tmp_path / TRUTH_FILE).write_text(json.dumps(old), encoding="utf-8")
+    loaded = read_truth(tmp_path)
+    assert loaded == single and loaded.second is None
+    for joint in (SLIDE, HINGE):
+        for kind, second in (("soft_close", "self_close"), ("self_close", "soft_close"), ("stiction", "spring"),
+                             ("tilt", "direction_friction"), ("magnetic_catch", "tilt")):
+            drawn = random_truth(kind, joint, np.random.default_rng(4), second=second)
+            assert drawn.kinds == (kind, second)
+            assert GroundTruth.from_json(json.loads(json.dumps(drawn.to_json()))) == drawn
+
+
+def test_two_effect_truths_are_refused_when_inconsistent() -> None:
+    base = (SLIDE, 6.0, 4.0, 3.0, (0.0, 0.4))
+    rng = np.random.default_rng(0)
+    cases = [
+        (lambda: GroundTruth(*base, SoftClose(zone=0.05, damping=1.0), SoftClose(zone=0.03, damping=2.0)),
+         "GroundTruth second is a soft_close, the same kind as effect; the two effects must be of different "
+         "kinds"),
+        (lambda: GroundTruth(*base, Spring(stiffness=1.0), Spring(stiffness=2.0)),
+         "GroundTruth second is a spring, the same kind as effect"),
+        (lambda: GroundTruth(*base, None, SelfClose(zone=0.03, stiffness=400.0)),
+         "GroundTruth second (self_close) needs a first effect: give it as effect"),
+        (lambda: GroundTruth(*base, Spring(stiffness=1.0), "wobble"),
+         "GroundTruth second must be a JointEffect, a Spring or None, got str"),
+        (lambda: GroundTruth(*base, Spring(stiffness=1.0), SelfClose(zone=0.5, stiffness=1.0)),
+         "GroundTruth second zone 0.5 must be inside the range"),
+        (lambda: GroundTruth(*base, Spring(stiffness=1.0), Tilt(force=1.0, sine=0.5)),
+         "GroundTruth second: a slide's tilt has no sine term"),
+        (lambda: GroundTruth.from_json({**SOFT_CLOSE_RUNNER.to_json(), "second": {"kind": "warp"}}),
+         "ground truth second is malformed"),
+        (lambda: random_truth("soft_close", SLIDE, rng, second="soft_close"),
+         "second 'soft_close' is the same kind as kind; the two effects must differ"),
+        (lambda: random_truth(None, SLIDE, rng, second="self_close"),
+         "second 'self_close' needs a first effect kind; give kind"),
+        (lambda: random_truth("soft_close", SLIDE, rng, second="wobble"), "second 'wobble' is not an effect kind"),
+        (lambda: random_truth("tilt", HINGE, rng, second="stiction"),
+         "kind 'tilt' and second 'stiction' cannot be drawn together: both set the Coulomb friction"),
+        (lambda: random_truth("stiction", SLIDE, rng, second="tilt"),
+         "kind 'stiction' and second 'tilt' cannot be drawn together"),
+    ]
+    for call, words in cases:
+        with pytest.raises(RikError) as exc:
+            call()
+        assert words in _one_line(exc)
+
+
+@pytest.mark.parametrize("joint", [SLIDE, HINGE])
+def test_random_two_effect_truths_keep_the_first_draws_and_their_ranges(joint: JointType) -> None:
+    for kind in EFFECT_KINDS:
+        for second in EFFECT_KINDS:
+            if second == kind or {kind, second} == {"tilt", "stiction"}:
+                continue
+            for seed in range(3):
+                one = random_truth(kind, joint, np.random.default_rng(seed))
+                two = random_truth(kind, joint, np.random.default_rng(seed), second=second)
+                assert two.kinds == (kind, second) and two.kind == kind
+                assert two.effect == one.effect and two.damping == one.damping and two.range == one.range
+                if second not in ("tilt", "stiction"):  # these set the friction (tilt on a slide: the mass too)
+                    assert two.mass == one.mass and two.frictionloss == one.frictionloss
+                params = truth_parameters(two)
+                for name, (lo, hi) in EFFECT_RANGES[joint][second].items():
+                    value = params.get(f"second.{name}", params.get(name))  # stiction's frictionloss: base
+                    assert value is not None, (second, name)
+                    assert lo - 1e-9 <= value <= hi + 1e-9, (kind, second, name, value, (lo, hi))
+                for name, (lo, hi) in EFFECT_RANGES[joint][kind].items():
+                    if name in ("frictionloss", "over_friction", "ratio") and second in ("tilt", "stiction"):
+                        continue  # the second redrew the friction the first's ratio refers to
+                    value = params.get(f"effect.{name}", params.get(name))
+                    assert lo - 1e-9 <= value <= hi + 1e-9, (kind, second, name, value, (lo, hi))
+
+
+@pytest.mark.parametrize("joint", [SLIDE, HINGE])
+def test_two_effect_laws_are_the_sums_of_the_single_laws(joint: JointType) -> None:
+    rng = np.random.default_rng(2)
+    q = rng.uniform(-0.01, 0.5 if joint is SLIDE else 1.8, 400)
+    v = np.concatenate([rng.uniform(-0.5, 0.5, 200), rng.uniform(-0.01, 0.01, 200)]) * MOVE_SCALE[joint]
+    load = rng.uniform(-5.0, 5.0, 400) * (1.0 if joint is SLIDE else 0.1)
+    pairs = [("soft_close", "self_close"), ("self_close", "soft_close"), ("stiction", "direction_friction"),
+             ("load_friction", "quadratic_damping"), ("tilt", "spring"), ("magnetic_catch", "stiction")]
+    for kind, second in pairs:
+        truth = random_truth(kind, joint, np.random.default_rng(5), second=second)
+        first, other = _singles(truth)
+        applied, friction = effect_laws(truth, q, v, load)
+        a1, f1 = effect_laws(first, q, v, load)
+        a2, f2 = effect_laws(other, q, v, load)
+        assert np.array_equal(applied, a1 + a2) and np.array_equal(friction, f1 + f2), (kind, second)
+        assert np.array_equal(ground_truth_force(truth, q, v, load),
+                              ground_truth_force(first, q, v, load) + ground_truth_force(other, q, v, load))
+        # the step loop's closures sum the same
+        step_a, step_f = gen._scalar_laws(truth)
+        got_a = np.zeros(400) if step_a is None else np.array([step_a(*x) for x in zip(q, v, strict=True)])
+        got_f = np.zeros(400) if step_f is None else np.array([step_f(*x) for x in zip(q, v, load, strict=True)])
+        assert np.allclose(got_a, applied, rtol=1e-9, atol=1e-12), (kind, second)
+        assert np.allclose(got_f, friction, rtol=1e-9, atol=1e-12), (kind, second)
+    # the soft-close runner: damper and pull-in spring both act inside their zones
+    damper, spring = _singles(SOFT_CLOSE_RUNNER)
+    assert _force(SOFT_CLOSE_RUNNER, 0.015, -0.1) == pytest.approx(_force(damper, 0.015, -0.1)
+                                                                   + _force(spring, 0.015, 0.0))
+    assert _force(SOFT_CLOSE_RUNNER, 0.0, 0.0) == pytest.approx(-12.0, rel=0.01)
+    assert gen.hand_gains(SOFT_CLOSE_RUNNER)[0] >= max(gen.hand_gains(damper)[0], gen.hand_gains(spring)[0])
+
+
+@pytest.mark.parametrize("joint", [SLIDE, HINGE])
+def test_two_effect_simulation_applies_the_summed_law_and_its_trials_load_back(tmp_path, joint: JointType) -> None:
+    truth = random_truth("soft_close", joint, np.random.default_rng(0), second="self_close")
+    plan = excitation_plan(joint, truth.range[1], np.random.default_rng(100))
+    sim = simulate(truth, plan, duration_s=12.0)
+    dt = sim.timestep
+    q, v, f = sim.q[:-1], sim.v[:-1], sim.f[:-1]
+    a = np.diff(sim.v) / dt
+    applied, extra = effect_laws(truth, q, v, f)
+    first, other = _singles(truth)
+    assert np.array_equal(applied, effect_laws(first, q, v, f)[0] + effect_laws(other, q, v, f)[0])
+    keep = (np.abs(v) > 0.02 * MOVE_SCALE[joint]) & (np.sign(v) == np.sign(sim.v[1:])) \
+        & (q > 0.001 * MOVE_SCALE[joint]) & (q < truth.range[1] - 0.01 * MOVE_SCALE[joint])
+    model = (truth.mass + dt * truth.damping) * a + truth.damping * v + (truth.frictionloss + extra) * np.sign(v) \
+        - applied
+    both = keep & (np.abs(effect_laws(first, q, v)[0]) > 0.1) & (np.abs(effect_laws(other, q, v)[0]) > 0.1)
+    assert keep.sum() > 2000 and both.sum() > 20  # both effects act together on some samples
+    assert np.abs(f - model)[keep].max() < 1e-6 * (1.0 + float(np.abs(applied).max()))
+    trials = simulate_trials(truth, n_trials=2, seed=3, duration_s=4.0)
+    paths = write_trials(trials, tmp_path / "out", truth)
+    back = load_trials(paths, joint)
+    for x, y in zip(trials, back, strict=True):
+        assert y.name == x.name
+        assert np.array_equal(x.t, y.t) and np.array_equal(x.q, y.q) and np.array_equal(x.f, y.f)
+    loaded = read_truth(tmp_path / "out")
+    assert loaded == truth and loaded.kinds == ("soft_close", "self_close")
 
 
 # ---------------------------------------------------------------------------------------------- bad input

@@ -70,6 +70,9 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
 def simulate(effect: Annotated[str, typer.Option("--effect", help="Hidden effect: none, stiction, soft_close, "
                                                  "self_close, magnetic_catch, tilt, direction_friction, "
                                                  "quadratic_damping, load_friction or spring.")] = "soft_close",
+             second: Annotated[str | None, typer.Option("--second", help="A second hidden effect acting together "
+                                                       "with --effect (e.g. self_close with soft_close, as on "
+                                                       "soft-close runners).")] = None,
              joint: JointOption = JointOpt.slide,
              out: Annotated[Path, typer.Option("--out", "-o", help="Directory for the trial CSVs and truth.json.")]
              = Path("sysid-data"),
@@ -85,12 +88,13 @@ def simulate(effect: Annotated[str, typer.Option("--effect", help="Hidden effect
     from rik.sysid.generate import random_truth, simulate_trials, write_trials
 
     kind = None if effect == "none" else effect
-    truth = random_truth(kind, joint.value, np.random.default_rng(seed), mass=mass)
+    truth = random_truth(kind, joint.value, np.random.default_rng(seed), mass=mass, second=second)
     with console().status(f"simulating {trials} trials"):
         made = simulate_trials(truth, n_trials=trials, seed=seed, duration_s=duration)
         paths = write_trials(made, out, truth)
     con = console()
-    con.print(f"{len(paths)} trials of a {joint.value} joint with {effect} hidden → {out}/ (truth in "
+    hidden = effect + (f" and {second}" if second else "")
+    con.print(f"{len(paths)} trials of a {joint.value} joint with {hidden} hidden → {out}/ (truth in "
               f"{out / 'truth.json'})")
     con.print(f"fit them: rik sysid fit {out}/*.csv --joint {joint.value} --report {out}-report")
 

@@ -21,10 +21,10 @@ import numpy as np
 from rik.errors import RikError
 from rik.schemas.common import Provenance
 from rik.schemas.joints import JointResistance, JointType, Spring
-from rik.sysid.effects import Baseline, Effect
-from rik.sysid.fit import Fit, Rows, Split, all_rows, fit_all, fit_velocity, split_rows
+from rik.sysid.effects import FAMILIES, Baseline, Effect
+from rik.sysid.fit import Fit, Rows, Split, all_rows, fit_all, fit_model, fit_velocity, split_rows
 from rik.sysid.preprocess import Prepared, preprocess
-from rik.sysid.select import Selection, select
+from rik.sysid.select import Selection, pair_allowed, select, select_pair
 from rik.sysid.trials import Trial
 
 WINDOWS_S = (0.1, 0.15, 0.2, 0.3)
@@ -79,7 +79,8 @@ class Discovery:
 
     @property
     def chosen(self) -> Fit | None:
-        return self.selection.chosen.fit if self.selection.chosen else None
+        """The selected model (the baseline plus every chosen effect), None when no effect was chosen."""
+        return self.selection.final if self.selection.found else None
 
     @property
     def force_rmse(self) -> tuple[float, float | None]:
@@ -92,23 +93,26 @@ class Discovery:
         pos_unit, scale = _POS[self.joint]
         fb, fe = self.force_rmse
         pb, pe = self.position_rmse
-        chosen = self.selection.chosen
-        if chosen is None:
+        if not self.selection.found:
             best = self.selection.scores[0] if self.selection.scores else None
             tail = (f"; the best candidate, {best.fit.family.title}, fails: {best.verdict}" if best else "")
             return (f"No significant unmodelled effect: damping and Coulomb friction explain the held-out data "
                     f"(force error {fb:.3g} {unit}){tail}.")
-        family = chosen.fit.family
+        final = self.selection.final
         also = ""
-        if self.selection.alternatives:
-            names = " or ".join(s.fit.family.title for s in self.selection.alternatives)
-            also = f" (this data cannot tell it from {names}; see below)"
+        others = self.selection.pair_alternatives if self.selection.pair else self.selection.alternatives
+        if others:
+            names = " or ".join(" + ".join(f.title for f, _ in s.fit.terms) for s in others)
+            also = f" (this data cannot tell {'them' if self.selection.pair else 'it'} from {names}; see below)"
         position = ""
         if pe is not None:
             position = (f" and the re-simulated position error from {pb * scale:.3g} to {pe * scale:.3g} "
                         f"{pos_unit}")
-        return (f"The simulation misses {family.cause}{also}: {describe(chosen.fit.effect, self.joint)}; adding "
-                f"it cuts the held-out force error from {fb:.3g} to {fe:.3g} {unit} ({chosen.gain:.0%}){position}.")
+        causes = [f"{family.cause}: {describe(effect, self.joint)}"
+                  for (family, _), effect in zip(final.terms, final.effects, strict=True)]
+        it = "it" if len(causes) == 1 else "them"
+        return (f"The simulation misses {'; and '.join(causes)}{also}; adding {it} cuts the held-out force error "
+                f"from {fb:.3g} to {fe:.3g} {unit} ({self.selection.gain:.0%}){position}.")
 
 
 def describe(effect: Effect | None, joint: JointType) -> str:
@@ -148,12 +152,12 @@ def describe(effect: Effect | None, joint: JointType) -> str:
     return str(effect)
 
 
-def resistance_of(base: Baseline, effect: Effect | None, notes: str) -> JointResistance:
+def resistance_of(base: Baseline, effects: Sequence[Effect], notes: str) -> JointResistance:
     """A measured :class:`JointResistance` from fitted values (negative damping or friction clipped to 0)."""
-    spring = effect if isinstance(effect, Spring) else None
-    effects = (effect,) if effect is not None and spring is None else ()
+    spring = next((e for e in effects if isinstance(e, Spring)), None)
     return JointResistance(damping=max(base.damping, 0.0), frictionloss=max(base.friction, 0.0), spring=spring,
-                           effects=effects, provenance=Provenance.measured, notes=notes)
+                           effects=tuple(e for e in effects if not isinstance(e, Spring)),
+                           provenance=Provenance.measured, notes=notes)
 
 
 def prepare_all(trials: Sequence[Trial], *, rate_hz: float | None = None, window_s: float | None = None,
@@ -190,9 +194,13 @@ def discover(trials: Sequence[Trial], *, heldout: Sequence[int] | None = None, r
     split = split_rows(rows, prepared, heldout)
     baseline, fits = fit_all(split)
     selection = select(baseline, fits)
-    base_res = resistance_of(baseline.baseline, None, "rik sysid: baseline fit")
-    chosen = selection.chosen.fit if selection.chosen else None
-    ext_res = resistance_of(chosen.baseline, chosen.effect, f"rik sysid: {chosen.family.title}") if chosen else None
+    firsts = [s.fit for s in selection.scores if s.gain > 0]
+    selection = select_pair(selection, [fit_model(split, second, first) for first in firsts
+                                        for second in FAMILIES if pair_allowed(first.kind, second.kind)])
+    base_res = resistance_of(baseline.baseline, (), "rik sysid: baseline fit")
+    chosen = selection.final if selection.found else None
+    ext_res = resistance_of(chosen.baseline, chosen.effects, "rik sysid: " + " + ".join(
+        f.title for f, _ in chosen.terms)) if chosen else None
     resim: list[Resimulated] = []
     rmse: tuple[float, float | None] = (float("nan"), None)
     if resimulate:

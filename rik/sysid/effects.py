@@ -25,7 +25,7 @@ The families follow ../shared/notes/research-sysid.md, section 2. Not in the lib
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -56,6 +56,8 @@ class Baseline:
     """N·s/m or N·m·s/rad."""
     friction: float
     """N or N·m."""
+    damping_se: float = 0.0
+    """Standard error of ``damping`` (inflated for the residuals' correlation), N·s/m or N·m·s/rad."""
 
 
 @dataclass(frozen=True)
@@ -116,11 +118,11 @@ _LENGTH = {JointType.slide: "m", JointType.hinge: "rad"}
 
 DAMPING_TOLERANCE = {JointType.slide: 0.2, JointType.hinge: 0.02}
 """How far below 0 a fitted damping may come out before it counts as unphysical (noise around a joint with
-almost no damping): N·s/m or N·m·s/rad."""
+almost no damping), N·s/m or N·m·s/rad: at least this, or 3 standard errors of the fitted damping."""
 
 
 def _unphysical_baseline(base: Baseline, joint: JointType) -> str | None:
-    if base.damping < -DAMPING_TOLERANCE[joint]:
+    if base.damping < -max(DAMPING_TOLERANCE[joint], 3.0 * base.damping_se):
         unit = "N·s/m" if joint is JointType.slide else "N·m·s/rad"
         return f"the viscous damping comes out negative ({base.damping:.3g} {unit})"
     if base.inertia <= 0:
@@ -198,7 +200,7 @@ def _direction_reading(theta: np.ndarray, h: float | None, base: Baseline, joint
     if extra >= 0:
         return j.DirectionFriction(extra=extra, direction="closing"), base, _unphysical_baseline(base, joint)
     # more friction opening than closing: the closing level is the baseline's, the opening one adds |extra|
-    adjusted = Baseline(base.inertia, base.damping, base.friction + extra)
+    adjusted = replace(base, friction=base.friction + extra)
     problem = _unphysical_baseline(adjusted, joint)
     return j.DirectionFriction(extra=-extra, direction="opening"), adjusted, problem
 

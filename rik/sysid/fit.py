@@ -78,6 +78,8 @@ class Split:
     """Indices of the held-out trials; with one trial, ``(0,)`` and :attr:`heldout_from` says from when."""
     heldout_from: float | None = None
     """With a single trial: the time, s, from which it is held out."""
+    window_samples: int = 1
+    """Samples of the smoothing window: residuals within it are correlated."""
 
 
 def velocity_noise(p: Prepared) -> float:
@@ -125,14 +127,14 @@ def split_rows(rows: Rows, prepared: Sequence[Prepared], heldout: Sequence[int] 
         p = prepared[0]
         start = float(p.t[0] + (1.0 - HELDOUT_FRACTION) * (p.t[-1] - p.t[0]))
         late = rows.t >= start
-        split = Split(rows.take(~late), rows.take(late), (0,), start)
+        split = Split(rows.take(~late), rows.take(late), (0,), start, p.settings.window_samples)
     else:
         chosen = tuple(sorted(set(heldout))) if heldout is not None else tuple(range(n - max(1, n // 4), n))
         if not chosen or any(not 0 <= i < n for i in chosen) or len(chosen) == n:
             raise RikError(f"held-out trials must be some but not all of the {n} trials (0 to {n - 1}), "
                            f"got {list(heldout or [])}")
         out = np.isin(rows.trial, chosen)
-        split = Split(rows.take(~out), rows.take(out), chosen)
+        split = Split(rows.take(~out), rows.take(out), chosen, None, prepared[0].settings.window_samples)
     for part, rows_ in (("training", split.train), ("held-out", split.heldout)):
         if len(rows_) < MIN_ROWS:
             raise RikError(f"only {len(rows_)} moving samples away from the range's ends in the {part} data "
@@ -143,19 +145,23 @@ def split_rows(rows: Rows, prepared: Sequence[Prepared], heldout: Sequence[int] 
 
 # --------------------------------------------------------------------------------------------------- fitting
 
+Term = tuple[Family, float | None]
+"""One effect in a model: its family and hyperparameter (None for families without one)."""
+
+
 @dataclass(frozen=True, eq=False)
 class Fit:
-    """One model fitted by equation error: the baseline alone (``family`` None) or with one effect."""
+    """One model fitted by equation error: the baseline plus the effects of ``terms`` (none: the baseline)."""
 
-    family: Family | None
-    hyper: float | None
+    terms: tuple[Term, ...]
     theta: np.ndarray
-    """Coefficients: M, b, Fc, then the effect's."""
+    """Coefficients: M, b, Fc, then each term's."""
     baseline: Baseline
-    """Inertia, damping and friction (adjusted where the effect's reading moves the friction level)."""
-    effect: Effect | None
+    """Inertia, damping and friction (adjusted where an effect's reading moves the friction level)."""
+    effects: tuple[Effect, ...]
+    """The terms' effects in physical form, in order."""
     problem: str | None
-    """Why the fitted effect is unphysical, or None."""
+    """Why a fitted effect is unphysical, or None."""
     parameters: int
     rss: float
     n: int
@@ -165,8 +171,26 @@ class Fit:
     residual_heldout: np.ndarray = field(repr=False)
 
     @property
+    def family(self) -> Family | None:
+        """The family this model adds last (the candidate it was fitted for), None for the baseline."""
+        return self.terms[-1][0] if self.terms else None
+
+    @property
+    def hyper(self) -> float | None:
+        return self.terms[-1][1] if self.terms else None
+
+    @property
+    def effect(self) -> Effect | None:
+        """The effect this model adds last."""
+        return self.effects[-1] if self.effects else None
+
+    @property
     def kind(self) -> str:
         return self.family.kind if self.family else "baseline"
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        return tuple(f.kind for f, _ in self.terms)
 
     @property
     def bic(self) -> float:
@@ -174,15 +198,15 @@ class Fit:
 
     def predict(self, rows: Rows) -> np.ndarray:
         """Modelled applied force at ``rows``, N or N·m."""
-        return design(rows, self.family, self.hyper) @ self.theta
+        return design(rows, self.terms) @ self.theta
 
 
-def design(rows: Rows, family: Family | None, hyper: float | None) -> np.ndarray:
-    """The regressor matrix of the baseline plus ``family`` (at ``hyper``) at ``rows``."""
+def design(rows: Rows, terms: Sequence[Term] = ()) -> np.ndarray:
+    """The regressor matrix of the baseline plus ``terms`` at ``rows``."""
     base = baseline_features(rows.q, rows.qd, rows.qdd)
-    if family is None:
+    if not terms:
         return base
-    return np.hstack([base, family.features(rows.motion, hyper, rows.joint)])
+    return np.hstack([base, *(family.features(rows.motion, hyper, rows.joint) for family, hyper in terms)])
 
 
 def _solve(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
@@ -193,42 +217,73 @@ def _solve(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
     return theta, float(r @ r)
 
 
-def _rss_at(rows: Rows, family: Family, hyper: float) -> float:
-    return _solve(design(rows, family, hyper), rows.f)[1]
-
-
-def best_hyper(rows: Rows, family: Family) -> float:
-    """The hyperparameter minimising the training RSS: grid, then bounded refinement in log space."""
+def best_hyper(rows: Rows, family: Family, fixed: Sequence[Term] = ()) -> float:
+    """The hyperparameter of ``family`` (added to the ``fixed`` terms) minimising the training RSS: grid, then
+    bounded refinement in log space."""
     from scipy.optimize import minimize_scalar
 
+    base = design(rows, fixed)
+
+    def rss_at(h: float) -> float:
+        return _solve(np.hstack([base, family.features(rows.motion, h, rows.joint)]), rows.f)[1]
+
     grid = family.grid(rows.joint)
-    rss = np.array([_rss_at(rows, family, h) for h in grid])
+    rss = np.array([rss_at(h) for h in grid])
     k = int(np.argmin(rss))
     lo, hi = np.log(grid[max(k - 1, 0)]), np.log(grid[min(k + 1, len(grid) - 1)])
     if hi <= lo:
         return float(grid[k])
-    res = minimize_scalar(lambda u: _rss_at(rows, family, math.exp(u)), bounds=(lo, hi), method="bounded",
-                          options={"xatol": 1e-3})
+    res = minimize_scalar(lambda u: rss_at(math.exp(u)), bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})
     return float(math.exp(res.x)) if res.fun <= rss[k] else float(grid[k])
 
 
-def fit_model(split: Split, family: Family | None) -> Fit:
-    """Fit the baseline plus ``family`` on the training rows and score it on the held-out rows."""
-    rows = split.train
-    hyper = best_hyper(rows, family) if family is not None and family.grid is not None else None
-    x = design(rows, family, hyper)
-    theta, rss = _solve(x, rows.f)
-    base = Baseline(float(theta[0]), float(theta[1]), float(theta[2]))
-    effect, problem = None, None
-    if family is not None:
-        effect, base, problem = family.reading(theta[3:], hyper, base, rows.joint)
-    elif base.inertia <= 0 or base.friction < 0:
+def _damping_se(x: np.ndarray, rss: float, correlated: int) -> float:
+    """Standard error of the damping coefficient (column 1) of a least-squares fit with design ``x``, inflated by
+    the square root of ``correlated``, the number of consecutive samples smoothing makes dependent."""
+    n, k = x.shape
+    if n <= k:
+        return 0.0
+    scale = np.maximum(np.abs(x).max(axis=0), 1e-12)
+    xs = x / scale
+    try:
+        cov = np.linalg.pinv(xs.T @ xs)
+    except np.linalg.LinAlgError:  # pragma: no cover - pinv converges for finite input
+        return 0.0
+    return float(math.sqrt(max(cov[1, 1], 0.0) * rss / (n - k) * correlated) / scale[1])
+
+
+def _reading(theta: np.ndarray, terms: Sequence[Term], joint: JointType,
+             damping_se: float = 0.0) -> tuple[Baseline, tuple[Effect, ...], str | None]:
+    """The baseline and each term's effect from the coefficients, each reading adjusting the baseline in turn."""
+    base = Baseline(float(theta[0]), float(theta[1]), float(theta[2]), damping_se)
+    effects, problem, at = [], None, 3
+    for family, hyper in terms:
+        width = family.features(Motion(np.zeros(1), np.zeros(1)), hyper, joint).shape[1]
+        effect, base, trouble = family.reading(theta[at:at + width], hyper, base, joint)
+        effects.append(effect)
+        problem = problem or trouble
+        at += width
+    if not terms and (base.inertia <= 0 or base.friction < 0):
         problem = f"the baseline fit is unphysical (inertia {base.inertia:.3g}, friction {base.friction:.3g})"
+    return base, tuple(effects), problem
+
+
+def fit_model(split: Split, family: Family | None, base: Fit | None = None) -> Fit:
+    """Fit the baseline plus ``base``'s terms (their hyperparameters kept) plus ``family`` on the training rows,
+    and score it on the held-out rows."""
+    rows = split.train
+    terms: tuple[Term, ...] = base.terms if base is not None else ()
+    if family is not None:
+        hyper = best_hyper(rows, family, terms) if family.grid is not None else None
+        terms = (*terms, (family, hyper))
+    x = design(rows, terms)
+    theta, rss = _solve(x, rows.f)
+    baseline, effects, problem = _reading(theta, terms, rows.joint, _damping_se(x, rss, split.window_samples))
     residual_train = rows.f - x @ theta
-    residual_heldout = split.heldout.f - design(split.heldout, family, hyper) @ theta
-    params = x.shape[1] + (hyper is not None)
-    return Fit(family, hyper, theta, base, effect, problem, params, rss, len(rows),
-               _rms(residual_train), _rms(residual_heldout), residual_train, residual_heldout)
+    residual_heldout = split.heldout.f - design(split.heldout, terms) @ theta
+    params = x.shape[1] + sum(h is not None for _, h in terms)
+    return Fit(terms, theta, baseline, effects, problem, params, rss, len(rows), _rms(residual_train),
+               _rms(residual_heldout), residual_train, residual_heldout)
 
 
 def _rms(x: np.ndarray) -> float:
@@ -238,3 +293,4 @@ def _rms(x: np.ndarray) -> float:
 def fit_all(split: Split, families: Sequence[Family] = FAMILIES) -> tuple[Fit, list[Fit]]:
     """The baseline fit and one fit per family of the library."""
     return fit_model(split, None), [fit_model(split, f) for f in families]
+

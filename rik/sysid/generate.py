@@ -1,10 +1,11 @@
 """Ground-truth generator for ``rik sysid``: "measured" trials of a furniture joint simulated from a hidden truth.
 
 A :class:`GroundTruth` is a 1-DOF joint (slide: m, N, kg; hinge: rad, N·m, kg·m²) with inertia, viscous damping,
-Coulomb friction, a range and at most one effect beyond them (a :data:`~rik.schemas.joints.JointEffect` or a
-closer :class:`~rik.schemas.joints.Spring`). Its parameters are in the library's form, so a fit can be compared
-with them, but the force the simulation applies has a slightly different shape from the library law (no "inverse
-crime"):
+Coulomb friction, a range and up to two effects beyond them (each a :data:`~rik.schemas.joints.JointEffect` or a
+closer :class:`~rik.schemas.joints.Spring`, of different kinds; two act together, their forces and extra frictions
+add up, e.g. the damper and the pull-in spring of a soft-close runner). Its parameters are in the library's form,
+so a fit can be compared with them, but the force the simulation applies has a slightly different shape from the
+library law (no "inverse crime"):
 
 ==================  ========================================================================================
 effect              truth's force law (library parameters keep their meaning)
@@ -213,7 +214,10 @@ class GroundTruth:
     range: tuple[float, float]
     """(lower, upper) joint limits, m or rad; lower ≤ 0 < upper."""
     effect: Effect | None = None
-    """The one effect beyond the baseline, in library form (the simulated shape differs slightly)."""
+    """The (first) effect beyond the baseline, in library form (the simulated shape differs slightly)."""
+    second: Effect | None = None
+    """A second effect acting together with ``effect``, e.g. the pull-in spring of a soft-close runner; of
+    another kind than ``effect``, and only with one."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "joint", _joint(self.joint))
@@ -232,56 +236,95 @@ class GroundTruth:
         if not (math.isfinite(lower) and math.isfinite(upper) and lower <= 0.0 < upper):
             raise RikError(f"GroundTruth range must be (lower, upper) with lower ≤ 0 < upper, got {self.range!r}")
         object.__setattr__(self, "range", (lower, upper))
-        effect = self.effect
-        if effect is not None and not isinstance(effect, (Spring, Stiction, SoftClose, SelfClose, MagneticCatch,
-                                                          Tilt, DirectionFriction, QuadraticDamping, LoadFriction)):
-            raise RikError(f"GroundTruth effect must be a JointEffect, a Spring or None, got {type(effect).__name__}")
-        if isinstance(effect, Tilt) and self.joint is JointType.slide and effect.sine != 0.0:
-            raise RikError(f"GroundTruth effect: a slide's tilt has no sine term (got sine={effect.sine}); "
-                           "sine is for hinges")
-        zone = getattr(effect, "zone", None)
-        if zone is not None and zone >= upper:
-            raise RikError(f"GroundTruth effect zone {zone:g} must be inside the range (upper {upper:g})")
+        _check_effect("effect", self.effect, self.joint, upper)
+        _check_effect("second", self.second, self.joint, upper)
+        if self.second is not None:
+            if self.effect is None:
+                raise RikError(f"GroundTruth second ({_kind(self.second)}) needs a first effect: give it as effect "
+                               "(second only acts together with effect)")
+            if _kind(self.second) == _kind(self.effect):
+                raise RikError(f"GroundTruth second is a {_kind(self.second)}, the same kind as effect; the two "
+                               "effects must be of different kinds")
 
     @property
     def kind(self) -> str | None:
-        """The effect's kind (``spring`` for a :class:`Spring`), or None."""
+        """The (first) effect's kind (``spring`` for a :class:`Spring`), or None."""
         return _kind(self.effect)
 
+    @property
+    def effects(self) -> tuple[Effect, ...]:
+        """The effects present, in order (``effect``, then ``second``)."""
+        return tuple(e for e in (self.effect, self.second) if e is not None)
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        """The kinds of the effects present, in order (empty for none)."""
+        return tuple(_kind(e) or "" for e in self.effects)
+
     def to_json(self) -> dict[str, Any]:
-        """A JSON-ready dict; the effect carries its ``kind`` (``spring`` for a Spring)."""
-        effect = None
-        if self.effect is not None:
-            effect = self.effect.model_dump(mode="json")
-            effect.setdefault("kind", "spring")
-        return {"joint": self.joint.value, "mass": self.mass, "damping": self.damping,
-                "frictionloss": self.frictionloss, "range": list(self.range), "effect": effect}
+        """A JSON-ready dict; each effect carries its ``kind`` (``spring`` for a Spring). ``second`` is written
+        only when there is one (so a one-effect truth's file is as before)."""
+        out = {"joint": self.joint.value, "mass": self.mass, "damping": self.damping,
+               "frictionloss": self.frictionloss, "range": list(self.range), "effect": _effect_json(self.effect)}
+        if self.second is not None:
+            out["second"] = _effect_json(self.second)
+        return out
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> GroundTruth:
-        """The inverse of :meth:`to_json`; a malformed dict is a :class:`RikError`."""
-        from pydantic import TypeAdapter, ValidationError
-
+        """The inverse of :meth:`to_json`; ``effect`` and ``second`` may be absent (None; files written before
+        ``second`` existed load). A malformed dict is a :class:`RikError`."""
         if not isinstance(data, dict):
             raise RikError(f"ground truth must be a JSON object, got {type(data).__name__}")
-        keys = {"joint", "mass", "damping", "frictionloss", "range", "effect"}
-        if missing := sorted(keys - {"effect"} - set(data)):
+        keys = {"joint", "mass", "damping", "frictionloss", "range", "effect", "second"}
+        if missing := sorted(keys - {"effect", "second"} - set(data)):
             raise RikError(f"ground truth lacks {', '.join(missing)}")
         if extra := sorted(set(data) - keys):
             raise RikError(f"ground truth has unknown field(s) {', '.join(extra)}")
-        raw = data.get("effect")
-        effect: Effect | None = None
-        if raw is not None:
-            try:
-                if isinstance(raw, dict) and raw.get("kind") == "spring":
-                    effect = Spring(**{k: v for k, v in raw.items() if k != "kind"})
-                else:
-                    effect = TypeAdapter(JointEffect).validate_python(raw)
-            except (ValidationError, TypeError) as exc:
-                first = str(exc).splitlines()
-                raise RikError(f"ground truth effect is malformed: {' '.join(first[:3])}") from None
         return cls(joint=data["joint"], mass=data["mass"], damping=data["damping"],
-                   frictionloss=data["frictionloss"], range=data["range"], effect=effect)
+                   frictionloss=data["frictionloss"], range=data["range"],
+                   effect=_effect_from_json("effect", data.get("effect")),
+                   second=_effect_from_json("second", data.get("second")))
+
+
+_EFFECT_TYPES = (Spring, Stiction, SoftClose, SelfClose, MagneticCatch, Tilt, DirectionFriction, QuadraticDamping,
+                 LoadFriction)
+
+
+def _check_effect(name: str, effect: object, joint: JointType, upper: float) -> None:
+    """Refuse an effect (field ``name`` of a :class:`GroundTruth`) that is not one or does not fit the joint."""
+    if effect is None:
+        return
+    if not isinstance(effect, _EFFECT_TYPES):
+        raise RikError(f"GroundTruth {name} must be a JointEffect, a Spring or None, got {type(effect).__name__}")
+    if isinstance(effect, Tilt) and joint is JointType.slide and effect.sine != 0.0:
+        raise RikError(f"GroundTruth {name}: a slide's tilt has no sine term (got sine={effect.sine}); "
+                       "sine is for hinges")
+    zone = getattr(effect, "zone", None)
+    if zone is not None and zone >= upper:
+        raise RikError(f"GroundTruth {name} zone {zone:g} must be inside the range (upper {upper:g})")
+
+
+def _effect_json(effect: Effect | None) -> dict[str, Any] | None:
+    if effect is None:
+        return None
+    out = effect.model_dump(mode="json")
+    out.setdefault("kind", "spring")
+    return out
+
+
+def _effect_from_json(name: str, raw: object) -> Effect | None:
+    from pydantic import TypeAdapter, ValidationError
+
+    if raw is None:
+        return None
+    try:
+        if isinstance(raw, dict) and raw.get("kind") == "spring":
+            return Spring(**{k: v for k, v in raw.items() if k != "kind"})
+        return TypeAdapter(JointEffect).validate_python(raw)
+    except (ValidationError, TypeError) as exc:
+        first = str(exc).splitlines()
+        raise RikError(f"ground truth {name} is malformed: {' '.join(first[:3])}") from None
 
 
 def _kind(effect: Effect | None) -> str | None:
@@ -319,23 +362,47 @@ def _log_uniform(rng: np.random.Generator, bounds: Range) -> float:
     return float(math.exp(rng.uniform(math.log(bounds[0]), math.log(bounds[1]))))
 
 
+SECOND_CONFLICTS = {frozenset({"tilt", "stiction"}): "both set the Coulomb friction (tilt from its over_friction, "
+                                                    "stiction from its own frictionloss range)"}
+"""Pairs of kinds :func:`random_truth` cannot draw together, with the reason."""
+
+
+def _check_kind(name: str, kind: str, joint: JointType) -> None:
+    if kind not in EFFECT_KINDS:
+        raise RikError(f"{name} '{kind}' is not an effect kind; use one of {', '.join(EFFECT_KINDS)}"
+                       + (" or None" if name == "kind" else ""))
+    if kind not in JOINT_KINDS[joint]:
+        raise RikError(f"{name} '{kind}' is not valid for a {joint.value} joint; use one of "
+                       f"{', '.join(JOINT_KINDS[joint])}")
+
+
 def random_truth(kind: str | None, joint: JointType | str, rng: np.random.Generator, *,
-                 mass: float | None = None) -> GroundTruth:
+                 mass: float | None = None, second: str | None = None) -> GroundTruth:
     """A realistic truth with effect ``kind`` (one of :data:`EFFECT_KINDS`, or None for none), base and effect
     parameters drawn from :data:`BASE_RANGES` and :data:`EFFECT_RANGES`, large enough to identify (the effect's
-    RMS force where active is several times the default force noise). ``mass`` (kg or kg·m²) fixes the inertia."""
+    RMS force where active is several times the default force noise). ``mass`` (kg or kg·m²) fixes the inertia.
+
+    ``second`` (a kind other than ``kind``) adds a second effect acting together with the first, drawn the same
+    way after all of the first's draws (so a truth without ``second`` is the same for a seed); its base rules
+    apply on top (a second ``stiction`` redraws the Coulomb friction from its range, a second ``tilt`` sets it
+    from its over_friction and, on a slide without ``mass``, redraws a heavier mass). Pairs in
+    :data:`SECOND_CONFLICTS` are refused."""
     joint = _joint(joint)
-    if kind is not None and kind not in EFFECT_KINDS:
-        raise RikError(f"kind '{kind}' is not an effect kind; use one of {', '.join(EFFECT_KINDS)} or None")
-    if kind is not None and kind not in JOINT_KINDS[joint]:
-        raise RikError(f"kind '{kind}' is not valid for a {joint.value} joint; use one of "
-                       f"{', '.join(JOINT_KINDS[joint])}")
+    if kind is not None:
+        _check_kind("kind", kind, joint)
+    if second is not None:
+        _check_kind("second", second, joint)
+        if kind is None:
+            raise RikError(f"second '{second}' needs a first effect kind; give kind")
+        if second == kind:
+            raise RikError(f"second '{second}' is the same kind as kind; the two effects must differ")
+        if reason := SECOND_CONFLICTS.get(frozenset({kind, second})):
+            raise RikError(f"kind '{kind}' and second '{second}' cannot be drawn together: {reason}")
     if not isinstance(rng, np.random.Generator):
         raise RikError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
     if mass is not None and not (isinstance(mass, (int, float)) and math.isfinite(mass) and mass > 0):
         raise RikError(f"mass must be a finite number > 0, got {mass!r}")
     base = BASE_RANGES[joint]
-    ranges = EFFECT_RANGES[joint].get(kind or "", {})
     slide = joint is JointType.slide
     m = float(mass) if mass is not None else _log_uniform(rng, base["mass"])
     if kind == "tilt" and slide and mass is None:
@@ -343,6 +410,23 @@ def random_truth(kind: str | None, joint: JointType | str, rng: np.random.Genera
     damping = _log_uniform(rng, base["damping"])
     friction = _log_uniform(rng, base["frictionloss"])
     upper = _uniform(rng, base["upper"])
+    effect, friction = _draw_effect(kind, joint, rng, m=m, friction=friction, upper=upper)
+    other: Effect | None = None
+    if second is not None:
+        if second == "tilt" and slide and mass is None:
+            m = _log_uniform(rng, (4.0, base["mass"][1]))
+        other, friction = _draw_effect(second, joint, rng, m=m, friction=friction, upper=upper)
+    return GroundTruth(joint=joint, mass=m, damping=damping, frictionloss=friction, range=(0.0, upper),
+                       effect=effect, second=other)
+
+
+def _draw_effect(kind: str | None, joint: JointType, rng: np.random.Generator, *, m: float, friction: float,
+                 upper: float) -> tuple[Effect | None, float]:
+    """(effect of ``kind`` drawn from :data:`EFFECT_RANGES`, the Coulomb friction: ``friction`` or, for stiction
+    and tilt, the one their rule sets) for a joint of mass ``m`` and range (0, ``upper``)."""
+    base = BASE_RANGES[joint]
+    ranges = EFFECT_RANGES[joint].get(kind or "", {})
+    slide = joint is JointType.slide
     effect: Effect | None = None
     if kind == "stiction":
         friction = _uniform(rng, ranges["frictionloss"])
@@ -387,21 +471,28 @@ def random_truth(kind: str | None, joint: JointType | str, rng: np.random.Genera
         effect = LoadFriction(per_extension=_uniform(rng, ranges["per_extension"]))
     elif kind == "spring":
         effect = Spring(stiffness=_uniform(rng, ranges["stiffness"]), reference=_uniform(rng, ranges["reference"]))
-    return GroundTruth(joint=joint, mass=m, damping=damping, frictionloss=friction, range=(0.0, upper),
-                       effect=effect)
+    return effect, friction
 
 
 def truth_parameters(truth: GroundTruth) -> dict[str, float]:
-    """The base parameters (``mass``, ``damping``, ``frictionloss``, ``upper``) and the effect's, with the derived
-    quantities named in :data:`EFFECT_RANGES`; library units."""
+    """The base parameters (``mass``, ``damping``, ``frictionloss``, ``upper``) and the effect's (``effect.<name>``),
+    with the derived quantities named in :data:`EFFECT_RANGES`; a second effect's are ``second.<name>``, derived
+    ones included. Library units."""
     out = {"mass": truth.mass, "damping": truth.damping, "frictionloss": truth.frictionloss,
            "upper": truth.range[1]}
-    effect = truth.effect
-    if effect is None:
-        return out
-    values = {k: float(v) for k, v in effect.model_dump().items() if isinstance(v, (int, float))
-              and not isinstance(v, bool)}
-    out.update({f"effect.{k}": v for k, v in values.items()})
+    for prefix, effect in (("effect", truth.effect), ("second", truth.second)):
+        if effect is None:
+            continue
+        values = {k: float(v) for k, v in effect.model_dump().items() if isinstance(v, (int, float))
+                  and not isinstance(v, bool)}
+        out.update({f"{prefix}.{k}": v for k, v in values.items()})
+        derived = _derived_parameters(effect, truth)
+        out.update(derived if prefix == "effect" else {f"second.{k}": v for k, v in derived.items()})
+    return out
+
+
+def _derived_parameters(effect: Effect, truth: GroundTruth) -> dict[str, float]:
+    out: dict[str, float] = {}
     if isinstance(effect, Stiction):
         out["ratio"] = (truth.frictionloss + effect.breakaway) / truth.frictionloss if truth.frictionloss else math.inf
     elif isinstance(effect, SelfClose):
@@ -456,11 +547,30 @@ def direction_share(v: np.ndarray | float, load: np.ndarray | float, sign: float
 
 
 def _scalar_laws(truth: GroundTruth) -> tuple[Law | None, FrictionLaw | None]:
-    """(applied force law of (q, v), extra friction law of (q, v, hand force)) of the truth's effect as scalar
-    functions, for the step loop; None where the effect has no such part."""
-    e, joint, upper = truth.effect, truth.joint, truth.range[1]
-    if e is None:
-        return None, None
+    """(applied force law of (q, v), extra friction law of (q, v, hand force)) of the truth's effects as scalar
+    functions, for the step loop: the sum over the effects; None where no effect has such a part."""
+    applied: Law | None = None
+    friction: FrictionLaw | None = None
+    for e in truth.effects:
+        a, f = _scalar_law_of(e, truth)
+        if a is not None:
+            applied = a if applied is None else _add_laws(applied, a)
+        if f is not None:
+            friction = f if friction is None else _add_friction_laws(friction, f)
+    return applied, friction
+
+
+def _add_laws(a: Law, b: Law) -> Law:
+    return lambda q, v: a(q, v) + b(q, v)
+
+
+def _add_friction_laws(a: FrictionLaw, b: FrictionLaw) -> FrictionLaw:
+    return lambda q, v, f: a(q, v, f) + b(q, v, f)
+
+
+def _scalar_law_of(e: Effect, truth: GroundTruth) -> tuple[Law | None, FrictionLaw | None]:
+    """(applied force law, extra friction law) of one effect ``e`` of ``truth`` (see :func:`_scalar_laws`)."""
+    joint, upper = truth.joint, truth.range[1]
     if isinstance(e, Stiction):
         b, vs, p = e.breakaway, e.stribeck_velocity, STRIBECK_EXPONENT
         return None, lambda q, v, f: b * math.exp(-((abs(v) / vs) ** p))
@@ -506,19 +616,33 @@ def _scalar_laws(truth: GroundTruth) -> tuple[Law | None, FrictionLaw | None]:
 
 def effect_laws(truth: GroundTruth, q: np.ndarray, v: np.ndarray,
                 load: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(applied force, extra friction level) of the truth's effect at positions ``q`` and velocities ``v``
-    (arrays, m or rad and m/s or rad/s), N or N·m. The friction level is ≥ 0 and acts against the motion (at
-    rest it is the extra static friction the joint can hold). ``load`` (N or N·m, default 0) is the hand force,
-    which only the direction friction at rest depends on (see :func:`direction_share`)."""
+    """(applied force, extra friction level) of the truth's effects (summed over both where there are two) at
+    positions ``q`` and velocities ``v`` (arrays, m or rad and m/s or rad/s), N or N·m. The friction level is ≥ 0
+    and acts against the motion (at rest it is the extra static friction the joint can hold). ``load`` (N or N·m,
+    default 0) is the hand force, which only the direction friction at rest depends on (see
+    :func:`direction_share`)."""
     q = np.asarray(q, dtype=np.float64)
     v = np.asarray(v, dtype=np.float64)
     load = np.zeros(1) if load is None else np.asarray(load, dtype=np.float64)
     q, v, load = np.broadcast_arrays(q, v, load)
-    zero = np.zeros(q.shape)
-    e, joint, upper = truth.effect, truth.joint, truth.range[1]
-    qp = np.maximum(q, 0.0)
-    if e is None:
+    effects = truth.effects
+    if not effects:
+        zero = np.zeros(q.shape)
         return zero, zero.copy()
+    applied, friction = _laws_of(effects[0], truth, q, v, load)
+    for e in effects[1:]:
+        a, f = _laws_of(e, truth, q, v, load)
+        applied, friction = applied + a, friction + f
+    return applied, friction
+
+
+def _laws_of(e: Effect, truth: GroundTruth, q: np.ndarray, v: np.ndarray,
+             load: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(applied force, extra friction level) of one effect ``e`` of ``truth`` at broadcast float arrays ``q``,
+    ``v``, ``load`` (see :func:`effect_laws`)."""
+    zero = np.zeros(q.shape)
+    joint, upper = truth.joint, truth.range[1]
+    qp = np.maximum(q, 0.0)
     if isinstance(e, Stiction):
         return zero, e.breakaway * np.exp(-((np.abs(v) / e.stribeck_velocity) ** STRIBECK_EXPONENT))
     if isinstance(e, DirectionFriction):
@@ -554,9 +678,10 @@ def effect_laws(truth: GroundTruth, q: np.ndarray, v: np.ndarray,
 
 
 def ground_truth_force(truth: GroundTruth, q: np.ndarray, v: np.ndarray, load: np.ndarray | None = None) -> np.ndarray:
-    """The truth's effect force (not the baseline's) at positions ``q`` and velocities ``v``, N or N·m, positive
-    opening. Friction-type effects give ``-level * sign(v)``: 0 at v = 0, where friction is indeterminate.
-    ``load``: the hand force, as in :func:`effect_laws` (matters only to direction friction below ~2 v_eps)."""
+    """The truth's effect force (the sum of both where there are two; not the baseline's) at positions ``q`` and
+    velocities ``v``, N or N·m, positive opening. Friction-type effects give ``-level * sign(v)``: 0 at v = 0, where
+    friction is indeterminate. ``load``: the hand force, as in :func:`effect_laws` (matters only to direction
+    friction below ~2 v_eps)."""
     applied, friction = effect_laws(truth, q, v, load)
     return applied - friction * np.sign(np.asarray(v, dtype=np.float64))
 

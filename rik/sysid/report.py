@@ -26,7 +26,7 @@ import numpy as np
 from rik.paths import pyplot, save_figure, write_atomic
 from rik.schemas.joints import JointType, Spring
 from rik.sysid.discover import Discovery, describe
-from rik.sysid.fit import Fit, Rows, design
+from rik.sysid.fit import Fit, Rows
 from rik.sysid.select import MIN_BIC_DROP, MIN_GAIN
 
 SUMMARY = "summary.json"
@@ -39,7 +39,7 @@ _UNITS = {JointType.slide: {"position": "m", "force": "N", "plot_pos": ("mm", 1e
 
 
 def _residuals(fit: Fit, rows: Rows) -> np.ndarray:
-    return rows.f - design(rows, fit.family, fit.hyper) @ fit.theta
+    return rows.f - fit.predict(rows)
 
 
 def _effect_dict(effect: Any) -> dict[str, Any] | None:
@@ -52,7 +52,6 @@ def _effect_dict(effect: Any) -> dict[str, Any] | None:
 def summary(d: Discovery) -> dict[str, Any]:
     """The JSON summary of a discovery (SI units; see :data:`FORMAT`)."""
     sel = d.selection
-    chosen = sel.chosen
     base = sel.baseline.baseline
     resistance = d.extended_resistance or d.baseline_resistance
     units = _UNITS[d.joint]
@@ -63,9 +62,11 @@ def summary(d: Discovery) -> dict[str, Any]:
         "joint": d.joint.value,
         "units": {"position": units["position"], "force": units["force"]},
         "cause": d.sentence(),
-        "verdict": "effect" if chosen else "none",
-        "effect": chosen.fit.kind if chosen else None,
+        "verdict": "effect" if sel.found else "none",
+        "effect": sel.final.kinds[0] if sel.found else None,
+        "effects": list(sel.final.kinds),
         "alternatives": [s.fit.kind for s in sel.alternatives],
+        "pair_alternatives": [list(s.fit.kinds) for s in sel.pair_alternatives],
         "separation": list(sel.separation),
         "trials": {"names": list(d.rows.names), "heldout": [d.rows.names[i] for i in d.split.heldout_trials],
                    "heldout_from_s": d.split.heldout_from},
@@ -73,16 +74,22 @@ def summary(d: Discovery) -> dict[str, Any]:
                           "delay_s": d.delay_s, "fit_velocity": d.fit_velocity, "limits": list(d.limits),
                           "rows_train": len(d.split.train), "rows_heldout": len(d.split.heldout)},
         "baseline": {"inertia": base.inertia, "damping": base.damping, "frictionloss": base.friction},
-        "inertia": (chosen.fit.baseline.inertia if chosen else base.inertia),
+        "inertia": sel.final.baseline.inertia,
         "resistance": resistance.model_dump(mode="json"),
         "errors": {"force_rmse": {"baseline": fb, "extended": fe},
                    "position_rmse": {"baseline": pb, "extended": pe}},
         "thresholds": {"min_gain": MIN_GAIN, "min_bic_drop": MIN_BIC_DROP},
-        "candidates": [{"kind": s.fit.kind, "title": s.fit.family.title, "hyper": s.fit.hyper,
-                        "effect": _effect_dict(s.fit.effect), "gain": s.gain, "bic_drop": s.bic_drop,
-                        "rmse_train": s.fit.rmse_train, "rmse_heldout": s.fit.rmse_heldout,
-                        "parameters": s.fit.parameters, "verdict": s.verdict} for s in sel.scores],
+        "candidates": [_candidate(s) for s in sel.scores],
+        "pairs": [_candidate(s) for s in sel.pairs],
     }
+
+
+def _candidate(s: Any) -> dict[str, Any]:
+    return {"kind": s.fit.kind, "kinds": list(s.fit.kinds), "title": " + ".join(f.title for f, _ in s.fit.terms),
+            "hyper": s.fit.hyper, "effects": [_effect_dict(e) for e in s.fit.effects], "gain": s.gain,
+            "bic_drop": s.bic_drop,
+            "rmse_train": s.fit.rmse_train, "rmse_heldout": s.fit.rmse_heldout, "parameters": s.fit.parameters,
+            "verdict": s.verdict}
 
 
 # ------------------------------------------------------------------------------------------------------ plots
@@ -94,7 +101,7 @@ def _all_rows(d: Discovery) -> tuple[Rows, np.ndarray, np.ndarray | None, np.nda
     rows = Rows(d.joint, *(np.concatenate([getattr(p, k) for p in parts]) for k in ("t", "q", "qd", "qdd", "f",
                                                                                     "trial")), d.rows.names)
     held = np.concatenate([np.zeros(len(parts[0]), bool), np.ones(len(parts[1]), bool)])
-    chosen = sel.chosen.fit if sel.chosen else None
+    chosen = sel.final if sel.found else None
     return rows, _residuals(sel.baseline, rows), _residuals(chosen, rows) if chosen else None, held
 
 
@@ -222,7 +229,7 @@ def markdown(d: Discovery, data: dict[str, Any]) -> str:
               f"| model | force RMSE [{u['force']}] | re-simulated position RMSE [{pos_label}] |", "|---|---:|---:|",
               f"| baseline (inertia, damping, friction) | {fb:.4g} | {pb * pos_scale:.4g} |"]
     if fe is not None:
-        lines.append(f"| extended ({sel.chosen.fit.family.title}) | {fe:.4g} | "
+        lines.append(f"| extended ({' + '.join(f.title for f, _ in sel.final.terms)}) | {fe:.4g} | "
                      f"{(pe * pos_scale if pe is not None else float('nan')):.4g} |")
     lines += ["", f"Held out: {', '.join(data['trials']['heldout'])}"
               + (f" from {d.split.heldout_from:.2f} s on" if d.split.heldout_from is not None else "")
@@ -243,6 +250,15 @@ def markdown(d: Discovery, data: dict[str, Any]) -> str:
     for s in sel.scores:
         lines.append(f"| {s.fit.family.title} | {describe(s.fit.effect, d.joint)} | {s.gain:.1%} | "
                      f"{s.bic_drop:.0f} | {s.verdict} |")
+    if sel.pairs:
+        against = sel.chosen.fit.family.title if sel.chosen else "the baseline: no single effect passed"
+        lines += ["", f"Pairs of effects, scored against the best single effect ({against}) and required to beat "
+                      f"each member alone by {MIN_GAIN:.0%}; the ten best:", "",
+                  "| effects | fitted | held-out gain | BIC drop | verdict |", "|---|---|---:|---:|---|"]
+        for s in sel.pairs[:10]:
+            fitted = "; ".join(describe(e, d.joint) for e in s.fit.effects)
+            lines.append(f"| {' + '.join(f.title for f, _ in s.fit.terms)} | {fitted} | {s.gain:.1%} | "
+                         f"{s.bic_drop:.0f} | {s.verdict} |")
     lines += ["", "## Data", "",
               f"{len(d.rows.names)} trials ({', '.join(d.rows.names)}) at {data['preprocessing']['rate_hz']:g} Hz; "
               f"force-to-position delay {d.delay_s * 1e3:.1f} ms (one for all trials); samples enter the fit above "

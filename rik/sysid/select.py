@@ -13,12 +13,22 @@ not beat a constant force by the width of its extra coefficient). Other passing 
 fewer parameters whose improvement reaches :data:`TIE` (90 %) of the chosen one's cannot be told apart from it
 in this data: the verdict says so, with the experiment that would separate them. When nothing passes, the
 answer is "no significant unmodelled effect".
+
+Then a second effect (real soft-close runners pair a damper with a pull-in spring): pairs of effects, the first
+any candidate of the first round that helped (its fitted shape kept), the second any other family (not one the
+data cannot tell from the first: they would model the same force twice), are fitted. A pair passes the same
+three tests against the chosen single effect (or the baseline, when none passed) and must also beat each of its
+members fitted alone by :data:`MIN_GAIN`, so that both effects earn their place; the best passing pair replaces
+the single effect, with the same preference for fewer parameters and the same statement of pairs it cannot be
+told from. Searching pairs, not only additions to the first round's winner, matters: a constant force can win
+the first round by absorbing half of a self-closing spring and a quadratic damper together, and a damper and a
+spring that act in the same zone can each look unphysical alone.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from rik.sysid.effects import INDISTINGUISHABLE, MAGNET_AMBIGUITY
 from rik.sysid.fit import Fit
@@ -31,6 +41,8 @@ OCCAM = 0.95
 """Share of the winner's improvement at which a simpler candidate is preferred."""
 TIE = 0.90
 """Share of the chosen candidate's improvement from which another candidate explains the data as well."""
+MAX_EFFECTS = 2
+"""Most effects a model is extended with (a pair)."""
 
 
 @dataclass(frozen=True)
@@ -67,10 +79,36 @@ class Selection:
     """Candidates the data cannot tell from the chosen one."""
     separation: tuple[str, ...] = field(default=())
     """For each alternative (and for a magnet's amplitude-decay trade-off): what would separate them."""
+    pair: Score | None = None
+    """The chosen pair of effects, scored against the chosen single effect; None when no pair passes."""
+    pairs: tuple[Score, ...] = ()
+    """Every pair tried, best held-out error first."""
+    pair_alternatives: tuple[Score, ...] = ()
+    """Pairs the data cannot tell from the chosen pair."""
 
     @property
     def ambiguous(self) -> bool:
         return bool(self.alternatives)
+
+    @property
+    def found(self) -> bool:
+        """Whether any effect was chosen (alone or in a pair)."""
+        return self.chosen is not None or self.pair is not None
+
+    @property
+    def final(self) -> Fit:
+        """The selected model: the baseline with every chosen effect."""
+        if self.pair:
+            return self.pair.fit
+        return self.chosen.fit if self.chosen else self.baseline
+
+    @property
+    def gain(self) -> float:
+        """Relative drop of the held-out force RMSE from the baseline to :attr:`final`."""
+        b = self.baseline.rmse_heldout
+        return 1.0 - self.final.rmse_heldout / b if b > 0 else 0.0
+
+
 
 
 def score(baseline: Fit, fit: Fit) -> Score:
@@ -95,24 +133,83 @@ def _gain_share(candidate: Score, reference: Score) -> float:
 def select(baseline: Fit, fits: Sequence[Fit]) -> Selection:
     """Apply the rules of the module docstring to the candidates ``fits``."""
     scores = tuple(sorted((score(baseline, f) for f in fits), key=lambda s: s.fit.rmse_heldout))
-    passing = [s for s in scores if s.passed]
-    if not passing:
+    chosen, alternatives = _pick(scores)
+    if chosen is None:
         return Selection(baseline, scores, None)
-    chosen = passing[0]
-    simpler = [s for s in passing if s.fit.parameters < chosen.fit.parameters and _gain_share(s, chosen) >= OCCAM]
-    if simpler:
-        chosen = min(simpler, key=lambda s: (s.fit.parameters, s.fit.rmse_heldout))
-    alternatives = tuple(s for s in passing if s is not chosen and s.fit.parameters <= chosen.fit.parameters
-                         and _gain_share(s, chosen) >= TIE)
-    separation = [INDISTINGUISHABLE.get(frozenset({chosen.fit.kind, s.fit.kind}), _generic(chosen, s))
-                  for s in alternatives]
+    separation = [_separation(chosen, s) for s in alternatives]
     if chosen.fit.kind == "magnetic_catch":
         separation.append(MAGNET_AMBIGUITY)
     return Selection(baseline, scores, chosen, alternatives, tuple(separation))
 
 
+def _pick(scores: Sequence[Score]) -> tuple[Score | None, tuple[Score, ...]]:
+    """The passing score with the lowest held-out error (or a simpler one with :data:`OCCAM` of its gain), and the
+    passing ones within :data:`TIE` of its gain with no more parameters."""
+    passing = [s for s in scores if s.passed]
+    if not passing:
+        return None, ()
+    chosen = passing[0]
+    simpler = [s for s in passing if s.fit.parameters < chosen.fit.parameters and _gain_share(s, chosen) >= OCCAM]
+    if simpler:
+        chosen = min(simpler, key=lambda s: (s.fit.parameters, s.fit.rmse_heldout))
+    return chosen, tuple(s for s in passing if s is not chosen and s.fit.parameters <= chosen.fit.parameters
+                         and _gain_share(s, chosen) >= TIE)
+
+
+def _separation(chosen: Score, other: Score) -> str:
+    """What would tell ``other``'s model from ``chosen``'s: the text for the effects in which they differ."""
+    mine, theirs = set(chosen.fit.kinds) - set(other.fit.kinds), set(other.fit.kinds) - set(chosen.fit.kinds)
+    if len(mine) == 1 and len(theirs) == 1:
+        known = INDISTINGUISHABLE.get(frozenset(mine | theirs))
+        if known:
+            return known
+    return _generic(chosen, other)
+
+
+def pair_allowed(first: str, second: str) -> bool:
+    """Whether two effects may be fitted together: different, and not a pair the data cannot tell apart."""
+    return first != second and frozenset({first, second}) not in INDISTINGUISHABLE
+
+
+def pair_score(reference: Fit, singles: dict[str, Fit], fit: Fit) -> Score:
+    """:func:`score` of a two-effect ``fit`` against ``reference``, failing it unless it also beats each of its
+    members fitted alone (``singles``, by kind) by :data:`MIN_GAIN` on held-out data."""
+    result = score(reference, fit)
+    if not result.passed:
+        return result
+    for kind in fit.kinds:
+        alone = singles[kind].rmse_heldout
+        gain = 1.0 - fit.rmse_heldout / alone if alone > 0 else 0.0
+        if gain < MIN_GAIN:
+            return replace(result, verdict=f"held-out gain over {singles[kind].family.title} alone {gain:.1%} "
+                                           f"below {MIN_GAIN:.0%}")
+    return result
+
+
+def select_pair(selection: Selection, fits: Sequence[Fit]) -> Selection:
+    """The second round: ``fits`` are models with two effects; the best passing one (module docstring) becomes
+    the selection's final model. Pairs of the same two kinds count once (the lower held-out error)."""
+    best: dict[frozenset[str], Fit] = {}
+    for f in fits:
+        key = frozenset(f.kinds)
+        if key not in best or f.rmse_heldout < best[key].rmse_heldout:
+            best[key] = f
+    reference = selection.chosen.fit if selection.chosen else selection.baseline
+    singles = {s.fit.kind: s.fit for s in selection.scores}
+    scores = tuple(sorted((pair_score(reference, singles, f) for f in best.values()),
+                          key=lambda s: s.fit.rmse_heldout))
+    chosen, alternatives = _pick(scores)
+    if chosen is None:
+        return replace(selection, pairs=scores)
+    separation = (*selection.separation, *(_separation(chosen, s) for s in alternatives))
+    if "magnetic_catch" in chosen.fit.kinds and MAGNET_AMBIGUITY not in separation:
+        separation = (*separation, MAGNET_AMBIGUITY)
+    return replace(selection, pair=chosen, pairs=scores, pair_alternatives=alternatives, separation=separation)
+
+
 def _generic(chosen: Score, other: Score) -> str:
-    a, b = chosen.fit.family, other.fit.family
-    return (f"{a.title if a else chosen.fit.kind} and {b.title if b else other.fit.kind} explain these strokes "
-            f"equally well; record strokes at other speeds and positions, holds and free releases, where their "
-            f"forces differ")
+    def title(fit: Fit) -> str:
+        return " + ".join(f.title for f, _ in fit.terms) or fit.kind
+
+    return (f"{title(chosen.fit)} and {title(other.fit)} explain these strokes equally well; record strokes at "
+            f"other speeds and positions, holds and free releases, where their forces differ")
