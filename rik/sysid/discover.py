@@ -182,6 +182,16 @@ def prepare_all(trials: Sequence[Trial], *, rate_hz: float | None = None, window
     return [preprocess(t, delay_s=delay_s, **kwargs) for t in trials], float(delay_s)
 
 
+def select_effects(split: Split) -> Selection:
+    """Both rounds of :mod:`rik.sysid.select` on ``split``: every single effect against the baseline, then the
+    pairs (the first member any single effect that helped, with its fitted shape)."""
+    baseline, fits = fit_all(split)
+    selection = select(baseline, fits)
+    firsts = [s.fit for s in selection.scores if s.gain > 0]
+    return select_pair(selection, [fit_model(split, second, first) for first in firsts
+                                   for second in FAMILIES if pair_allowed(first.kind, second.kind)])
+
+
 def discover(trials: Sequence[Trial], *, heldout: Sequence[int] | None = None, rate_hz: float | None = None,
              window_s: float | None = None, delay_s: float | None = None,
              resim_window_s: float = RESIM_WINDOW_S, resimulate: bool = True) -> Discovery:
@@ -192,11 +202,8 @@ def discover(trials: Sequence[Trial], *, heldout: Sequence[int] | None = None, r
     rows = all_rows(prepared, velocity=velocity)
     limits = (min(float(p.q.min()) for p in prepared), max(float(p.q.max()) for p in prepared))
     split = split_rows(rows, prepared, heldout)
-    baseline, fits = fit_all(split)
-    selection = select(baseline, fits)
-    firsts = [s.fit for s in selection.scores if s.gain > 0]
-    selection = select_pair(selection, [fit_model(split, second, first) for first in firsts
-                                        for second in FAMILIES if pair_allowed(first.kind, second.kind)])
+    selection = select_effects(split)
+    baseline = selection.baseline
     base_res = resistance_of(baseline.baseline, (), "rik sysid: baseline fit")
     chosen = selection.final if selection.found else None
     ext_res = resistance_of(chosen.baseline, chosen.effects, "rik sysid: " + " + ".join(
