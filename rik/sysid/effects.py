@@ -84,17 +84,7 @@ class Family:
     """Whether the effect pushes the joint at zero speed (and so shows in holds and releases)."""
 
 
-
 # --------------------------------------------------------------------------------------------------- helpers
-
-def _sign(v: np.ndarray) -> np.ndarray:
-    return np.sign(v)
-
-
-def _closed_distance(m: Motion) -> np.ndarray:
-    """Distance from closed, clipped at 0 (noise can put a closed front slightly below 0), m or rad."""
-    return np.maximum(m.q, 0.0)
-
 
 def _scale(joint: JointType, slide: float, hinge: float) -> float:
     return slide if joint is JointType.slide else hinge
@@ -104,17 +94,11 @@ def _log_grid(lo: float, hi: float, n: int = 32) -> np.ndarray:
     return np.geomspace(lo, hi, n)
 
 
-def _col(x: np.ndarray) -> np.ndarray:
-    return x.reshape(-1, 1)
-
-
 def _negative(name: str, value: float, unit: str) -> str | None:
     return f"{name} {value:.3g} {unit} is negative" if value < 0 else None
 
 
 _FORCE = {JointType.slide: "N", JointType.hinge: "N·m"}
-_LENGTH = {JointType.slide: "m", JointType.hinge: "rad"}
-
 
 DAMPING_TOLERANCE = {JointType.slide: 0.2, JointType.hinge: 0.02}
 """How far below 0 a fitted damping may come out before it counts as unphysical (noise around a joint with
@@ -138,40 +122,43 @@ def _first(*problems: str | None) -> str | None:
 
 # ------------------------------------------------------------------------------------------------ families
 
-def _stiction_features(m: Motion, vs: float | None, joint: JointType) -> np.ndarray:
-    return _col(_sign(m.qd) * np.exp(-(m.qd / vs) ** 2))
+UnitEffects = Callable[[float | None, JointType], tuple[Effect, ...]]
+"""(h, joint) → the family's effect with each linear coefficient set to 1 in turn (the others 0)."""
 
 
-def _stiction_reading(theta: np.ndarray, vs: float | None, base: Baseline, joint: JointType):
-    effect = j.Stiction(breakaway=max(float(theta[0]), 0.0), stribeck_velocity=float(vs))
-    return effect, base, _first(_negative("the breakaway friction", float(theta[0]), _FORCE[joint]),
-                                _unphysical_baseline(base, joint))
+def _law_features(unit: UnitEffects) -> Callable[[Motion, float | None, JointType], np.ndarray]:
+    """Regressors from the library's one force law (:func:`rik.sim.effects.effect_force`, what rik's simulator
+    applies): the resistance of each unit effect, i.e. minus its force, so a fitted effect is exactly the law the
+    extended joint is simulated with."""
+
+    def features(m: Motion, h: float | None, joint: JointType) -> np.ndarray:
+        from rik.sim.effects import effect_force
+
+        return -np.column_stack([effect_force(e, m.q, m.qd, joint) for e in unit(h, joint)])
+
+    return features
 
 
-def _soft_close_features(m: Motion, zone: float | None, joint: JointType) -> np.ndarray:
-    return _col(m.qd * ((m.q < zone) & (m.qd < 0)))
+_UNITS = {
+    "breakaway": {JointType.slide: "N", JointType.hinge: "N·m"},
+    "damping": {JointType.slide: "N·s/m", JointType.hinge: "N·m·s/rad"},
+    "stiffness": {JointType.slide: "N/m", JointType.hinge: "N·m/rad"},
+    "coefficient": {JointType.slide: "N·s²/m²", JointType.hinge: "N·m·s²/rad²"},
+    "per_extension": {JointType.slide: "N/m", JointType.hinge: "N·m/rad"},
+}
+"""Units of the single coefficients read by :func:`_coefficient_reading`."""
 
 
-def _soft_close_reading(theta: np.ndarray, zone: float | None, base: Baseline, joint: JointType):
-    unit = "N·s/m" if joint is JointType.slide else "N·m·s/rad"
-    effect = j.SoftClose(zone=float(zone), damping=max(float(theta[0]), 0.0))
-    return effect, base, _first(_negative("the soft-close damping", float(theta[0]), unit),
-                                _unphysical_baseline(base, joint))
+def _coefficient_reading(build: Callable[[float, float | None], Effect], name: str, field: str):
+    """The reading of a family with one coefficient that must not be negative: ``build(value, h)`` makes the
+    effect (the value clipped at 0), ``name`` says what it is in the message when it comes out negative."""
 
+    def reading(theta: np.ndarray, h: float | None, base: Baseline, joint: JointType):
+        value = float(theta[0])
+        return build(max(value, 0.0), h), base, _first(_negative(name, value, _UNITS[field][joint]),
+                                                        _unphysical_baseline(base, joint))
 
-def _self_close_features(m: Motion, zone: float | None, joint: JointType) -> np.ndarray:
-    return _col(np.maximum(zone - m.q, 0.0))
-
-
-def _self_close_reading(theta: np.ndarray, zone: float | None, base: Baseline, joint: JointType):
-    unit = "N/m" if joint is JointType.slide else "N·m/rad"
-    effect = j.SelfClose(zone=float(zone), stiffness=max(float(theta[0]), 0.0))
-    return effect, base, _first(_negative("the pull-in stiffness", float(theta[0]), unit),
-                                _unphysical_baseline(base, joint))
-
-
-def _magnet_features(m: Motion, decay: float | None, joint: JointType) -> np.ndarray:
-    return _col(1.0 / (1.0 + _closed_distance(m) / decay) ** 2)
+    return reading
 
 
 def _magnet_reading(theta: np.ndarray, decay: float | None, base: Baseline, joint: JointType):
@@ -180,19 +167,15 @@ def _magnet_reading(theta: np.ndarray, decay: float | None, base: Baseline, join
     return effect, base, _first(problem, _unphysical_baseline(base, joint))
 
 
-def _tilt_features(m: Motion, h: float | None, joint: JointType) -> np.ndarray:
+def _tilt_units(h: float | None, joint: JointType) -> tuple[Effect, ...]:
     if joint is JointType.slide:
-        return -np.ones((len(m.q), 1))
-    return -np.column_stack([np.cos(m.q), np.sin(m.q)])
+        return (j.Tilt(force=1.0),)
+    return j.Tilt(force=1.0), j.Tilt(force=0.0, sine=1.0)
 
 
 def _tilt_reading(theta: np.ndarray, h: float | None, base: Baseline, joint: JointType):
     effect = j.Tilt(force=float(theta[0]), sine=float(theta[1]) if joint is JointType.hinge else 0.0)
     return effect, base, _unphysical_baseline(base, joint)
-
-
-def _direction_features(m: Motion, h: float | None, joint: JointType) -> np.ndarray:
-    return _col(_sign(m.qd) * (m.qd < 0))
 
 
 def _direction_reading(theta: np.ndarray, h: float | None, base: Baseline, joint: JointType):
@@ -205,29 +188,8 @@ def _direction_reading(theta: np.ndarray, h: float | None, base: Baseline, joint
     return j.DirectionFriction(extra=-extra, direction="opening"), adjusted, problem
 
 
-def _quadratic_features(m: Motion, h: float | None, joint: JointType) -> np.ndarray:
-    return _col(m.qd * np.abs(m.qd))
-
-
-def _quadratic_reading(theta: np.ndarray, h: float | None, base: Baseline, joint: JointType):
-    unit = "N·s²/m²" if joint is JointType.slide else "N·m·s²/rad²"
-    effect = j.QuadraticDamping(coefficient=max(float(theta[0]), 0.0))
-    return effect, base, _first(_negative("the quadratic damping", float(theta[0]), unit),
-                                _unphysical_baseline(base, joint))
-
-
-def _load_features(m: Motion, h: float | None, joint: JointType) -> np.ndarray:
-    return _col(_closed_distance(m) * _sign(m.qd))
-
-
-def _load_reading(theta: np.ndarray, h: float | None, base: Baseline, joint: JointType):
-    unit = "N/m" if joint is JointType.slide else "N·m/rad"
-    effect = j.LoadFriction(per_extension=max(float(theta[0]), 0.0))
-    return effect, base, _first(_negative("the friction per extension", float(theta[0]), unit),
-                                _unphysical_baseline(base, joint))
-
-
 def _spring_features(m: Motion, h: float | None, joint: JointType) -> np.ndarray:
+    """The closer spring is MuJoCo's own joint stiffness, ``-k (q - reference)``: resistance ``k q - k reference``."""
     return np.column_stack([m.q, -np.ones_like(m.q)])
 
 
@@ -241,26 +203,43 @@ def _spring_reading(theta: np.ndarray, h: float | None, base: Baseline, joint: J
 
 
 FAMILIES: tuple[Family, ...] = (
-    Family("stiction", "stiction (Stribeck)", ("breakaway",), _stiction_features, _stiction_reading,
-           hyper="stribeck_velocity", grid=lambda j: _log_grid(_scale(j, 0.002, 0.01), _scale(j, 0.15, 1.0)),
+    Family("stiction", "stiction (Stribeck)", ("breakaway",),
+           _law_features(lambda h, jt: (j.Stiction(breakaway=1.0, stribeck_velocity=h),)),
+           _coefficient_reading(lambda v, h: j.Stiction(breakaway=v, stribeck_velocity=float(h)),
+                                "the breakaway friction", "breakaway"),
+           hyper="stribeck_velocity", grid=lambda jt: _log_grid(_scale(jt, 0.002, 0.01), _scale(jt, 0.15, 1.0)),
            cause="friction that is higher at low speed than when sliding (stiction, fading by the Stribeck speed)"),
-    Family("soft_close", "soft-close damper", ("damping",), _soft_close_features, _soft_close_reading,
-           hyper="zone", grid=lambda j: _log_grid(_scale(j, 0.005, 0.01), _scale(j, 0.2, 0.8)),
+    Family("soft_close", "soft-close damper", ("damping",),
+           _law_features(lambda h, jt: (j.SoftClose(zone=h, damping=1.0),)),
+           _coefficient_reading(lambda v, h: j.SoftClose(zone=float(h), damping=v), "the soft-close damping",
+                                "damping"),
+           hyper="zone", grid=lambda jt: _log_grid(_scale(jt, 0.005, 0.01), _scale(jt, 0.2, 0.8)),
            cause="a soft-close damper: damping that acts only near the closed end and only while closing"),
-    Family("self_close", "self-closing spring", ("stiffness",), _self_close_features, _self_close_reading,
-           hyper="zone", grid=lambda j: _log_grid(_scale(j, 0.003, 0.01), _scale(j, 0.2, 0.8)),
+    Family("self_close", "self-closing spring", ("stiffness",),
+           _law_features(lambda h, jt: (j.SelfClose(zone=h, stiffness=1.0),)),
+           _coefficient_reading(lambda v, h: j.SelfClose(zone=float(h), stiffness=v), "the pull-in stiffness",
+                                "stiffness"),
+           hyper="zone", grid=lambda jt: _log_grid(_scale(jt, 0.003, 0.01), _scale(jt, 0.2, 0.8)),
            cause="a self-closing spring that pulls the front shut over its last stretch", acts_at_rest=True),
-    Family("magnetic_catch", "magnetic catch", ("force",), _magnet_features, _magnet_reading,
-           hyper="decay", grid=lambda j: _log_grid(_scale(j, 0.0005, 0.002), _scale(j, 0.05, 0.3)),
+    Family("magnetic_catch", "magnetic catch", ("force",),
+           _law_features(lambda h, jt: (j.MagneticCatch(force=1.0, decay=h),)), _magnet_reading,
+           hyper="decay", grid=lambda jt: _log_grid(_scale(jt, 0.0005, 0.002), _scale(jt, 0.05, 0.3)),
            cause="a magnetic catch: a pull towards closed that fades within millimetres of it", acts_at_rest=True),
-    Family("tilt", "tilt (gravity)", ("force", "sine"), _tilt_features, _tilt_reading,
+    Family("tilt", "tilt (gravity)", ("force", "sine"), _law_features(_tilt_units), _tilt_reading,
            cause="gravity along the joint: a tilted runner or an out-of-plumb hinge", acts_at_rest=True),
-    Family("direction_friction", "direction-dependent friction", ("extra",), _direction_features,
+    Family("direction_friction", "direction-dependent friction", ("extra",),
+           _law_features(lambda h, jt: (j.DirectionFriction(extra=1.0, direction="closing"),)),
            _direction_reading, cause="friction that is higher in one direction of motion than the other"),
-    Family("quadratic_damping", "quadratic damping", ("coefficient",), _quadratic_features, _quadratic_reading,
+    Family("quadratic_damping", "quadratic damping", ("coefficient",),
+           _law_features(lambda h, jt: (j.QuadraticDamping(coefficient=1.0),)),
+           _coefficient_reading(lambda v, h: j.QuadraticDamping(coefficient=v), "the quadratic damping",
+                                "coefficient"),
            cause="damping that grows with the square of speed (fluid drag)"),
-    Family("load_friction", "friction growing with extension", ("per_extension",), _load_features,
-           _load_reading, cause="friction that grows the further the front is open (a cantilevered load)"),
+    Family("load_friction", "friction growing with extension", ("per_extension",),
+           _law_features(lambda h, jt: (j.LoadFriction(per_extension=1.0),)),
+           _coefficient_reading(lambda v, h: j.LoadFriction(per_extension=v), "the friction per extension",
+                                "per_extension"),
+           cause="friction that grows the further the front is open (a cantilevered load)"),
     Family("spring", "closer spring", ("stiffness", "preload"), _spring_features, _spring_reading,
            cause="a spring that pulls the front closed over its whole travel", acts_at_rest=True),
 )
