@@ -80,8 +80,6 @@ class Family:
     """Hyperparameter values to search, SI."""
     cause: str = ""
     """What the effect is, as a clause for the report's sentence."""
-    acts_at_rest: bool = False
-    """Whether the effect pushes the joint at zero speed (and so shows in holds and releases)."""
 
 
 # --------------------------------------------------------------------------------------------------- helpers
@@ -220,13 +218,13 @@ FAMILIES: tuple[Family, ...] = (
            _coefficient_reading(lambda v, h: j.SelfClose(zone=float(h), stiffness=v), "the pull-in stiffness",
                                 "stiffness"),
            hyper="zone", grid=lambda jt: _log_grid(_scale(jt, 0.003, 0.01), _scale(jt, 0.2, 0.8)),
-           cause="a self-closing spring that pulls the front shut over its last stretch", acts_at_rest=True),
+           cause="a self-closing spring that pulls the front shut over its last stretch"),
     Family("magnetic_catch", "magnetic catch", ("force",),
            _law_features(lambda h, jt: (j.MagneticCatch(force=1.0, decay=h),)), _magnet_reading,
            hyper="decay", grid=lambda jt: _log_grid(_scale(jt, 0.0005, 0.002), _scale(jt, 0.05, 0.3)),
-           cause="a magnetic catch: a pull towards closed that fades within millimetres of it", acts_at_rest=True),
+           cause="a magnetic catch: a pull towards closed that fades within millimetres of it"),
     Family("tilt", "tilt (gravity)", ("force", "sine"), _law_features(_tilt_units), _tilt_reading,
-           cause="gravity along the joint: a tilted runner or an out-of-plumb hinge", acts_at_rest=True),
+           cause="gravity along the joint: a tilted runner or an out-of-plumb hinge"),
     Family("direction_friction", "direction-dependent friction", ("extra",),
            _law_features(lambda h, jt: (j.DirectionFriction(extra=1.0, direction="closing"),)),
            _direction_reading, cause="friction that is higher in one direction of motion than the other"),
@@ -241,7 +239,7 @@ FAMILIES: tuple[Family, ...] = (
                                 "per_extension"),
            cause="friction that grows the further the front is open (a cantilevered load)"),
     Family("spring", "closer spring", ("stiffness", "preload"), _spring_features, _spring_reading,
-           cause="a spring that pulls the front closed over its whole travel", acts_at_rest=True),
+           cause="a spring that pulls the front closed over its whole travel"),
 )
 """The library, in the order ties are broken (simplest and most common first is not implied)."""
 

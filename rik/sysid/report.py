@@ -94,7 +94,11 @@ def _candidate(s: Any) -> dict[str, Any]:
 
 # ------------------------------------------------------------------------------------------------------ plots
 
-def _all_rows(d: Discovery) -> tuple[Rows, np.ndarray, np.ndarray | None, np.ndarray]:
+Residuals = tuple[Rows, np.ndarray, np.ndarray | None, np.ndarray]
+"""All fit rows, the baseline's residuals, the chosen model's (None without one), held-out flags."""
+
+
+def all_residuals(d: Discovery) -> Residuals:
     """All fit rows (training then held-out), the baseline's and the chosen model's residuals, held-out flags."""
     sel = d.selection
     parts = (d.split.train, d.split.heldout)
@@ -119,8 +123,8 @@ def _binned(x: np.ndarray, y: np.ndarray, bins: int = 30) -> tuple[np.ndarray, n
     return np.array(centres), np.array(means)
 
 
-def plot_residual_time(d: Discovery, path: Path) -> Path:
-    rows, rb, re, held = _all_rows(d)
+def plot_residual_time(d: Discovery, res: Residuals, path: Path) -> Path:
+    rows, rb, re, held = res
     plt = pyplot()
     n = len(d.rows.names)
     fig, axes = plt.subplots(n, 1, figsize=(9, 1.8 * n + 0.6), sharey=True, squeeze=False)
@@ -141,8 +145,8 @@ def plot_residual_time(d: Discovery, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-def plot_residual_position(d: Discovery, path: Path) -> Path:
-    rows, rb, re, _ = _all_rows(d)
+def plot_residual_position(d: Discovery, res: Residuals, path: Path) -> Path:
+    rows, rb, re, _ = res
     plt = pyplot()
     label, scale = _UNITS[d.joint]["plot_pos"]
     unit = _UNITS[d.joint]["force"]
@@ -162,8 +166,8 @@ def plot_residual_position(d: Discovery, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-def plot_residual_velocity(d: Discovery, path: Path) -> Path:
-    rows, rb, re, _ = _all_rows(d)
+def plot_residual_velocity(d: Discovery, res: Residuals, path: Path) -> Path:
+    rows, rb, re, _ = res
     plt = pyplot()
     label, scale = _UNITS[d.joint]["plot_vel"]
     fig, ax = plt.subplots(figsize=(7, 3.6))
@@ -184,7 +188,7 @@ def plot_residual_velocity(d: Discovery, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-def plot_resimulated(d: Discovery, path: Path) -> Path:
+def plot_resimulated(d: Discovery, res: Residuals, path: Path) -> Path:
     plt = pyplot()
     label, scale = _UNITS[d.joint]["plot_pos"]
     n = max(len(d.resimulated), 1)
@@ -278,8 +282,9 @@ def write_report(d: Discovery, directory: Path) -> Path:
     stage.mkdir(parents=True)
     try:
         data = summary(d)
+        res = all_residuals(d)
         for name, plot in PLOTS.items():
-            plot(d, stage / name)
+            plot(d, res, stage / name)
         write_atomic(stage / SUMMARY, json.dumps(data, indent=2) + "\n")
         write_atomic(stage / REPORT, markdown(d, data))
         if directory.exists():

@@ -41,8 +41,6 @@ OCCAM = 0.95
 """Share of the winner's improvement at which a simpler candidate is preferred."""
 TIE = 0.90
 """Share of the chosen candidate's improvement from which another candidate explains the data as well."""
-MAX_EFFECTS = 2
-"""Most effects a model is extended with (a pair)."""
 
 
 @dataclass(frozen=True)
@@ -60,11 +58,6 @@ class Score:
     @property
     def passed(self) -> bool:
         return self.verdict == "pass"
-
-    @property
-    def improvement(self) -> float:
-        """Drop of the held-out force RMSE, N or N·m."""
-        return self.gain * self.fit.rmse_heldout / (1.0 - self.gain) if self.gain < 1 else float("inf")
 
 
 @dataclass(frozen=True)
@@ -85,10 +78,6 @@ class Selection:
     """Every pair tried, best held-out error first."""
     pair_alternatives: tuple[Score, ...] = ()
     """Pairs the data cannot tell from the chosen pair."""
-
-    @property
-    def ambiguous(self) -> bool:
-        return bool(self.alternatives)
 
     @property
     def found(self) -> bool:
