@@ -11,9 +11,12 @@ if ((${#apt_pkgs[@]})) && command -v dpkg-query >/dev/null; then
   missing=()
   for p in "${apt_pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done
   if ((${#missing[@]})); then
-    sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    # As root (every container) apt-get runs directly, else through sudo. The environment variable goes
+    # through env(1): a `VAR=value` after an expanded "$sudo" would be read as a command name when it is empty.
+    as_root=(); [ "$(id -u)" -ne 0 ] && as_root=(sudo)
     echo "setup: installing Debian packages: ${missing[*]}"
-    $sudo apt-get update -qq && $sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
+    "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+    "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
   fi
 fi
 
