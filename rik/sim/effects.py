@@ -25,13 +25,21 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from rik.combinator.joints import DIRECTION_FRICTION_SPEED, native_kind
 from rik.errors import RikError
-from rik.schemas.joints import JointType
+from rik.schemas.joints import JointEffect, JointType, SoftClose
+
+if TYPE_CHECKING:
+    import mujoco
+    from numpy.typing import ArrayLike, NDArray
+    from pydantic import TypeAdapter
+
+    Values = float | np.floating | NDArray[np.floating]
+    """A joint position, velocity or force: one value, or an array of them (the laws broadcast)."""
 
 __all__ = ["DIRECTION_FRICTION_SPEED", "FRICTION_KINDS", "RuntimeEffects", "as_effect", "effect_force",
            "extra_friction", "front_effects", "is_native"]
@@ -41,15 +49,13 @@ FRICTION_KINDS = frozenset({"stiction", "direction_friction", "load_friction"})
 
 
 @functools.cache
-def _adapter() -> Any:
+def _adapter() -> TypeAdapter[JointEffect]:
     from pydantic import TypeAdapter
-
-    from rik.schemas.joints import JointEffect
 
     return TypeAdapter(JointEffect)
 
 
-def as_effect(effect: Any) -> Any:
+def as_effect(effect: JointEffect | Mapping[str, object]) -> JointEffect:
     """An effect model from a model or its ``model_dump()`` dict (as variants record runtime effects)."""
     if isinstance(effect, Mapping):
         try:
@@ -68,64 +74,64 @@ def _type(joint_type: JointType | str) -> str:
     return value
 
 
-def is_native(effect: Any, joint_type: JointType | str) -> bool:
+def is_native(effect: JointEffect | Mapping[str, object], joint_type: JointType | str) -> bool:
     """True when MuJoCo expresses ``effect`` on a joint of ``joint_type`` in the MJCF itself (rik writes it there);
     False when :class:`RuntimeEffects` applies it each step."""
     return native_kind(as_effect(effect).kind, _type(joint_type))
 
 
-def _extra(effect: Any, q: Any, v: Any, regularisation: float) -> Any:
+def _extra(effect: JointEffect, q: Values, v: Values, regularisation: float) -> Values:
     """The friction laws, on floats or arrays alike (only ufuncs and arithmetic: fast on floats)."""
-    kind = effect.kind
-    if kind == "stiction":
+    if effect.kind == "stiction":
         return effect.breakaway * np.exp(-((v / effect.stribeck_velocity) ** 2))
-    if kind == "direction_friction":
+    if effect.kind == "direction_friction":
         along = v if effect.direction == "opening" else -v
         if regularisation > 0:
             return effect.extra * np.minimum(np.maximum(along / regularisation, 0.0), 1.0)
         return effect.extra * (along > 0)
-    if kind == "load_friction":
+    if effect.kind == "load_friction":
         return effect.per_extension * np.maximum(q, 0.0)
-    raise RikError(f"joint effect '{kind}' is not a friction effect (those are {', '.join(sorted(FRICTION_KINDS))})")
+    raise RikError(f"joint effect '{effect.kind}' is not a friction effect (those are {', '.join(sorted(FRICTION_KINDS))})")
 
 
-def _force(effect: Any, q: Any, v: Any, joint_type: str, regularisation: float) -> Any:
+def _force(effect: JointEffect, q: Values, v: Values, joint_type: str, regularisation: float) -> Values:
     """The force laws, on floats or arrays alike (see :func:`effect_force`)."""
-    kind = effect.kind
-    if kind in FRICTION_KINDS:
+    if effect.kind in FRICTION_KINDS:
         return -_extra(effect, q, v, regularisation) * np.sign(v)
-    if kind == "soft_close":
+    if effect.kind == "soft_close":
         return -effect.damping * v * ((q < effect.zone) & ((v < 0) | (not effect.closing_only)))
-    if kind == "self_close":
+    if effect.kind == "self_close":
         return -effect.stiffness * np.minimum(np.maximum(effect.zone - q, 0.0), effect.zone)
-    if kind == "magnetic_catch":
+    if effect.kind == "magnetic_catch":
         return -effect.force / (1.0 + np.maximum(q, 0.0) / effect.decay) ** 2
-    if kind == "tilt":
+    if effect.kind == "tilt":
         if joint_type == "slide":
             return effect.force + 0.0 * q
         return effect.force * np.cos(q) + effect.sine * np.sin(q)
-    if kind == "quadratic_damping":
+    if effect.kind == "quadratic_damping":
         return -effect.coefficient * v * np.abs(v)
-    raise RikError(f"joint effect kind '{kind}' has no force law")  # pragma: no cover - the schema's union is closed
+    raise RikError(f"joint effect kind '{effect.kind}' has no force law")  # pragma: no cover - the schema's union is closed
 
 
-def _arrays(q: Any, v: Any) -> tuple[np.ndarray, np.ndarray]:
+def _arrays(q: ArrayLike, v: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     q, v = np.broadcast_arrays(np.asarray(q, np.float64), np.asarray(v, np.float64))
     return q, v
 
 
-def extra_friction(effect: Any, q: Any, v: Any, regularisation: float = 0.0) -> np.ndarray:
+def extra_friction(effect: JointEffect | Mapping[str, object], q: ArrayLike, v: ArrayLike,
+                   regularisation: float = 0.0) -> NDArray[np.float64]:
     """Friction magnitude (N or N·m, ≥ 0) a friction-type effect adds to the joint's Coulomb friction at position
     ``q`` (m or rad) and velocity ``v`` (m/s or rad/s); arrays broadcast.
 
     ``regularisation`` (m/s or rad/s; 0: the ideal law) ramps direction-dependent friction linearly from 0 at
     rest to its full value at that speed in its direction, as rik's simulation does
     (:data:`rik.combinator.joints.DIRECTION_FRICTION_SPEED`)."""
-    q, v = _arrays(q, v)
-    return np.asarray(_extra(as_effect(effect), q, v, regularisation), np.float64)
+    qa, va = _arrays(q, v)
+    return np.asarray(_extra(as_effect(effect), qa, va, regularisation), np.float64)
 
 
-def effect_force(effect: Any, q: Any, v: Any, joint_type: JointType | str, regularisation: float = 0.0) -> np.ndarray:
+def effect_force(effect: JointEffect | Mapping[str, object], q: ArrayLike, v: ArrayLike, joint_type: JointType | str,
+                 regularisation: float = 0.0) -> NDArray[np.float64]:
     """Generalised force (N or N·m; positive pushes open) of ``effect`` on a joint of ``joint_type`` at position
     ``q`` (m or rad, 0 closed) and velocity ``v`` (m/s or rad/s); arrays broadcast.
 
@@ -133,8 +139,8 @@ def effect_force(effect: Any, q: Any, v: Any, joint_type: JointType | str, regul
     ``regularisation`` is passed to :func:`extra_friction`. Where the schema leaves a law open, rik's choice:
     ``self_close`` pulls ``stiffness * zone`` past closed (q < 0), as its native actuator does; ``magnetic_catch``
     pulls ``force`` past closed; ``soft_close`` acts over ``q < zone``, past closed included."""
-    q, v = _arrays(q, v)
-    return np.asarray(_force(as_effect(effect), q, v, _type(joint_type), regularisation), np.float64)
+    qa, va = _arrays(q, v)
+    return np.asarray(_force(as_effect(effect), qa, va, _type(joint_type), regularisation), np.float64)
 
 
 class RuntimeEffects:
@@ -150,7 +156,8 @@ class RuntimeEffects:
     construction.
     """
 
-    def __init__(self, model: Any, dof_adr: int, qpos_adr: int, effects: Iterable[Any],
+    def __init__(self, model: mujoco.MjModel, dof_adr: int, qpos_adr: int,
+                 effects: Iterable[JointEffect | Mapping[str, object]],
                  base_frictionloss: float | None = None, base_damping: float | None = None):
         import mujoco
 
@@ -164,13 +171,14 @@ class RuntimeEffects:
                                        else base_frictionloss)
         self.base_damping = float(model.dof_damping[self.dof] if base_damping is None else base_damping)
         self._friction = tuple(e for e in self.effects if e.kind in FRICTION_KINDS)
-        self._dampers = tuple(e for e in self.effects if e.kind == "soft_close")
+        self._dampers = tuple(e for e in self.effects if isinstance(e, SoftClose))
         self._forces = tuple(e for e in self.effects if e.kind not in FRICTION_KINDS and e.kind != "soft_close")
         self._speed = DIRECTION_FRICTION_SPEED[self.joint_type]
-        self._pending: tuple[Any, float, float] | None = None
-        self._frictionloss, self._damping = model.dof_frictionloss, model.dof_damping
-        self._data: Any = None
-        self._arrays: tuple[Any, Any, Any] = ()  # type: ignore[assignment]
+        self._pending: tuple[mujoco.MjData, float, float] | None = None
+        self._frictionloss: NDArray[np.float64] = model.dof_frictionloss
+        self._damping: NDArray[np.float64] = model.dof_damping
+        self._data: mujoco.MjData | None = None
+        self._arrays: tuple[NDArray[np.float64], ...] = ()
 
     def __bool__(self) -> bool:
         return bool(self.effects)
@@ -197,12 +205,12 @@ class RuntimeEffects:
                 extra += e.damping
         return self.base_damping + extra
 
-    def _views(self, data: Any) -> tuple[Any, Any, Any]:
+    def _views(self, data: mujoco.MjData) -> tuple[NDArray[np.float64], ...]:
         if data is not self._data:  # attribute access builds a new array wrapper each time: keep them
             self._data, self._arrays = data, (data.qpos, data.qvel, data.qfrc_applied)
         return self._arrays
 
-    def apply(self, data: Any) -> None:
+    def apply(self, data: mujoco.MjData) -> None:
         """Set the joint's friction and damping and add the effects' forces for the coming ``mj_step``."""
         if self._pending is not None:
             self.undo(data)
@@ -220,7 +228,7 @@ class RuntimeEffects:
             qfrc[self.dof] = written
             self._pending = (data, before, written)
 
-    def undo(self, data: Any) -> None:
+    def undo(self, data: mujoco.MjData) -> None:
         """Put back the model's friction and damping and the ``qfrc_applied`` entry as they were before
         :meth:`apply` (if something else changed that entry since, only the effects' force is taken off)."""
         if self._friction:
@@ -234,7 +242,7 @@ class RuntimeEffects:
             current = float(qfrc[self.dof])
             qfrc[self.dof] = before if current == written else current - (written - before)
 
-    def step(self, data: Any, steps: int = 1) -> None:
+    def step(self, data: mujoco.MjData, steps: int = 1) -> None:
         """``steps`` physics steps with the effects applied."""
         import mujoco
 
@@ -244,14 +252,14 @@ class RuntimeEffects:
             self.undo(data)
 
 
-def front_effects(model: Any, fronts: Iterable[Mapping[str, Any]]) -> tuple[RuntimeEffects, ...]:
+def front_effects(model: mujoco.MjModel, fronts: Iterable[Mapping[str, object]]) -> tuple[RuntimeEffects, ...]:
     """The appliers of a compiled variant's (or scene's) runtime effects, from the ``rik.variant`` record's
     fronts (their ``joint`` and ``runtime_effects``); fronts without runtime effects get none."""
     import mujoco
 
     appliers = []
     for front in fronts:
-        effects = front.get("runtime_effects") or ()
+        effects = cast("list[dict[str, object]]", front.get("runtime_effects") or [])  # JSON: effect dumps
         if not effects:
             continue
         joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, front["joint"])
