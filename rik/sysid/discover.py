@@ -20,6 +20,7 @@ import numpy as np
 
 from rik.errors import RikError
 from rik.schemas.common import Provenance
+from rik.schemas import joints as j
 from rik.schemas.joints import JointResistance, JointType, Spring
 from rik.sysid.effects import FAMILIES, Baseline, Effect
 from rik.sysid.fit import Fit, Rows, Split, all_rows, fit_all, fit_model, fit_velocity, split_rows
@@ -95,7 +96,7 @@ class Discovery:
         pb, pe = self.position_rmse
         if not self.selection.found:
             best = self.selection.scores[0] if self.selection.scores else None
-            tail = (f"; the best candidate, {best.fit.family.title}, fails: {best.verdict}" if best else "")
+            tail = (f"; the best candidate, {best.fit.title}, fails: {best.verdict}" if best else "")
             return (f"No significant unmodelled effect: damping and Coulomb friction explain the held-out data "
                     f"(force error {fb:.3g} {unit}){tail}.")
         final = self.selection.final
@@ -125,28 +126,28 @@ def describe(effect: Effect | None, joint: JointType) -> str:
     damp = "N·s/m" if slide else "N·m·s/rad"
     stiff = "N/m" if slide else "N·m/rad"
     speed = "mm/s" if slide else "°/s"
-    match effect.kind if not isinstance(effect, Spring) else "spring":
-        case "stiction":
+    match effect:
+        case j.Stiction():
             return (f"breakaway friction {effect.breakaway:.3g} {f} above sliding, fading by "
                     f"{effect.stribeck_velocity * to_len:.3g} {speed}")
-        case "soft_close":
+        case j.SoftClose():
             return f"damping {effect.damping:.3g} {damp} within {effect.zone * to_len:.3g} {length} of closed"
-        case "self_close":
+        case j.SelfClose():
             return (f"stiffness {effect.stiffness:.3g} {stiff} over the last {effect.zone * to_len:.3g} {length}, "
                     f"a pull of {effect.stiffness * effect.zone:.3g} {f} at closed")
-        case "magnetic_catch":
+        case j.MagneticCatch():
             return f"a pull of {effect.force:.3g} {f} at contact, decaying over {effect.decay * to_len:.3g} {length}"
-        case "tilt":
+        case j.Tilt():
             extra = f" and {effect.sine:.3g} {f} × sin(angle)" if not slide else ""
             return f"a constant {effect.force:.3g} {f} pushing it {'open' if effect.force > 0 else 'closed'}{extra}"
-        case "direction_friction":
+        case j.DirectionFriction():
             return f"{effect.extra:.3g} {f} more friction when {effect.direction}"
-        case "quadratic_damping":
+        case j.QuadraticDamping():
             sq = "N·s²/m²" if slide else "N·m·s²/rad²"
             return f"a coefficient of {effect.coefficient:.3g} {sq}"
-        case "load_friction":
+        case j.LoadFriction():
             return f"{effect.per_extension / (1e3 if slide else to_len):.3g} {f} more friction per {length} open"
-        case "spring":
+        case j.Spring():
             return (f"stiffness {effect.stiffness:.3g} {stiff} with its rest at {effect.reference * to_len:.3g} "
                     f"{length}")
     return str(effect)
@@ -173,13 +174,13 @@ def prepare_all(trials: Sequence[Trial], *, rate_hz: float | None = None, window
         raise RikError(f"trials of different joint types: {', '.join(sorted(j.value for j in joints))}")
     joint = next(iter(joints))
     for window in (window_s,) if window_s else WINDOWS_S:
-        kwargs = {"rate_hz": rate_hz, "window_s": window}
-        moving = fit_velocity([preprocess(t, delay_s=0.0, **kwargs) for t in trials])
+        moving = fit_velocity([preprocess(t, rate_hz, window_s=window, delay_s=0.0) for t in trials])
         if moving <= NOISE_FLOOR[joint]:
             break
     if delay_s is None:
-        delay_s = statistics.median(preprocess(t, moving_velocity=moving, **kwargs).delay_s for t in trials)
-    return [preprocess(t, delay_s=delay_s, **kwargs) for t in trials], float(delay_s)
+        delay_s = statistics.median(preprocess(t, rate_hz, window_s=window, moving_velocity=moving).delay_s
+                                    for t in trials)
+    return [preprocess(t, rate_hz, window_s=window, delay_s=delay_s) for t in trials], float(delay_s)
 
 
 def select_effects(split: Split) -> Selection:

@@ -92,6 +92,13 @@ def _log_grid(lo: float, hi: float, n: int = 32) -> np.ndarray:
     return np.geomspace(lo, hi, n)
 
 
+def _given(hyper: float | None) -> float:
+    """The hyperparameter of a family that has one (its grid gives it)."""
+    if hyper is None:
+        raise ValueError("this effect family needs its hyperparameter")
+    return float(hyper)
+
+
 def _negative(name: str, value: float, unit: str) -> str | None:
     return f"{name} {value:.3g} {unit} is negative" if value < 0 else None
 
@@ -120,7 +127,7 @@ def _first(*problems: str | None) -> str | None:
 
 # ------------------------------------------------------------------------------------------------ families
 
-UnitEffects = Callable[[float | None, JointType], tuple[Effect, ...]]
+UnitEffects = Callable[[float | None, JointType], tuple[j.JointEffect, ...]]
 """(h, joint) → the family's effect with each linear coefficient set to 1 in turn (the others 0)."""
 
 
@@ -160,12 +167,12 @@ def _coefficient_reading(build: Callable[[float, float | None], Effect], name: s
 
 
 def _magnet_reading(theta: np.ndarray, decay: float | None, base: Baseline, joint: JointType):
-    effect = j.MagneticCatch(force=max(float(theta[0]), 0.0), decay=float(decay))
+    effect = j.MagneticCatch(force=max(float(theta[0]), 0.0), decay=_given(decay))
     problem = f"the catch repels ({float(theta[0]):.3g} {_FORCE[joint]})" if theta[0] < 0 else None
     return effect, base, _first(problem, _unphysical_baseline(base, joint))
 
 
-def _tilt_units(h: float | None, joint: JointType) -> tuple[Effect, ...]:
+def _tilt_units(h: float | None, joint: JointType) -> tuple[j.JointEffect, ...]:
     if joint is JointType.slide:
         return (j.Tilt(force=1.0),)
     return j.Tilt(force=1.0), j.Tilt(force=0.0, sine=1.0)
@@ -203,19 +210,19 @@ def _spring_reading(theta: np.ndarray, h: float | None, base: Baseline, joint: J
 FAMILIES: tuple[Family, ...] = (
     Family("stiction", "stiction (Stribeck)", ("breakaway",),
            _law_features(lambda h, jt: (j.Stiction(breakaway=1.0, stribeck_velocity=h),)),
-           _coefficient_reading(lambda v, h: j.Stiction(breakaway=v, stribeck_velocity=float(h)),
+           _coefficient_reading(lambda v, h: j.Stiction(breakaway=v, stribeck_velocity=_given(h)),
                                 "the breakaway friction", "breakaway"),
            hyper="stribeck_velocity", grid=lambda jt: _log_grid(_scale(jt, 0.002, 0.01), _scale(jt, 0.15, 1.0)),
            cause="friction that is higher at low speed than when sliding (stiction, fading by the Stribeck speed)"),
     Family("soft_close", "soft-close damper", ("damping",),
            _law_features(lambda h, jt: (j.SoftClose(zone=h, damping=1.0),)),
-           _coefficient_reading(lambda v, h: j.SoftClose(zone=float(h), damping=v), "the soft-close damping",
+           _coefficient_reading(lambda v, h: j.SoftClose(zone=_given(h), damping=v), "the soft-close damping",
                                 "damping"),
            hyper="zone", grid=lambda jt: _log_grid(_scale(jt, 0.005, 0.01), _scale(jt, 0.2, 0.8)),
            cause="a soft-close damper: damping that acts only near the closed end and only while closing"),
     Family("self_close", "self-closing spring", ("stiffness",),
            _law_features(lambda h, jt: (j.SelfClose(zone=h, stiffness=1.0),)),
-           _coefficient_reading(lambda v, h: j.SelfClose(zone=float(h), stiffness=v), "the pull-in stiffness",
+           _coefficient_reading(lambda v, h: j.SelfClose(zone=_given(h), stiffness=v), "the pull-in stiffness",
                                 "stiffness"),
            hyper="zone", grid=lambda jt: _log_grid(_scale(jt, 0.003, 0.01), _scale(jt, 0.2, 0.8)),
            cause="a self-closing spring that pulls the front shut over its last stretch"),

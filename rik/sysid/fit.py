@@ -115,8 +115,8 @@ def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, mar
     for i, p in enumerate(prepared):
         keep = (np.abs(p.qd) >= velocity) & ~touching(p.q, limits, margin, p.settings.window_samples // 2)
         parts.append((p.t[keep], p.q[keep], p.qd[keep], p.qdd[keep], p.f_smooth[keep], np.full(keep.sum(), i)))
-    cols = [np.concatenate(c) for c in zip(*parts, strict=True)]
-    return Rows(joint, *cols[:5], cols[5].astype(int), tuple(p.trial.name for p in prepared))
+    t, q, qd, qdd, f, trial = (np.concatenate(c) for c in zip(*parts, strict=True))
+    return Rows(joint, t, q, qd, qdd, f, trial.astype(int), tuple(p.trial.name for p in prepared))
 
 
 def split_rows(rows: Rows, prepared: Sequence[Prepared], heldout: Sequence[int] | None = None) -> Split:
@@ -176,6 +176,11 @@ class Fit:
         return self.terms[-1][0] if self.terms else None
 
     @property
+    def title(self) -> str:
+        """The title of :attr:`family`, ``baseline`` for the baseline."""
+        return self.family.title if self.family else "baseline"
+
+    @property
     def hyper(self) -> float | None:
         return self.terms[-1][1] if self.terms else None
 
@@ -227,6 +232,8 @@ def best_hyper(rows: Rows, family: Family, fixed: Sequence[Term] = ()) -> float:
     def rss_at(h: float) -> float:
         return _solve(np.hstack([base, family.features(rows.motion, h, rows.joint)]), rows.f)[1]
 
+    if family.grid is None:
+        raise ValueError(f"effect family {family.kind} has no hyperparameter to search")
     grid = family.grid(rows.joint)
     rss = np.array([rss_at(h) for h in grid])
     k = int(np.argmin(rss))

@@ -46,7 +46,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, overload
 
 import numpy as np
 
@@ -534,6 +534,10 @@ Law = Callable[[float, float], float]
 FrictionLaw = Callable[[float, float, float], float]
 
 
+@overload
+def direction_share(v: float, load: float, sign: float, v_eps: float, f_eps: float) -> float: ...
+@overload
+def direction_share(v: np.ndarray, load: np.ndarray | float, sign: float, v_eps: float, f_eps: float) -> np.ndarray: ...
 def direction_share(v: np.ndarray | float, load: np.ndarray | float, sign: float, v_eps: float,
                     f_eps: float) -> np.ndarray | float:
     """Share (0 to 1) of the direction friction that acts: ``(1 + tanh(sign v / v_eps)) / 2`` when moving,
@@ -750,10 +754,11 @@ def excitation_plan(joint: JointType | str, upper: float, rng: np.random.Generat
     x = EXCITE[joint]
     u = float(upper)
     best: ExcitationPlan | None = None
-    begin = start
     for _ in range(50):
         if start is None:
             begin = 0.0 if rng.random() < 0.4 else _uniform(rng, (0.1 * u, 0.6 * u))
+        else:
+            begin = start
 
         def move(lo: float, hi: float) -> Segment:
             return Segment("move", _uniform(rng, (lo * u, hi * u)), _log_uniform(rng, x.block_speed), BLOCK_MOVE_TIME)

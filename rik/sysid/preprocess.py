@@ -295,8 +295,8 @@ def preprocess(trial: Trial, rate_hz: float | None = None, *, window_s: float = 
         motion["qd_measured"] = resample(trial.t, trial.qd, grid)
     aligned = _align(lag, motion, {"f": f_raw, "f_smooth": f_smooth})
     observed = limits is None
-    bounds = (float(aligned["q"].min()), float(aligned["q"].max())) if observed else (float(limits[0]),
-                                                                                      float(limits[1]))
+    bounds = ((float(aligned["q"].min()), float(aligned["q"].max())) if limits is None
+              else (float(limits[0]), float(limits[1])))
     settings = PreprocessSettings(
         rate_hz=rate, window_s=window_s, window_samples=window, polyorder=polyorder, delay_s=lag / rate,
         delay_estimated=delay_s is None, max_delay_s=max_delay_s, moving_velocity=moving_velocity,

@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 import shutil
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 
@@ -33,7 +33,15 @@ SUMMARY = "summary.json"
 REPORT = "report.md"
 FORMAT = 1
 """Version of ``summary.json``'s layout."""
-_UNITS = {JointType.slide: {"position": "m", "force": "N", "plot_pos": ("mm", 1e3), "plot_vel": ("mm/s", 1e3)},
+class _Units(TypedDict):
+    position: str
+    force: str
+    plot_pos: tuple[str, float]
+    """Plot unit of positions and its factor from SI."""
+    plot_vel: tuple[str, float]
+
+
+_UNITS: dict[JointType, _Units] = {JointType.slide: {"position": "m", "force": "N", "plot_pos": ("mm", 1e3), "plot_vel": ("mm/s", 1e3)},
           JointType.hinge: {"position": "rad", "force": "N·m", "plot_pos": ("°", 180 / np.pi),
                             "plot_vel": ("°/s", 180 / np.pi)}}
 
@@ -102,8 +110,9 @@ def all_residuals(d: Discovery) -> Residuals:
     """All fit rows (training then held-out), the baseline's and the chosen model's residuals, held-out flags."""
     sel = d.selection
     parts = (d.split.train, d.split.heldout)
-    rows = Rows(d.joint, *(np.concatenate([getattr(p, k) for p in parts]) for k in ("t", "q", "qd", "qdd", "f",
-                                                                                    "trial")), d.rows.names)
+    t, q, qd, qdd, f, trial = (np.concatenate([getattr(p, k) for p in parts]) for k in ("t", "q", "qd", "qdd", "f",
+                                                                                         "trial"))
+    rows = Rows(d.joint, t, q, qd, qdd, f, trial, d.rows.names)
     held = np.concatenate([np.zeros(len(parts[0]), bool), np.ones(len(parts[1]), bool)])
     chosen = sel.final if sel.found else None
     return rows, _residuals(sel.baseline, rows), _residuals(chosen, rows) if chosen else None, held
@@ -252,10 +261,10 @@ def markdown(d: Discovery, data: dict[str, Any]) -> str:
               f"at least {MIN_GAIN:.0%}, a BIC drop of at least {MIN_BIC_DROP:g} and physical parameters.", "",
               "| effect | fitted | held-out gain | BIC drop | verdict |", "|---|---|---:|---:|---|"]
     for s in sel.scores:
-        lines.append(f"| {s.fit.family.title} | {describe(s.fit.effect, d.joint)} | {s.gain:.1%} | "
+        lines.append(f"| {s.fit.title} | {describe(s.fit.effect, d.joint)} | {s.gain:.1%} | "
                      f"{s.bic_drop:.0f} | {s.verdict} |")
     if sel.pairs:
-        against = sel.chosen.fit.family.title if sel.chosen else "the baseline: no single effect passed"
+        against = sel.chosen.fit.title if sel.chosen else "the baseline: no single effect passed"
         lines += ["", f"Pairs of effects, scored against the best single effect ({against}) and required to beat "
                       f"each member alone by {MIN_GAIN:.0%}; the ten best:", "",
                   "| effects | fitted | held-out gain | BIC drop | verdict |", "|---|---|---:|---:|---|"]

@@ -170,7 +170,7 @@ def pair_score(reference: Fit, singles: dict[str, Fit], fit: Fit) -> Score:
         alone = singles[kind].rmse_heldout
         gain = 1.0 - fit.rmse_heldout / alone if alone > 0 else 0.0
         if gain < MIN_GAIN:
-            return replace(result, verdict=f"held-out gain over {singles[kind].family.title} alone {gain:.1%} "
+            return replace(result, verdict=f"held-out gain over {singles[kind].title} alone {gain:.1%} "
                                            f"below {MIN_GAIN:.0%}")
     return result
 

@@ -326,8 +326,8 @@ def _find_columns(raw: _Raw, joint: JointType) -> tuple[dict[str, str], dict[str
         if name == TRIAL_COLUMN:
             trial = header
             continue
-        for role, names in COLUMN_NAMES.items():
-            if name in names:
+        for role, aliases in COLUMN_NAMES.items():
+            if name in aliases:
                 if role in found:
                     raise TrialError(raw.file, None, header, f"a second {role} column (besides "
                                                              f"'{found[role]}'); keep one")
@@ -343,12 +343,12 @@ def _find_columns(raw: _Raw, joint: JointType) -> tuple[dict[str, str], dict[str
     units: dict[str, str] = {}
     scales: dict[str, float] = {}
     for role, header in found.items():
-        name, unit = _parse_header(header)
+        name, declared = _parse_header(header)
         try:
-            scales[role] = unit_scale(role, unit, joint, name)
+            scales[role] = unit_scale(role, declared, joint, name)
         except ValueError as exc:
             raise TrialError(raw.file, None, header, str(exc)) from None
-        units[role] = unit or ""
+        units[role] = declared or ""
     return found, units, scales, trial
 
 
@@ -463,11 +463,18 @@ def _build(src: _Source, limits: _Thresholds) -> Trial:
 
 # ------------------------------------------------------------------------------------------------ files in
 
+def _rows_where(where: Callable[[int], str], rows: np.ndarray) -> Callable[[int], str]:
+    """Sample index in a trial → its row's label, from the file's rows the trial takes and ``where`` (file row
+    index → label)."""
+    return lambda i: where(int(rows[i]))
+
+
 def _file_trials(raw: _Raw, joint: JointType, limits: _Thresholds) -> list[Trial]:
     columns, units, scales, trial_header = _find_columns(raw, joint)
     data = {role: raw.numbers(header) for role, header in columns.items()}
     if raw.rows == 0:
         raise TrialError(raw.file, None, None, "no data rows below the header")
+    groups: list[tuple[str, np.ndarray]]
     if trial_header is None:
         groups = [(Path(raw.file).stem, np.arange(raw.rows))]
     else:
@@ -483,7 +490,7 @@ def _file_trials(raw: _Raw, joint: JointType, limits: _Thresholds) -> list[Trial
         src = _Source(raw.file, name, joint, columns, units, scales,
                       {role: col.values[rows] for role, col in data.items()},
                       {role: col.empty[rows] for role, col in data.items()},
-                      lambda i, rows=rows: raw.where(int(rows[i])))
+                      _rows_where(raw.where, rows))
         trials.append(_build(src, limits))
     return trials
 
@@ -634,7 +641,8 @@ def load_lerobot_trials(root: str | Path, joint: Literal["slide", "hinge"] | Joi
     limits = _thresholds(kind, min_samples, min_motion, min_force_range)
     root = Path(root)
     info_file, info = _read_info(root)
-    declared = {"position": (position, position_unit), "force": (force, force_unit)}
+    declared: dict[str, tuple[str, str | None]] = {"position": (position, position_unit),
+                                                   "force": (force, force_unit)}
     if velocity is not None:
         declared["velocity"] = (velocity, velocity_unit)
     refs = {role: _feature_ref(text, info["features"], info_file) for role, (text, _) in declared.items()}
@@ -662,7 +670,7 @@ def load_lerobot_trials(root: str | Path, joint: Literal["slide", "hinge"] | Joi
             found[int(ep)] = (str(path), columns, np.flatnonzero(index == ep))
     if wanted is not None and (missing := sorted(wanted - set(found))):
         raise TrialError(root, None, "episode_index", f"no episode {missing[0]} in the dataset")
-    units = {"time": "s", **{role: unit for role, (_, unit) in declared.items()}}
+    units = {"time": "s", **{role: unit or "" for role, (_, unit) in declared.items()}}  # each checked above
     names = {"time": "timestamp", **{role: ref.text for role, ref in refs.items()}}
     trials = []
     for ep in sorted(found):
@@ -670,6 +678,6 @@ def load_lerobot_trials(root: str | Path, joint: Literal["slide", "hinge"] | Joi
         src = _Source(file, f"episode_{ep}", kind, names, units, scales,
                       {role: columns[role][0][rows] for role in columns},
                       {role: columns[role][1][rows] for role in columns},
-                      lambda i, rows=rows: f"row {int(rows[i])}")
+                      _rows_where(lambda row: f"row {row}", rows))
         trials.append(_build(src, limits))
     return trials
