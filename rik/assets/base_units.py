@@ -9,6 +9,7 @@ decomposed with CoACD.)
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -19,6 +20,12 @@ if TYPE_CHECKING:
 
 BACK_PANEL_THICKNESS = 0.006
 """Hardboard back panel, m."""
+
+
+def vec3(values: Iterable[float]) -> tuple[float, float, float]:
+    """Three numbers as a tuple of floats (a position or extents, m); ValueError unless exactly three."""
+    x, y, z = values
+    return float(x), float(y), float(z)
 
 
 @dataclass(frozen=True)
@@ -49,9 +56,9 @@ class PartPlan:
 
 
 def _slab(name: str, lo: tuple[float, float, float], hi: tuple[float, float, float]) -> Panel:
-    center = tuple((a + b) / 2 for a, b in zip(lo, hi, strict=True))
-    extents = tuple(b - a for a, b in zip(lo, hi, strict=True))
-    return Panel(name, center, extents)  # type: ignore[arg-type]
+    center = vec3((a + b) / 2 for a, b in zip(lo, hi, strict=True))
+    extents = vec3(b - a for a, b in zip(lo, hi, strict=True))
+    return Panel(name, center, extents)
 
 
 def carcass_panels(unit: BaseUnit) -> tuple[Panel, ...]:
@@ -73,15 +80,16 @@ def _dividers(unit: BaseUnit) -> list[Panel]:
     """A vertical divider midway between the boxes of two drawers that share a height band."""
     c = unit.carcass
     t = c.panel_thickness
-    drawers = sorted((f for f in unit.fronts if f.drawer_box is not None), key=lambda f: f.center[0])
+    drawers = sorted(((f, f.drawer_box) for f in unit.fronts if f.drawer_box is not None),
+                     key=lambda fb: fb[0].center[0])
     out = []
-    for left, right in zip(drawers, drawers[1:], strict=False):
+    for (left, left_box), (right, right_box) in zip(drawers, drawers[1:], strict=False):
         lz = (left.center[2] - left.size[1] / 2, left.center[2] + left.size[1] / 2)
         rz = (right.center[2] - right.size[1] / 2, right.center[2] + right.size[1] / 2)
         if min(lz[1], rz[1]) <= max(lz[0], rz[0]):
             continue
-        gap_lo = left.center[0] + left.drawer_box.width / 2
-        gap_hi = right.center[0] - right.drawer_box.width / 2
+        gap_lo = left.center[0] + left_box.width / 2
+        gap_hi = right.center[0] - right_box.width / 2
         if gap_hi - gap_lo <= t:
             continue
         x = (gap_lo + gap_hi) / 2

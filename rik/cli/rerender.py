@@ -112,8 +112,10 @@ def print_demo_renders(overlay_paths: list[Path], episodes: list[Path], out: Pat
         with progress_bar() as progress:
             task = progress.add_task(f"{spec.key} frames", total=sum(read_meta(e).steps + 1 for e in episodes),
                                      last="")
+            # the ignore: mypy cannot infer the type of a lambda with a default argument
             results = [render_episode(cat, e, spec, renders=out, variants=variants,
-                                      progress=lambda n, t=task: progress.update(t, advance=n)) for e in episodes]
+                                      progress=lambda n, t=task: progress.update(t, advance=n))  # type: ignore[misc]
+                       for e in episodes]
         first.append(results[0])
         for r in results:
             con.print(f"stream {r.directory}: {r.frames} frames x {', '.join(r.cameras)}"

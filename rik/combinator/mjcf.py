@@ -27,14 +27,18 @@ import json
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rik.assets.base_units import Panel
+from rik.assets.base_units import Panel, vec3
 from rik.combinator.ids import VariantKey
 from rik.combinator.joints import add_effect_actuators, add_front_joint, add_joint_classes, joint_model
 from rik.combinator.placement import HandlePlacement, front_motion, place_handle
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import mujoco
     import numpy as np
 
+    from rik.assets.base_units import PartPlan
     from rik.assets.build import Asset
     from rik.registry.catalog import Catalog
     from rik.schemas import BaseUnit, Front
@@ -67,17 +71,16 @@ class VariantModel:
     """A variant ready to compile and write: the spec, the mesh files it references, and its layout."""
 
     key: VariantKey
-    spec: Any
-    """``mujoco.MjSpec``."""
+    spec: mujoco.MjSpec
     mesh_files: dict[str, bytes]
     """File name under ``meshes/`` -> STL bytes."""
     mesh_vertices: dict[str, int]
     """Mesh name -> its number of vertices."""
     fronts: list[FrontLayout]
     handle_type: str
-    handle_bounds: Any
+    handle_bounds: np.ndarray
     """(2, 3) array: the handle's visual mesh bounds in its mount frame, m."""
-    unit: BaseUnit | None = None
+    unit: BaseUnit
     recess: tuple[float, float, float, float, float] | None = None
     """Inset handles: the recess cut into each front, (x0, y0, x1, y1) in the mount frame and its depth, m."""
 
@@ -122,7 +125,7 @@ def _full(inertia: np.ndarray) -> list[float]:
             float(inertia[0, 1]), float(inertia[0, 2]), float(inertia[1, 2])]
 
 
-def _panel_boxes(plan: Any) -> list[Panel]:
+def _panel_boxes(plan: PartPlan) -> list[Panel]:
     return list(plan.panels)
 
 
@@ -133,7 +136,7 @@ def _trimmed(panel: Panel, axis: tuple[float, float, float], trim: float) -> Pan
     center, extents = list(panel.center), list(panel.extents)
     extents[i] -= trim
     center[i] -= sign * trim / 2
-    return Panel(panel.name, tuple(center), tuple(extents))  # type: ignore[arg-type]
+    return Panel(panel.name, vec3(center), vec3(extents))
 
 
 def _cut_recess(panel: Panel, placement: HandlePlacement,
@@ -176,7 +179,7 @@ def _cut_recess(panel: Panel, placement: HandlePlacement,
     else:
         back_lo[n_axis] = lo[n_axis] + depth
     slab(back_lo, back_hi)
-    return [Panel(f"{panel.name}_{i}", tuple(((p + q) / 2).tolist()), tuple((q - p).tolist()))  # type: ignore[arg-type]
+    return [Panel(f"{panel.name}_{i}", vec3(((p + q) / 2).tolist()), vec3((q - p).tolist()))
             for i, (p, q) in enumerate(pieces)]
 
 
@@ -197,7 +200,7 @@ def _stl(asset_key: str, part: str, index: int, vertices: bytes, faces: bytes) -
     return header + np.uint32(len(f)).tobytes() + record.tobytes()
 
 
-def stl_bytes(asset_key: str, part: str, index: int, vertices: Any, faces: Any) -> bytes:
+def stl_bytes(asset_key: str, part: str, index: int, vertices: np.ndarray, faces: np.ndarray) -> bytes:
     import numpy as np
 
     return _stl(asset_key, part, index, np.ascontiguousarray(vertices, dtype=np.float64).tobytes(),
@@ -219,7 +222,7 @@ def _handle_mass_properties(asset_key: str, mass: float, vertices: bytes, faces:
 
 
 # ---- the spec ---------------------------------------------------------------------------------------------------
-def _material(spec: Any, catalog: Catalog, finish_id: str, made: set[str]) -> str:
+def _material(spec: mujoco.MjSpec, catalog: Catalog, finish_id: str, made: set[str]) -> str:
     if finish_id not in made:
         finish = catalog.finishes[finish_id]
         spec.add_material(name=finish_id, rgba=[*finish.base_color, 1.0], specular=0.3 + 0.5 * finish.metallic,
@@ -228,7 +231,8 @@ def _material(spec: Any, catalog: Catalog, finish_id: str, made: set[str]) -> st
     return finish_id
 
 
-def _add_boxes(spec: Any, body: Any, boxes: list[Panel], prefix: str, material: str, classes: dict[str, Any]) -> None:
+def _add_boxes(spec: mujoco.MjSpec, body: mujoco.MjsBody, boxes: list[Panel], prefix: str, material: str,
+               classes: dict[str, mujoco.MjsDefault]) -> None:
     import mujoco
 
     for b in boxes:
@@ -239,15 +243,16 @@ def _add_boxes(spec: Any, body: Any, boxes: list[Panel], prefix: str, material: 
                       material=material)
 
 
-def _add_mesh_part(spec: Any, body: Any, asset: Asset, part_name: str, prefix: str, material: str,
-                   classes: dict[str, Any], files: dict[str, bytes], vertices: dict[str, int], pos: Any = None,
-                   quat: Any = None) -> None:
+def _add_mesh_part(spec: mujoco.MjSpec, body: mujoco.MjsBody, asset: Asset, part_name: str, prefix: str,
+                   material: str, classes: dict[str, mujoco.MjsDefault], files: dict[str, bytes],
+                   vertices: dict[str, int], pos: Sequence[float] | None = None,
+                   quat: Sequence[float] | None = None) -> None:
     """A part from meshes: its visual mesh and its hulls (meshes added once per model, geoms per use)."""
     import mujoco
 
     part = asset.part(part_name)
     stem = f"{asset.id.replace('/', '-')}-{part_name}"
-    frame = {} if pos is None else {"pos": list(pos), "quat": list(quat)}
+    frame = {} if pos is None or quat is None else {"pos": list(pos), "quat": list(quat)}
     visual = f"{stem}-visual"
     if f"{visual}.stl" not in files:
         files[f"{visual}.stl"] = stl_bytes(asset.key, part_name, -1, part.visual.vertices, part.visual.faces)
@@ -264,7 +269,7 @@ def _add_mesh_part(spec: Any, body: Any, asset: Asset, part_name: str, prefix: s
                       meshname=f"{stem}-hull-{i:02d}", **frame)
 
 
-def _set_inertial(body: Any, mass: float, com: list[float], full: list[float]) -> None:
+def _set_inertial(body: mujoco.MjsBody, mass: float, com: list[float], full: list[float]) -> None:
     body.explicitinertial = True
     body.mass = mass
     body.ipos = com
@@ -360,14 +365,14 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
         hbody.add_site(name=f"{front.id}/handle", group=SITE_GROUP, size=[0.003, 0.003, 0.003])
         hbody.add_site(name=f"{front.id}/grasp", group=SITE_GROUP, pos=((bounds[0] + bounds[1]) / 2).tolist(),
                        size=[0.004, 0.004, 0.004], rgba=[1.0, 0.2, 0.2, 0.6])
-        fronts.append(FrontLayout(front.id, front.kind, front_motion(front), placement, tuple(front.joint.range),
+        fronts.append(FrontLayout(front.id, front.kind, front_motion(front), placement, front.joint.range,
                                   jmodel.runtime_effects))
     model = VariantModel(key, spec, files, vertices, fronts, handle_type.value, bounds, unit, recess)
     spec.add_text(name="rik.variant", data=json.dumps(model.info(), separators=(",", ":")))
     return model
 
 
-def _add_mount_site(body: Any, front: Front) -> None:
+def _add_mount_site(body: mujoco.MjsBody, front: Front) -> None:
     import mujoco
 
     sx, sy = front.mount.size

@@ -27,7 +27,10 @@ def _frame_times(path: Path) -> list[float]:
 
     with av.open(str(path)) as container:
         stream = container.streams.video[0]
-        return sorted(float(frame.pts * stream.time_base) for frame in container.decode(stream))
+        base = stream.time_base
+        times = [float(frame.pts * base) for frame in container.decode(stream)
+                 if frame.pts is not None and base is not None]  # frames without a timestamp cannot be checked
+    return sorted(times)
 
 
 def check_frame_counts(root: Path) -> dict[str, int]:

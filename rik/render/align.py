@@ -42,7 +42,7 @@ def mitsuba_silhouette(model: Any, data: Any, camera: str, width: int, height: i
     posed = build_posed_scene(model, data, finishes or {}, [camera], width, height, 1,
                               integrator={"type": "aov", "aovs": "depth:depth"}, floor=False, lights=False,
                               pixel_centres=True)
-    depth = np.array(mi.render(posed.scene, sensor=0, spp=1, seed=0))[..., 0]
+    depth = np.array(mi.render(posed.scene, sensor=0, spp=1, seed=mi.UInt32(0)))[..., 0]
     return depth > 0.0
 
 

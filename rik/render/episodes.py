@@ -90,7 +90,7 @@ def render_episode(catalog: Catalog, directory: Path, spec: StreamSpec, *, rende
                 writer.write(k, cam, image)
             if progress:
                 progress(1)
-        info = renderer.info() if renderer else {"renderer": "resumed", "render_seconds": 0.0}
+        info: dict[str, Any] = renderer.info() if renderer else {"renderer": "resumed", "render_seconds": 0.0}
     finally:
         if renderer is not None:
             renderer.close()

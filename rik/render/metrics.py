@@ -182,7 +182,8 @@ def _emd_transport(cost: np.ndarray) -> float:
     cols = sparse.kron(np.ones((1, na)), sparse.eye(nb))  # column sums: each b-point receives 1/nb
     eq = sparse.vstack([rows, cols]).tocsr()
     rhs = np.concatenate([np.full(na, 1.0 / na), np.full(nb, 1.0 / nb)])
-    res = linprog(cost.ravel(), A_eq=eq[:-1], b_eq=rhs[:-1], bounds=(0, None), method="highs")
+    # scipy-stubs type A_eq as a dense array; scipy's HiGHS methods take a sparse matrix too
+    res = linprog(cost.ravel(), A_eq=eq[:-1], b_eq=rhs[:-1], bounds=(0, None), method="highs")  # type: ignore[call-overload]
     if res.status != 0:
         raise RikError(f"emd: the transport problem did not solve ({res.message})")
     return float(res.fun)

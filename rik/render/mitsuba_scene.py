@@ -62,7 +62,9 @@ def _box(half: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, n
     """A box of half-sizes ``half``: 4 vertices per face (flat shading), texture coordinates in metres with u
     along the box's longest side wherever that lies in the face (the grain of a board), else the longer side."""
     longest = int(np.argmax(half))
-    verts, faces, uvs = [], [], []
+    verts: list[np.ndarray] = []
+    faces: list[tuple[int, int, int]] = []
+    uvs: list[tuple[float, float]] = []
     for axis in range(3):
         others = [a for a in range(3) if a != axis]
         u_ax = longest if longest in others else max(others, key=lambda a: half[a])

@@ -82,11 +82,11 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
     for ti, t in enumerate(types):
         for pi, p in enumerate(presets):
             for i in range(per_cell):
-                s = seed * 1_000_003 + ti * 10_007 + pi * 101 + i
-                vid, front = _choose(catalog, t, p, np.random.default_rng(s), kinds, compatible)
+                task_seed = seed * 1_000_003 + ti * 10_007 + pi * 101 + i
+                vid, front = _choose(catalog, t, p, np.random.default_rng(task_seed), kinds, compatible)
                 for strategy in strategies:
                     for g in grip_forces:
-                        tasks.append(BenchTask(t, p, strategy, i, s, vid, front, g))
+                        tasks.append(BenchTask(t, p, strategy, i, task_seed, vid, front, g))
     return tasks
 
 
@@ -163,11 +163,12 @@ def table_markdown(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFA
         lines += [f"**{t}**", "", "| strategy | " + " | ".join(f"{p} F | {p} P | {p} S" for p in presets) + " | n |",
                   "|---|" + "---:|" * (3 * len(presets) + 1)]
         for s in strategies:
-            cells, n = [], 0
+            cells: list[str] = []
+            n = 0
             for p in presets:
                 v = summary.get((t, s, p))
                 cells += [f"{v[o]:.2f}" for o in OUTCOMES] if v else ["-"] * 3
-                n = max(n, v["n"] if v else 0)
+                n = max(n, int(v["n"]) if v else 0)
             lines.append(f"| {s} | " + " | ".join(cells) + f" | {n} |")
         lines.append("")
     return "\n".join(lines)

@@ -91,7 +91,8 @@ def _extra(effect: JointEffect, q: Values, v: Values, regularisation: float) -> 
         return effect.extra * (along > 0)
     if effect.kind == "load_friction":
         return effect.per_extension * np.maximum(q, 0.0)
-    raise RikError(f"joint effect '{effect.kind}' is not a friction effect (those are {', '.join(sorted(FRICTION_KINDS))})")
+    raise RikError(f"joint effect '{effect.kind}' is not a friction effect "
+                   f"(those are {', '.join(sorted(FRICTION_KINDS))})")
 
 
 def _force(effect: JointEffect, q: Values, v: Values, joint_type: str, regularisation: float) -> Values:
@@ -110,7 +111,8 @@ def _force(effect: JointEffect, q: Values, v: Values, joint_type: str, regularis
         return effect.force * np.cos(q) + effect.sine * np.sin(q)
     if effect.kind == "quadratic_damping":
         return -effect.coefficient * v * np.abs(v)
-    raise RikError(f"joint effect kind '{effect.kind}' has no force law")  # pragma: no cover - the schema's union is closed
+    # the schema's union is closed: no other kind gets here
+    raise RikError(f"joint effect kind '{effect.kind}' has no force law")  # pragma: no cover
 
 
 def _arrays(q: ArrayLike, v: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -78,7 +78,7 @@ class OpenFrontEnv(gym.Env):
         self._renderer_model: Any = None
         self.scene = self._scene(variant, front)
         n = len(STATE_NAMES)
-        spaces = {"state": gym.spaces.Box(-np.inf, np.inf, (n,), np.float64)}
+        spaces: dict[str, gym.Space[Any]] = {"state": gym.spaces.Box(-np.inf, np.inf, (n,), np.float64)}
         if images:
             h, w = image_size
             spaces |= {c: gym.spaces.Box(0, 255, (h, w, 3), np.uint8) for c in ("front", "wrist")}

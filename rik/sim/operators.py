@@ -260,7 +260,7 @@ def _contact_rich(scene: SimScene) -> list[GraspPlan]:
 class Strategy:
     name: str
     summary: str
-    make: Callable[[], Operator]
+    make: Callable[[], ScriptedGrasp]
 
 
 STRATEGIES: dict[str, Strategy] = {s.name: s for s in (
@@ -277,7 +277,7 @@ STRATEGIES: dict[str, Strategy] = {s.name: s for s in (
 )}
 
 
-def make_operator(name: str) -> Operator:
+def make_operator(name: str) -> ScriptedGrasp:
     """A fresh scripted operator by strategy name."""
     try:
         return STRATEGIES[name].make()

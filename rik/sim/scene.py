@@ -292,8 +292,9 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     joint = name2id(mujoco.mjtObj.mjOBJ_JOINT, record["joint"])
     body = int(model.jnt_bodyid[joint])
     handle_body = name2id(mujoco.mjtObj.mjOBJ_BODY, record["handle_body"])
+    lo, hi = model.jnt_range[joint]
     front_info = FrontInfo(record["id"], record["kind"], record["motion"], joint, int(model.jnt_qposadr[joint]),
-                           int(model.jnt_dofadr[joint]), tuple(float(v) for v in model.jnt_range[joint]), body,
+                           int(model.jnt_dofadr[joint]), (float(lo), float(hi)), body,
                            handle_body, name2id(mujoco.mjtObj.mjOBJ_SITE, record["grasp_site"]))
     base_qpos = np.array([model.jnt_qposadr[name2id(mujoco.mjtObj.mjOBJ_JOINT, GRIPPER_PREFIX + j)]
                           for j in BASE_JOINTS])

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rik.errors import RikError
-from rik.schemas.common import Provenance
 from rik.schemas import joints as j
+from rik.schemas.common import Provenance
 from rik.schemas.joints import JointResistance, JointType, Spring
 from rik.sysid.effects import FAMILIES, Baseline, Effect
 from rik.sysid.fit import Fit, Rows, Split, all_rows, fit_all, fit_model, fit_velocity, split_rows

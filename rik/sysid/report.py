@@ -41,7 +41,8 @@ class _Units(TypedDict):
     plot_vel: tuple[str, float]
 
 
-_UNITS: dict[JointType, _Units] = {JointType.slide: {"position": "m", "force": "N", "plot_pos": ("mm", 1e3), "plot_vel": ("mm/s", 1e3)},
+_UNITS: dict[JointType, _Units] = {
+          JointType.slide: {"position": "m", "force": "N", "plot_pos": ("mm", 1e3), "plot_vel": ("mm/s", 1e3)},
           JointType.hinge: {"position": "rad", "force": "N·m", "plot_pos": ("°", 180 / np.pi),
                             "plot_vel": ("°/s", 180 / np.pi)}}
 

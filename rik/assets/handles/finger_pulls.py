@@ -24,16 +24,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import shapely
 import trimesh
-from shapely.geometry import LineString, Polygon, box
+from shapely.geometry import LineString, MultiPolygon, Polygon, box
 
 from rik.assets.meshkit import difference, segments, union
 from rik.errors import RikError
 from rik.schemas.generators import CupPull, EdgeProfile, RecessLip, TabPull
 from rik.schemas.handles import HandleGeometry, Mount
+
+if TYPE_CHECKING:
+    from rik.assets.handles import Generator
 
 EDGE_CAP_DEPTH = 0.016
 """How far an edge profile's cap lies over the front's edge, from the face toward the back, m (the thinnest
@@ -101,11 +105,11 @@ def _opened(poly: Polygon, r: float) -> Polygon:
 
 def _single(geom: shapely.Geometry) -> Polygon:
     """The largest polygon of ``geom`` (a union or a rounding may leave specks), simplified of collinear points."""
-    if geom.geom_type == "MultiPolygon":
+    if isinstance(geom, MultiPolygon):
         geom = max(geom.geoms, key=lambda g: g.area)
-    if geom.geom_type != "Polygon" or geom.is_empty:
+    if not isinstance(geom, Polygon) or geom.is_empty:
         raise RikError("finger pull: a cross-section came out empty; the handle's sizes are inconsistent")
-    return shapely.set_precision(geom, 1e-9).simplify(1e-9)
+    return cast(Polygon, shapely.set_precision(geom, 1e-9).simplify(1e-9))  # a polygon simplifies to a polygon
 
 
 def _rounded_rect(x0: float, y0: float, x1: float, y1: float, r: float) -> Polygon:
@@ -365,7 +369,7 @@ def _cup_layout(spec: CupPull, geometry: HandleGeometry) -> dict[str, float]:
         ry, rz = h, p  # quarter-elliptic roof from the band out to the rim
         r_end = 0.5 * p if hood == "half_moon" else 0.6 * p
     return {"t": t, "a_o": a_o, "y_top": y_top, "y_rim": y_rim, "p": p, "depth": depth, "half_w": half_w,
-            "z_b": z_b, "ry": ry, "rz": rz, "r_end": r_end, "band": band}
+            "z_b": z_b, "ry": ry, "rz": rz, "r_end": r_end, "band": band, "hole_spacing": geometry.hole_spacing}
 
 
 def _roof(y_top: float, y_end: float, z_max: float, ry: float, rz: float, z_lo: float) -> Polygon:
@@ -432,7 +436,7 @@ def cup_pull(spec: CupPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
     plate = _rounded_rect(-half_l, -half_wd, half_l, half_wd, ear_r)
     plate = _single(plate.difference(box(-a_o + 0.5 * t, y_top + 0.5 * t, a_o - 0.5 * t, _BIG)))
     flange = _prism(plate, "z", 0.0, t)
-    hs = 0.5 * geometry.hole_spacing
+    hs = 0.5 * lay["hole_spacing"]
     holes = [
         trimesh.creation.cylinder(SCREW_HOLE_RADIUS, t + 4 * _OVER, sections=segments(SCREW_HOLE_RADIUS),
                                   transform=trimesh.transformations.translation_matrix([sx, 0.0, 0.5 * t]))
@@ -529,7 +533,7 @@ def clearance_box(spec: EdgeProfile | TabPull | CupPull | RecessLip, geometry: H
     raise ValueError(f"not a finger-pull generator: {spec!r}")
 
 
-GENERATORS = {
+GENERATORS: dict[str, Generator] = {
     "edge_profile": edge_profile,
     "tab_pull": tab_pull,
     "cup_pull": cup_pull,

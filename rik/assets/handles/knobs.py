@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import trimesh
@@ -23,6 +24,9 @@ import trimesh
 from rik.assets.meshkit import difference, segments, translated, union
 from rik.schemas.generators import KnobLathe, KnobPrism, KnobRing
 from rik.schemas.handles import HandleGeometry, Mount
+
+if TYPE_CHECKING:
+    from rik.assets.handles import Generator
 
 _EPS = 1e-9
 ROSE_HEIGHT = 1.2e-3
@@ -481,5 +485,5 @@ def knob_ring(spec: KnobRing, geometry: HandleGeometry, mount: Mount) -> trimesh
     return union([boss, ring])
 
 
-GENERATORS = {"knob_lathe": knob_lathe, "knob_prism": knob_prism, "knob_ring": knob_ring}
+GENERATORS: dict[str, Generator] = {"knob_lathe": knob_lathe, "knob_prism": knob_prism, "knob_ring": knob_ring}
 """The generators of this module by name."""

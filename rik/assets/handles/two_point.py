@@ -35,6 +35,7 @@ from rik.assets.meshkit import difference, segments, union
 from rik.errors import RikError
 
 if TYPE_CHECKING:
+    from rik.assets.handles import Generator
     from rik.schemas.generators import BarPull, BowPull
     from rik.schemas.handles import HandleGeometry, Mount
 
@@ -595,5 +596,5 @@ def bow_pull(spec: BowPull, geometry: HandleGeometry, mount: Mount) -> trimesh.T
     return _cut_below(union(parts), geometry, cutters)
 
 
-GENERATORS = {"bar_pull": bar_pull, "bow_pull": bow_pull}
+GENERATORS: dict[str, Generator] = {"bar_pull": bar_pull, "bow_pull": bow_pull}
 """The two-point generators by name."""
