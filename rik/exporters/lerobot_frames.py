@@ -13,11 +13,17 @@ from __future__ import annotations
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from rik.errors import RikError
+
+if TYPE_CHECKING:
+    import pyarrow as pa
+
+    from rik.registry.catalog import Catalog
+    from rik.schemas.episodes import EpisodeMeta
 
 ACTION_NAMES = ("target_x", "target_y", "target_z", "target_pitch", "target_yaw", "target_roll", "gripper")
 """The recorded action: target pose of the gripper base (m, rad) and gripper command (0 open, 1 closed)."""
@@ -49,7 +55,7 @@ def features(cameras: Sequence[str], streams: Sequence[str], width: int, height:
     return out
 
 
-def task_text(catalog: Any, meta: Any, front_kind: str) -> str:
+def task_text(catalog: Catalog, meta: EpisodeMeta, front_kind: str) -> str:
     """A natural instruction, e.g. "open the drawer by its bow handle"."""
     handle = catalog.handles[meta.handle]
     design = catalog.designs[handle.design]
@@ -57,7 +63,7 @@ def task_text(catalog: Any, meta: Any, front_kind: str) -> str:
     return f"open the {front_kind} by its {shape} {TYPE_WORDS.get(meta.handle_type, 'handle')}"
 
 
-def episode_metadata(meta: Any) -> dict[str, Any]:
+def episode_metadata(meta: EpisodeMeta) -> dict[str, object]:
     """The ``rik/...`` columns of one episode's row in ``meta/episodes``."""
     values = {"episode_id": meta.id, "source_fps": int(meta.fps)}
     for name in META_FIELDS:
@@ -84,8 +90,8 @@ class EpisodeSource:
     """Stream kind -> finished stream folder (see :mod:`rik.render.streams`)."""
 
 
-def episode_frames(catalog: Any, source: EpisodeSource, cameras: Sequence[str], fps: int,
-                   variants: Path) -> tuple[Any, str, Iterator[dict[str, Any]], int]:
+def episode_frames(catalog: Catalog, source: EpisodeSource, cameras: Sequence[str], fps: int,
+                   variants: Path) -> tuple[EpisodeMeta, str, Iterator[dict[str, np.ndarray]], int]:
     """(meta, task, frame dicts for ``add_frame`` without the task, frame count) of one episode."""
     from rik.render.streams import read_frame
     from rik.sim.env import observe_state
@@ -95,18 +101,18 @@ def episode_frames(catalog: Any, source: EpisodeSource, cameras: Sequence[str], 
     meta, table = read_episode(source.directory)
     scene = episode_scene(catalog, source.directory, variants, meta)
     recorded = states(table)
-    actions = table.column("action").combine_chunks().values.to_numpy().reshape(len(recorded), -1)
+    actions = cast("pa.ListArray", table.column("action").combine_chunks()).values.to_numpy().reshape(len(recorded), -1)
     if actions.shape[1] != len(ACTION_NAMES):
         raise RikError(f"{source.directory / 'states.parquet'}: column 'action' has {actions.shape[1]} numbers "
                        f"per row; rik exports {len(ACTION_NAMES)} ({', '.join(ACTION_NAMES)})")
     picks = resample_indices(len(recorded), meta.fps, fps)
     task = task_text(catalog, meta, scene.front.kind)
 
-    def frames() -> Iterator[dict[str, Any]]:
+    def frames() -> Iterator[dict[str, np.ndarray]]:
         for k in picks:
             scene.restore(recorded[k])
-            frame: dict[str, Any] = {"observation.state": observe_state(scene).astype(np.float32),
-                                     "action": actions[k].astype(np.float32)}
+            frame: dict[str, np.ndarray] = {"observation.state": observe_state(scene).astype(np.float32),
+                                            "action": actions[k].astype(np.float32)}
             for stream, folder in source.streams.items():
                 for cam in cameras:
                     frame[image_key(cam, stream)] = read_frame(folder, cam, int(k))

@@ -5,14 +5,17 @@ IoU. Both sample each pixel at its centre, so the masks differ only where geomet
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rik.schemas.finishes import Finish
 
+if TYPE_CHECKING:
+    import mujoco
 
-def mujoco_silhouette(model: Any, data: Any, camera: str, width: int, height: int) -> np.ndarray:
+
+def mujoco_silhouette(model: mujoco.MjModel, data: mujoco.MjData, camera: str, width: int, height: int) -> np.ndarray:
     """(H, W) bool: pixels where MuJoCo's renderer draws a geom other than a plane."""
     import mujoco
 
@@ -29,7 +32,7 @@ def mujoco_silhouette(model: Any, data: Any, camera: str, width: int, height: in
     return is_geom & ~np.isin(ids, list(planes))
 
 
-def mitsuba_silhouette(model: Any, data: Any, camera: str, width: int, height: int,
+def mitsuba_silhouette(model: mujoco.MjModel, data: mujoco.MjData, camera: str, width: int, height: int,
                        finishes: Mapping[str, Finish] | None = None, variant: str = "auto") -> np.ndarray:
     """(H, W) bool: pixels whose centre ray hits a shape of rik's Mitsuba scene (floor left out): the depth
     AOV of one unjittered sample per pixel is positive."""
@@ -42,7 +45,8 @@ def mitsuba_silhouette(model: Any, data: Any, camera: str, width: int, height: i
     posed = build_posed_scene(model, data, finishes or {}, [camera], width, height, 1,
                               integrator={"type": "aov", "aovs": "depth:depth"}, floor=False, lights=False,
                               pixel_centres=True)
-    depth = np.array(mi.render(posed.scene, sensor=0, spp=1, seed=mi.UInt32(0)))[..., 0]
+    # the ignore: mitsuba's stub types seed as UInt32; every variant takes a Python int (scalar_rgb only that)
+    depth = np.array(mi.render(posed.scene, sensor=0, spp=1, seed=0))[..., 0]  # type: ignore[arg-type]
     return depth > 0.0
 
 
@@ -52,7 +56,7 @@ def iou(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.logical_and(a, b).sum() / union) if union else 1.0
 
 
-def silhouette_iou(model: Any, data: Any, camera: str, width: int, height: int,
+def silhouette_iou(model: mujoco.MjModel, data: mujoco.MjData, camera: str, width: int, height: int,
                    finishes: Mapping[str, Finish] | None = None, variant: str = "auto") -> float:
     """IoU of the MuJoCo and Mitsuba silhouettes of the state in ``data`` seen by ``camera``."""
     return iou(mujoco_silhouette(model, data, camera, width, height),

@@ -13,7 +13,12 @@ from rik.errors import RikError
 from rik.render.streams import StreamSpec, StreamWriter, is_done, read_manifest, stream_dir
 
 if TYPE_CHECKING:
+    import mujoco
+    import pyarrow as pa
+
     from rik.registry.catalog import Catalog
+    from rik.schemas.episodes import EpisodeMeta
+    from rik.sim.scene import SimScene
 
 
 @dataclass(frozen=True)
@@ -28,7 +33,7 @@ class StreamResult:
     """Render time per frame (all cameras) of the frames rendered by this call, s."""
 
 
-def scene_cameras(model: Any, wanted: Sequence[str] | None, where: str) -> list[str]:
+def scene_cameras(model: mujoco.MjModel, wanted: Sequence[str] | None, where: str) -> list[str]:
     """The scene's camera names (all, in model order), or the ``wanted`` ones after checking they exist."""
     import mujoco
 
@@ -41,7 +46,7 @@ def scene_cameras(model: Any, wanted: Sequence[str] | None, where: str) -> list[
     return list(wanted)
 
 
-def _episode_scene(catalog: Catalog, directory: Path, variants: Path) -> tuple[Any, Any, Any]:
+def _episode_scene(catalog: Catalog, directory: Path, variants: Path) -> tuple[EpisodeMeta, pa.Table, SimScene]:
     from rik.sim.episode import read_episode
     from rik.sim.replay import episode_scene
 
@@ -84,12 +89,12 @@ def render_episode(catalog: Catalog, directory: Path, spec: StreamSpec, *, rende
             from rik.render.renderers import make_renderer
 
             renderer = make_renderer(scene.model, scene.data, cams, spec, catalog.finishes)
-        for k in todo:
-            scene.restore(recorded[k])
-            for cam, image in renderer.render(scene.data, k).items():  # type: ignore[union-attr]
-                writer.write(k, cam, image)
-            if progress:
-                progress(1)
+            for k in todo:
+                scene.restore(recorded[k])
+                for cam, image in renderer.render(scene.data, k).items():
+                    writer.write(k, cam, image)
+                if progress:
+                    progress(1)
         info: dict[str, Any] = renderer.info() if renderer else {"renderer": "resumed", "render_seconds": 0.0}
     finally:
         if renderer is not None:

@@ -5,13 +5,19 @@ tracer (the offline ``rerendered`` stream). Both take the scene's ``MjData`` aft
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
-from typing import Any, Protocol
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from rik.render.streams import StreamSpec
 from rik.schemas.finishes import Finish
+
+if TYPE_CHECKING:
+    import mitsuba as mi
+    import mujoco
+
+    from rik.render.mitsuba_scene import PosedScene
 
 GUIDE_SPP = {"cuda_ad_rgb": 4, "llvm_ad_rgb": 4, "scalar_rgb": 1}
 """Samples per pixel of the albedo and normal images that guide the denoiser (they are nearly noise-free), per
@@ -20,7 +26,7 @@ Mitsuba variant. Mitsuba's AOV integrator is about 30 times slower than its path
 
 
 class FrameRenderer(Protocol):
-    def render(self, data: Any, index: int) -> dict[str, np.ndarray]:
+    def render(self, data: mujoco.MjData, index: int) -> dict[str, np.ndarray]:
         """Every camera's (H, W, 3) uint8 image of the state in ``data``; ``index`` seeds the sampler."""
         ...
 
@@ -31,15 +37,20 @@ class FrameRenderer(Protocol):
     def close(self) -> None: ...
 
 
-def _render_function(variant: str, spp: int) -> Any:
+RenderFunction = Callable[["mi.Scene", "mi.Sensor", "mi.UInt32 | int"], "mi.TensorXf"]
+"""``f(scene, sensor, seed)``: one image (H, W, channels) of ``sensor``."""
+
+
+def _render_function(variant: str, spp: int) -> RenderFunction:
     """``f(scene, sensor, seed)`` rendering ``spp`` samples per pixel. On the JIT variants the function is frozen
     (``drjit.freeze``): after three calls Dr.Jit replays the recorded kernels instead of tracing the integrator
     again, which otherwise costs about half a second per call whatever the image size (measured: 0.55 s against
     0.04 s for a 64-pixel image, identical pixels). The scene's changed poses are inputs of the replay."""
     import mitsuba as mi
 
-    def render(scene: Any, sensor: Any, seed: Any) -> Any:
-        return mi.render(scene, sensor=sensor, spp=spp, seed=seed)
+    def render(scene: mi.Scene, sensor: mi.Sensor, seed: mi.UInt32 | int) -> mi.TensorXf:
+        # the ignore: mitsuba's stub types seed as UInt32; scalar_rgb takes a Python int (and only that)
+        return mi.render(scene, sensor=sensor, spp=spp, seed=seed)  # type: ignore[arg-type]
 
     if variant == "scalar_rgb":
         return render
@@ -51,14 +62,14 @@ def _render_function(variant: str, spp: int) -> Any:
 class MujocoFrames:
     """MuJoCo's OpenGL renderer (EGL when headless), one camera after another."""
 
-    def __init__(self, model: Any, cameras: list[str], spec: StreamSpec):
+    def __init__(self, model: mujoco.MjModel, cameras: list[str], spec: StreamSpec):
         import mujoco
 
         self.model, self.cameras, self.spec = model, cameras, spec
         self.renderer = mujoco.Renderer(model, spec.height, spec.width)
         self.seconds = 0.0
 
-    def render(self, data: Any, index: int) -> dict[str, np.ndarray]:
+    def render(self, data: mujoco.MjData, index: int) -> dict[str, np.ndarray]:
         start = time.perf_counter()
         out = {}
         for cam in self.cameras:
@@ -80,27 +91,31 @@ class MitsubaFrames:
     """Mitsuba 3's path tracer on a scene built once and posed per frame; optionally denoised by Intel Open
     Image Denoise, guided by albedo and shading normals, then tone-mapped to 8-bit sRGB."""
 
-    def __init__(self, model: Any, data: Any, cameras: list[str], spec: StreamSpec, finishes: Mapping[str, Finish]):
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, cameras: list[str], spec: StreamSpec,
+                 finishes: Mapping[str, Finish]):
         from rik.render.backend import use_variant
         from rik.render.mitsuba_scene import DENOISER_GUIDES, PATH_TRACER, build_posed_scene
 
         self.variant = use_variant(spec.variant)
         self.model, self.cameras, self.spec = model, cameras, spec
         w, h = spec.width, spec.height
-        self.beauty = build_posed_scene(model, data, finishes, cameras, w, h, spec.spp, integrator=PATH_TRACER)
+        self.beauty: PosedScene | None = build_posed_scene(model, data, finishes, cameras, w, h, spec.spp,
+                                                           integrator=PATH_TRACER)
         self.guide_spp = GUIDE_SPP[self.variant]
-        self.guides = (build_posed_scene(model, data, finishes, cameras, w, h, self.guide_spp,
+        self.guides: PosedScene | None = (build_posed_scene(model, data, finishes, cameras, w, h, self.guide_spp,
                                          integrator=DENOISER_GUIDES) if spec.denoise else None)
         self.seconds = {"pose": 0.0, "render": 0.0, "denoise": 0.0}
         self._beauty_render = _render_function(self.variant, spec.spp)
         self._guides_render = _render_function(self.variant, self.guide_spp)
 
-    def render_linear(self, data: Any, index: int) -> dict[str, np.ndarray]:
+    def render_linear(self, data: mujoco.MjData, index: int) -> dict[str, np.ndarray]:
         """Every camera's linear radiance, (H, W, 3) float32, denoised when the spec says so."""
         import mitsuba as mi
 
         from rik.render.mitsuba_scene import pose_scene
 
+        if self.beauty is None:
+            raise RuntimeError("this MitsubaFrames is closed")
         t0 = time.perf_counter()
         pose_scene(self.beauty, self.model, data)
         if self.guides is not None:
@@ -132,7 +147,7 @@ class MitsubaFrames:
         return np.asarray(mitsuba_oidn.denoise(np.ascontiguousarray(color, np.float32), albedo=albedo,
                                                normal=normal, hdr=True))
 
-    def render(self, data: Any, index: int) -> dict[str, np.ndarray]:
+    def render(self, data: mujoco.MjData, index: int) -> dict[str, np.ndarray]:
         from rik.render.materials import linear_to_srgb8
 
         return {cam: linear_to_srgb8(img) for cam, img in self.render_linear(data, index).items()}
@@ -149,17 +164,21 @@ class MitsubaFrames:
                 "render_seconds": sum(self.seconds.values()), "seconds": dict(self.seconds)}
 
     def close(self) -> None:
-        self.beauty = self.guides = None  # type: ignore[assignment]
+        self.beauty = self.guides = None
 
 
-RENDERERS: dict[str, Any] = {
+RendererFactory = Callable[["mujoco.MjModel", "mujoco.MjData", list[str], StreamSpec, Mapping[str, Finish]],
+                           FrameRenderer]
+"""``(model, data, cameras, spec, finishes)`` → a renderer."""
+
+RENDERERS: dict[str, RendererFactory] = {
     "sim": lambda model, data, cameras, spec, finishes: MujocoFrames(model, cameras, spec),
     "rerendered": MitsubaFrames,
 }
 """Stream kind -> renderer factory ``(model, data, cameras, spec, finishes)``."""
 
 
-def make_renderer(model: Any, data: Any, cameras: list[str], spec: StreamSpec,
+def make_renderer(model: mujoco.MjModel, data: mujoco.MjData, cameras: list[str], spec: StreamSpec,
                   finishes: Mapping[str, Finish]) -> FrameRenderer:
     """The renderer of ``spec.kind``."""
     return RENDERERS[spec.kind](model, data, cameras, spec, finishes)

@@ -16,13 +16,16 @@ Use: ``import rik.sim.env`` (registers the id), then ``gymnasium.make("rik/OpenF
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 
 from rik.sim.outcome import SUCCESS_OPENING, classify
 from rik.sim.scene import SimScene
+
+if TYPE_CHECKING:
+    import mujoco
 
 ENV_ID = "rik/OpenFront-v0"
 MAX_DELTA = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1])
@@ -39,7 +42,7 @@ def observe_state(scene: SimScene) -> np.ndarray:
                            [scene.opening(), scene.contact_summary()["normal_force"]]]).astype(np.float64)
 
 
-def observe(scene: SimScene, renderer: Any = None) -> dict[str, np.ndarray]:
+def observe(scene: SimScene, renderer: mujoco.Renderer | None = None) -> dict[str, np.ndarray]:
     """The observation dict (images when a renderer is given)."""
     obs = {"state": observe_state(scene)}
     if renderer is not None:
@@ -74,8 +77,8 @@ class OpenFrontEnv(gym.Env):
         self._max_seconds = max_seconds
         self.render_mode = render_mode
         self._scenes: dict[tuple[str, str | None], SimScene] = {}
-        self._renderer: Any = None
-        self._renderer_model: Any = None
+        self._renderer: mujoco.Renderer | None = None
+        self._renderer_model: mujoco.MjModel | None = None
         self.scene = self._scene(variant, front)
         n = len(STATE_NAMES)
         spaces: dict[str, gym.Space[Any]] = {"state": gym.spaces.Box(-np.inf, np.inf, (n,), np.float64)}
@@ -95,7 +98,7 @@ class OpenFrontEnv(gym.Env):
             self._scenes[key] = build_scene(variant_dir(self._catalog, variant, self._variants), front)
         return self._scenes[key]
 
-    def _get_renderer(self) -> Any:
+    def _get_renderer(self) -> mujoco.Renderer:
         import mujoco
 
         if self._renderer_model is not self.scene.model:

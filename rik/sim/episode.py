@@ -16,13 +16,19 @@ import shutil
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from rik.errors import RikError
 from rik.sim.outcome import classify
 from rik.sim.scene import SimScene
+
+if TYPE_CHECKING:
+    import pyarrow as pa
+
+    from rik.schemas.episodes import EpisodeMeta
+    from rik.sim.operators import Operator
 
 DEFAULT_EPISODES = Path("episodes")
 META = "meta.json"
@@ -80,7 +86,7 @@ class EpisodeRecorder:
     def steps(self) -> int:
         return len(self.rows["step"])
 
-    def table(self) -> Any:
+    def table(self) -> pa.Table:
         """The rows so far plus the final state, as a pyarrow table."""
         import pyarrow as pa
 
@@ -111,7 +117,7 @@ def episode_id(variant: str, front: str, operator: str, seed: int) -> str:
 
 
 def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operator: str, operator_kind: str,
-                  seed: int, log: tuple[str, ...] = ()) -> Any:
+                  seed: int, log: tuple[str, ...] = ()) -> EpisodeMeta:
     """Write the recorded episode to ``out/<episode>`` (through a staging directory); returns its meta."""
     import pyarrow.parquet as pq
 
@@ -148,7 +154,7 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
     return meta
 
 
-def read_meta(directory: Path) -> Any:
+def read_meta(directory: Path) -> EpisodeMeta:
     """The validated meta of the episode in ``directory``."""
     from pydantic import ValidationError
 
@@ -167,7 +173,7 @@ def read_meta(directory: Path) -> Any:
         raise EpisodeError(f"{file}: field '{where}': {err['msg']}") from None
 
 
-def read_episode(directory: Path) -> tuple[Any, Any]:
+def read_episode(directory: Path) -> tuple[EpisodeMeta, pa.Table]:
     """(meta, states table) of a recorded episode, checked whole: the states file's hash and row count must
     match the meta."""
     import pyarrow.parquet as pq
@@ -201,20 +207,20 @@ def find_episodes(paths: list[Path]) -> list[Path]:
     return found
 
 
-def states(table: Any) -> np.ndarray:
+def states(table: pa.Table) -> np.ndarray:
     """The ``state`` column as an array, one row per recorded step."""
-    col = table.column("state").combine_chunks()
+    col = cast("pa.ListArray", table.column("state").combine_chunks())  # a list column
     return col.values.to_numpy().reshape(len(col), -1)
 
 
-def replay(scene: SimScene, table: Any) -> Iterator[int]:
+def replay(scene: SimScene, table: pa.Table) -> Iterator[int]:
     """Set the scene to each recorded state in turn (positions, velocities, everything derived); yields the row."""
     for i, state in enumerate(states(table)):
         scene.restore(state)
         yield i
 
 
-def run_operator(scene: SimScene, operator: Any, rng: np.random.Generator, max_seconds: float,
+def run_operator(scene: SimScene, operator: Operator, rng: np.random.Generator, max_seconds: float,
                  recorder: EpisodeRecorder | None = None,
                  on_step: Callable[[SimScene], None] | None = None) -> EpisodeRecorder:
     """Run ``operator`` on ``scene`` until it is done or ``max_seconds`` of simulated time have passed."""

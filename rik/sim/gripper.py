@@ -26,9 +26,12 @@ singularity (yaw = ±90°). Gripper frame: fingers point along +z, the jaws clos
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import mujoco
 
 GRIPPER_PREFIX = "gripper/"
 BASE_JOINTS = ("x", "y", "z", "pitch", "yaw", "roll")
@@ -99,7 +102,7 @@ _AXES = {"x": [1, 0, 0], "y": [0, 0, -1], "z": [0, 1, 0], "pitch": [1, 0, 0], "y
 down), yaw about the (pitched) vertical, roll about the approach axis."""
 
 
-def add_gripper(spec: Any, gripper: GripperSpec = HAND_E) -> None:
+def add_gripper(spec: mujoco.MjSpec, gripper: GripperSpec = HAND_E) -> None:
     """Add the gripper, its base chain, servos and wrist camera to ``spec`` (a ``mujoco.MjSpec``).
 
     The base sits at the world origin, so the slide joints' values are the world position of the base (the back
@@ -164,7 +167,8 @@ def add_gripper(spec: Any, gripper: GripperSpec = HAND_E) -> None:
     spec.add_exclude(bodyname1=f"{p}left", bodyname2=f"{p}right")
 
 
-def _box_inertial(body: Any, mass: float, size: tuple[float, float, float], com: tuple[float, float, float]) -> None:
+def _box_inertial(body: mujoco.MjsBody, mass: float, size: tuple[float, float, float],
+                  com: tuple[float, float, float]) -> None:
     """Explicit inertia of a solid box (variants compile with ``inertiafromgeom="false"``)."""
     x, y, z = size
     body.explicitinertial = True

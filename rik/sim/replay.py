@@ -5,11 +5,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from rik.sim.episode import EpisodeError, read_episode, states
+
+if TYPE_CHECKING:
+    import pyarrow as pa
+
+    from rik.registry.catalog import Catalog
+    from rik.schemas.episodes import EpisodeMeta
+    from rik.sim.scene import SimScene
 
 
 @dataclass(frozen=True)
@@ -20,7 +27,7 @@ class ReplayCheck:
     """Largest absolute difference between a re-simulated and a recorded state."""
 
 
-def episode_scene(catalog: Any, directory: Path, variants: Path, meta: Any) -> Any:
+def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: EpisodeMeta) -> SimScene:
     """The scene an episode was recorded in (its variant is built first if missing), with its gripper."""
     from rik.sim.gripper import HAND_E
     from rik.sim.record import variant_dir
@@ -39,12 +46,12 @@ def episode_scene(catalog: Any, directory: Path, variants: Path, meta: Any) -> A
     return scene
 
 
-def verify_episode(catalog: Any, directory: Path, variants: Path = Path("variants")) -> ReplayCheck:
+def verify_episode(catalog: Catalog, directory: Path, variants: Path = Path("variants")) -> ReplayCheck:
     """Re-simulate every recorded step from its recorded state and action; compare with the next state."""
     meta, table = read_episode(directory)
     scene = episode_scene(catalog, directory, variants, meta)
     recorded = states(table)
-    actions = table.column("action").combine_chunks().values.to_numpy().reshape(len(recorded), -1)
+    actions = cast("pa.ListArray", table.column("action").combine_chunks()).values.to_numpy().reshape(len(recorded), -1)
     worst = 0.0
     for k in range(len(recorded) - 1):
         scene.restore(recorded[k])

@@ -26,13 +26,16 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rik.errors import RikError
 from rik.sim.effects import RuntimeEffects
 from rik.sim.gripper import BASE_JOINTS, GRIPPER_PREFIX, HAND_E, GripperSpec, jaw_target
+
+if TYPE_CHECKING:
+    import mujoco
 
 CONTROL_FPS = 20
 """Control (and recording) rate, Hz."""
@@ -62,8 +65,8 @@ class FrontInfo:
 class SimScene:
     """A compiled scene and the names and addresses that operators, recorders and the environment use."""
 
-    model: Any
-    data: Any
+    model: mujoco.MjModel
+    data: mujoco.MjData
     info: dict[str, Any]
     """The variant's ``rik.variant`` record (id, base unit, handle, preset, fronts)."""
     front: FrontInfo
@@ -202,7 +205,7 @@ class SimScene:
         mujoco.mj_forward(self.model, self.data)
 
 
-def _variant_info(spec: Any, file: Path) -> dict[str, Any]:
+def _variant_info(spec: mujoco.MjSpec, file: Path) -> dict[str, Any]:
     text = spec.text("rik.variant") if hasattr(spec, "text") else None
     data = getattr(text, "data", None)
     if not data:
@@ -220,7 +223,7 @@ def _look_at(eye: np.ndarray, target: np.ndarray) -> list[float]:
     return [*x.tolist(), *y.tolist()]
 
 
-def _add_environment(spec: Any) -> None:
+def _add_environment(spec: mujoco.MjSpec) -> None:
     import mujoco
 
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
@@ -286,7 +289,7 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     model = spec.compile()
     data = mujoco.MjData(model)
 
-    def name2id(kind: Any, name: str) -> int:
+    def name2id(kind: mujoco.mjtObj, name: str) -> int:
         return mujoco.mj_name2id(model, kind, name)
 
     joint = name2id(mujoco.mjtObj.mjOBJ_JOINT, record["joint"])
@@ -312,7 +315,7 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     return scene
 
 
-def _ctrl_adr(model: Any, actuator: str) -> int:
+def _ctrl_adr(model: mujoco.MjModel, actuator: str) -> int:
     """The address in ``data.ctrl`` of the (single) control of the actuator named ``actuator``."""
     import mujoco
 
