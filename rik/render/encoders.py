@@ -12,14 +12,17 @@ from __future__ import annotations
 
 import difflib
 import re
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rik.errors import RikError
+
+if TYPE_CHECKING:
+    import torch
 
 RANDOM_INIT_SEED = 0
 """Seed of the random initialisation used when no weights file is given."""
@@ -41,11 +44,15 @@ class EncoderSpec:
         return self.name if self.weights is None else f"{self.name}:{self.weights}"
 
 
+Features = Callable[["torch.Tensor"], "torch.Tensor"]
+"""A network as a function: a normalised image batch (N, 3, H, W) → its features (N, dim)."""
+
+
 @dataclass(frozen=True)
 class Architecture:
     """One registry entry: how to build the network and how its inputs and outputs look."""
 
-    build: Callable[[Path | None], Callable[[Any], Any]]
+    build: Callable[[Path | None], Features]
     """Weights file (or None: random init) -> a function from a normalised image batch to features."""
     dim: int
     """Feature dimension."""
@@ -64,7 +71,7 @@ class Encoder:
 
     spec: EncoderSpec
     arch: Architecture
-    forward: Callable[[Any], Any]
+    forward: Features
     image_size: int
     """Side of the square the images are resized to (pixels)."""
 
@@ -110,7 +117,7 @@ def _batches(paths: Sequence[Path], size: int) -> Iterator[tuple[int, Sequence[P
 # --- building and loading ------------------------------------------------------------------------------------
 
 
-def _seeded(build: Callable[[], Any]) -> Any:
+def _seeded[T](build: Callable[[], T]) -> T:
     """``build()`` with torch's RNG seeded by RANDOM_INIT_SEED, leaving the caller's RNG state as it was."""
     import torch
 
@@ -119,7 +126,7 @@ def _seeded(build: Callable[[], Any]) -> Any:
         return build()
 
 
-def _read_state_dict(path: Path) -> dict[str, Any]:
+def _read_state_dict(path: Path) -> dict[str, torch.Tensor]:
     """Tensors of a .safetensors file or a torch.save'd state dict (optionally under 'state_dict', keys optionally
     prefixed 'module.'); never unpickles arbitrary objects."""
     import pickle
@@ -133,7 +140,7 @@ def _read_state_dict(path: Path) -> dict[str, Any]:
         if path.suffix == ".safetensors":
             from safetensors.torch import load_file
 
-            data: Any = load_file(str(path), device="cpu")
+            data: object = load_file(str(path), device="cpu")
         else:
             data = torch.load(path, map_location="cpu", weights_only=True)
     except pickle.UnpicklingError:
@@ -157,7 +164,7 @@ def _first_line(exc: BaseException, limit: int = 160) -> str:
     return line if len(line) <= limit else line[:limit - 3] + "..."
 
 
-def _mismatch(model_state: dict[str, Any], loaded: dict[str, Any]) -> str:
+def _mismatch(model_state: Mapping[str, torch.Tensor], loaded: Mapping[str, torch.Tensor]) -> str:
     """'' when ``loaded`` fits ``model_state`` key for key and shape for shape, else a short account of the first
     differences. BatchNorm's num_batches_tracked may be absent (old torchvision files lack it)."""
     missing = [k for k in model_state if k not in loaded and not k.endswith("num_batches_tracked")]
@@ -172,7 +179,7 @@ def _mismatch(model_state: dict[str, Any], loaded: dict[str, Any]) -> str:
     return "; ".join(parts)
 
 
-def _load_into(model: Any, path: Path, name: str) -> None:
+def _load_into(model: torch.nn.Module, path: Path, name: str) -> None:
     """Load a weights file into ``model``, exactly: any missing, unexpected or mis-shaped key is a RikError."""
     state = _read_state_dict(path)
     problem = _mismatch(model.state_dict(), state)
@@ -181,8 +188,8 @@ def _load_into(model: Any, path: Path, name: str) -> None:
     model.load_state_dict(state, strict=False)
 
 
-def _resnet(arch: str) -> Callable[[Path | None], Callable[[Any], Any]]:
-    def build(weights: Path | None) -> Callable[[Any], Any]:
+def _resnet(arch: str) -> Callable[[Path | None], Features]:
+    def build(weights: Path | None) -> Features:
         import torch
         import torchvision
 
@@ -195,8 +202,8 @@ def _resnet(arch: str) -> Callable[[Path | None], Callable[[Any], Any]]:
     return build
 
 
-def _clip(config: str, name: str) -> Callable[[Path | None], Callable[[Any], Any]]:
-    def build(weights: Path | None) -> Callable[[Any], Any]:
+def _clip(config: str, name: str) -> Callable[[Path | None], Features]:
+    def build(weights: Path | None) -> Features:
         import logging
 
         import open_clip
@@ -216,7 +223,7 @@ def _clip(config: str, name: str) -> Callable[[Path | None], Callable[[Any], Any
     return build
 
 
-def _load_clip(model: Any, path: Path, name: str) -> None:
+def _load_clip(model: torch.nn.Module, path: Path, name: str) -> None:
     """Load a CLIP checkpoint the way open_clip does (its own state dicts, OpenAI's TorchScript .pt archives,
     .safetensors, timm-style keys), but refuse one that does not fit exactly."""
     import warnings

@@ -9,11 +9,14 @@ Geoms without a catalog finish (the gripper, the floor) become plastics of their
 from __future__ import annotations
 
 from functools import cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rik.schemas.finishes import Finish
+
+if TYPE_CHECKING:
+    import mitsuba as mi
 
 WOOD_TEXTURE_SIZE_M = 0.25
 """Length of floor-to-ceiling wood grain the texture covers along u, m (the texture repeats beyond it)."""
@@ -46,7 +49,7 @@ def _wood_grain(seed: int = 7, size: tuple[int, int] = (128, 512)) -> np.ndarray
     return np.clip(0.65 * rings**3 + 0.35 + 0.08 * fibres, 0.0, 1.0)
 
 
-def _wood_bitmap(base_color: np.ndarray) -> Any:
+def _wood_bitmap(base_color: np.ndarray) -> mi.Bitmap:
     import mitsuba as mi
 
     grain = _wood_grain()[..., None]
@@ -81,7 +84,7 @@ def plastic_bsdf(rgba: np.ndarray, roughness: float = 0.45) -> dict[str, Any]:
             "metallic": 0.0, "roughness": roughness}
 
 
-def _uv_scale(su: float, sv: float) -> Any:
+def _uv_scale(su: float, sv: float) -> mi.ScalarTransform4f:
     import mitsuba as mi
 
     return mi.ScalarTransform4f().scale([su, sv, 1.0])

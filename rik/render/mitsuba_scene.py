@@ -13,12 +13,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rik.render.materials import finish_bsdf, lighting, plastic_bsdf
 from rik.schemas.finishes import Finish
+
+if TYPE_CHECKING:
+    import mitsuba as mi
+    import mujoco
 
 VISIBLE_GROUPS = (0, 1, 2)
 """Geom groups MuJoCo's renderer shows by default (``mjvOption.geomgroup``)."""
@@ -37,8 +41,8 @@ far less than wrapping the path tracer in the AOV integrator (measured: about tw
 class PosedScene:
     """A loaded Mitsuba scene plus what is needed to pose it from MuJoCo data."""
 
-    scene: Any
-    params: Any
+    scene: mi.Scene
+    params: mi.SceneParameters
     moving_geoms: list[int]
     """MuJoCo ids of the geoms drawn as instances, posed every frame."""
     cameras: dict[str, int]
@@ -95,7 +99,7 @@ def _planar_uv(v: np.ndarray) -> np.ndarray:
     return v[:, order[:2]]
 
 
-def _mesh_geom(model: Any, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+def _mesh_geom(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
     """A mesh geom's triangles in its geom frame, one vertex per face corner with MuJoCo's normals."""
     m = int(model.geom_dataid[g])
     va, fa, fn = int(model.mesh_vertadr[m]), int(model.mesh_faceadr[m]), int(model.mesh_facenum[m])
@@ -106,7 +110,7 @@ def _mesh_geom(model: Any, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray |
     return verts, np.arange(3 * fn).reshape(fn, 3), normals, _planar_uv(verts)
 
 
-def _primitive(model: Any, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+def _primitive(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
     import mujoco
     import trimesh
 
@@ -131,7 +135,8 @@ def _primitive(model: Any, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray |
     return v, np.asarray(mesh.faces), np.asarray(mesh.vertex_normals), _planar_uv(v)
 
 
-def _mi_mesh(name: str, v: np.ndarray, f: np.ndarray, n: np.ndarray | None, uv: np.ndarray, bsdf: Any) -> Any:
+def _mi_mesh(name: str, v: np.ndarray, f: np.ndarray, n: np.ndarray | None, uv: np.ndarray,
+             bsdf: mi.BSDF) -> mi.Mesh:
     import mitsuba as mi
 
     props = mi.Properties()
@@ -139,7 +144,7 @@ def _mi_mesh(name: str, v: np.ndarray, f: np.ndarray, n: np.ndarray | None, uv: 
     mesh = mi.Mesh(name, len(v), len(f), has_vertex_normals=n is not None, has_vertex_texcoords=True, props=props)
     p = mi.traverse(mesh)
 
-    def put(key: str, values: np.ndarray, dtype: Any) -> None:
+    def put(key: str, values: np.ndarray, dtype: type[np.generic]) -> None:
         p[key] = type(p[key])(np.ascontiguousarray(values, dtype).ravel())  # Dr.Jit's array type of this variant
 
     put("vertex_positions", v, np.float32)
@@ -151,7 +156,7 @@ def _mi_mesh(name: str, v: np.ndarray, f: np.ndarray, n: np.ndarray | None, uv: 
     return mesh
 
 
-def drawn_geoms(model: Any) -> list[int]:
+def drawn_geoms(model: mujoco.MjModel) -> list[int]:
     """Ids of the geoms MuJoCo's renderer draws by default: groups 0-2, not fully transparent."""
     out = []
     for g in range(model.ngeom):
@@ -162,7 +167,7 @@ def drawn_geoms(model: Any) -> list[int]:
     return out
 
 
-def geom_bsdf(model: Any, g: int, finishes: Mapping[str, Finish]) -> dict[str, Any]:
+def geom_bsdf(model: mujoco.MjModel, g: int, finishes: Mapping[str, Finish]) -> dict[str, Any]:
     """The BSDF of a geom: its material's catalog finish (materials are named by finish id), else a plastic of
     its MuJoCo colour."""
     import mujoco
@@ -176,7 +181,7 @@ def geom_bsdf(model: Any, g: int, finishes: Mapping[str, Finish]) -> dict[str, A
     return plastic_bsdf(np.asarray(model.geom_rgba[g]))
 
 
-def _sensor(model: Any, cam: int, width: int, height: int, sampler: dict[str, Any]) -> dict[str, Any]:
+def _sensor(model: mujoco.MjModel, cam: int, width: int, height: int, sampler: dict[str, Any]) -> dict[str, Any]:
     return {"type": "perspective", "fov_axis": "y", "fov": float(model.cam_fovy[cam]),
             "near_clip": 0.005, "far_clip": 100.0, "to_world": _camera_to_world(np.eye(4)),
             "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"},
@@ -184,7 +189,7 @@ def _sensor(model: Any, cam: int, width: int, height: int, sampler: dict[str, An
             "sampler": sampler}
 
 
-def _camera_to_world(pose: np.ndarray) -> Any:
+def _camera_to_world(pose: np.ndarray) -> mi.ScalarTransform4f:
     import mitsuba as mi
 
     m = pose.copy()
@@ -192,7 +197,7 @@ def _camera_to_world(pose: np.ndarray) -> Any:
     return mi.ScalarTransform4f(m.tolist())
 
 
-def _key_light_direction(model: Any) -> np.ndarray:
+def _key_light_direction(model: mujoco.MjModel) -> np.ndarray:
     """Direction of the scene's brightest directional light (MuJoCo's ``key``), or straight down."""
     best, direction = -1.0, np.array([0.0, 0.0, -1.0])
     for i in range(model.nlight):
@@ -202,7 +207,7 @@ def _key_light_direction(model: Any) -> np.ndarray:
     return direction
 
 
-def build_posed_scene(model: Any, data: Any, finishes: Mapping[str, Finish], cameras: list[str],
+def build_posed_scene(model: mujoco.MjModel, data: mujoco.MjData, finishes: Mapping[str, Finish], cameras: list[str],
                       width: int, height: int, spp: int = 16, *, integrator: dict[str, Any] | None = None,
                       floor: bool = True, lights: bool = True, pixel_centres: bool = False) -> PosedScene:
     """Load the Mitsuba scene of ``model`` posed as in ``data`` (after ``mj_forward``), with one sensor per
@@ -259,7 +264,7 @@ def build_posed_scene(model: Any, data: Any, finishes: Mapping[str, Finish], cam
     return posed
 
 
-def pose_scene(posed: PosedScene, model: Any, data: Any) -> None:
+def pose_scene(posed: PosedScene, model: mujoco.MjModel, data: mujoco.MjData) -> None:
     """Move every instance and camera to its pose in ``data`` (after ``mj_forward``)."""
     import mujoco
 
@@ -272,7 +277,7 @@ def pose_scene(posed: PosedScene, model: Any, data: Any) -> None:
     params.update()
 
 
-def _rigid_transform(pos: np.ndarray, mat: np.ndarray) -> Any:
+def _rigid_transform(pos: np.ndarray, mat: np.ndarray) -> mi.ScalarTransform4f:
     import mitsuba as mi
 
     return mi.ScalarTransform4f(_rigid(pos, mat).tolist())
