@@ -14,11 +14,13 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    import mujoco
     import numpy as np
 
     from rik.combinator.mjcf import FrontLayout, VariantModel
     from rik.registry.catalog import Catalog
-    from rik.schemas import BaseUnit
+    from rik.schemas import BaseUnit, Front
+    from rik.sim.effects import RuntimeEffects
 
 MIN_GRASP_DEPTH = 0.010
 """m: how far a handle must stand off the face (or, for an inset grip, reach into the front) for a fingertip or
@@ -67,11 +69,11 @@ class ModelContext:
 
     variant: VariantModel
     unit: BaseUnit
-    model: Any
-    data: Any
+    model: mujoco.MjModel
+    data: mujoco.MjData
     metrics: dict[str, Any] = field(default_factory=dict)
     """Timings and forces the checks measure, for the report."""
-    runtime_effects: dict[int, Any] | None = field(default=None, repr=False)
+    runtime_effects: dict[int, RuntimeEffects] | None = field(default=None, repr=False)
     """Appliers of the fronts' runtime joint effects by dof address (built on first use by :meth:`effects`)."""
 
     def joint(self, front: str) -> tuple[int, int, int]:
@@ -81,7 +83,7 @@ class ModelContext:
         jid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, front)
         return jid, int(self.model.jnt_qposadr[jid]), int(self.model.jnt_dofadr[jid])
 
-    def effects(self) -> dict[int, Any]:
+    def effects(self) -> dict[int, RuntimeEffects]:
         """Appliers of the fronts' runtime joint effects (the effects MuJoCo lacks), by dof address."""
         if self.runtime_effects is None:
             from rik.sim.effects import front_effects
@@ -258,7 +260,7 @@ def check_opens_outward(ctx: ModelContext) -> CheckResult:
     return CheckResult("opens_outward", True, "every front's handle moves outward as its joint opens")
 
 
-def _front(ctx: ModelContext, front_id: str) -> Any:
+def _front(ctx: ModelContext, front_id: str) -> Front:
     return next(f for f in ctx.unit.fronts if f.id == front_id)
 
 

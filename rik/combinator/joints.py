@@ -38,6 +38,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    import mujoco
+
     from rik.schemas import JointResistance, JointSpec, JointType, ResistancePreset
 
 LIMIT_MARGIN = 0.0
@@ -98,11 +100,12 @@ def joint_class(preset_id: str, joint_type: JointType | str) -> str:
     return f"{preset_id}_{getattr(joint_type, 'value', joint_type)}"
 
 
-def add_joint_classes(spec: Any, preset: ResistancePreset, joint_types: list[JointType]) -> dict[str, Any]:
+def add_joint_classes(spec: mujoco.MjSpec, preset: ResistancePreset,
+                      joint_types: list[JointType]) -> dict[str, mujoco.MjsDefault]:
     """Add one default class per joint type holding ``preset``'s resistance; returns the classes by type."""
     import mujoco
 
-    classes = {}
+    classes: dict[str, mujoco.MjsDefault] = {}
     for joint_type in joint_types:
         model = joint_model(preset.for_joint(joint_type), joint_type)
         default = spec.add_default(joint_class(preset.id, joint_type), spec.default)
@@ -120,7 +123,7 @@ def add_joint_classes(spec: Any, preset: ResistancePreset, joint_types: list[Joi
     return classes
 
 
-def add_front_joint(body: Any, name: str, joint: JointSpec, default: Any) -> Any:
+def add_front_joint(body: mujoco.MjsBody, name: str, joint: JointSpec, default: mujoco.MjsDefault) -> mujoco.MjsJoint:
     """A front's joint: its class (the resistance), axis, anchor (the body sits at the base unit's origin, so
     the anchor is the joint's position) and range."""
     return body.add_joint(name=name, default=default, pos=list(joint.anchor), axis=list(joint.axis),
@@ -132,7 +135,7 @@ def effect_actuator_name(joint_name: str, kind: str) -> str:
     return f"{joint_name}/effect/{kind}"
 
 
-def add_effect_actuators(spec: Any, joint_name: str, model: JointModel) -> list[Any]:
+def add_effect_actuators(spec: mujoco.MjSpec, joint_name: str, model: JointModel) -> list[mujoco.MjsActuator]:
     """Add the passive actuators of ``model``'s native effects (:attr:`JointModel.actuator_effects`) to the joint
     ``joint_name``; returns them (none for effects of zero magnitude)."""
     import mujoco

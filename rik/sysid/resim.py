@@ -20,6 +20,10 @@ import numpy as np
 from rik.errors import RikError
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    import mujoco
+
     from rik.schemas.joints import JointResistance, JointType
     from rik.sim.effects import RuntimeEffects
 
@@ -79,8 +83,8 @@ def joint_spec_model(joint_type: JointType | str, inertia: float, resistance: Jo
     return model, RuntimeEffects(model, 0, 0, jmodel.runtime_effects)
 
 
-def resimulate(model_and_applier: tuple[Any, RuntimeEffects], t: Any, q: Any, qd: Any, force: Any, *,
-               window_s: float = 0.5) -> np.ndarray:
+def resimulate(model_and_applier: tuple[mujoco.MjModel, RuntimeEffects], t: np.ndarray, q: np.ndarray,
+               qd: np.ndarray, force: np.ndarray, *, window_s: float = 0.5) -> np.ndarray:
     """The joint's simulated position at the sample times ``t`` (s, increasing) of a measured trial, by multiple
     shooting: every ``window_s`` s the joint restarts from the measured position ``q`` and velocity ``qd``, and
     it is driven by the measured generalised ``force`` (N or N·m, positive opening) as ``qfrc_applied``. The
@@ -130,7 +134,9 @@ def resimulate(model_and_applier: tuple[Any, RuntimeEffects], t: Any, q: Any, qd
     return out
 
 
-def position_rmse(model_and_applier: tuple[Any, RuntimeEffects], trials: Any, *, window_s: float = 0.5) -> float:
+def position_rmse(model_and_applier: tuple[mujoco.MjModel, RuntimeEffects],
+                  trials: Iterable[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]], *,
+                  window_s: float = 0.5) -> float:
     """Root-mean-square error (m or rad) between measured and re-simulated positions over ``trials``: an
     iterable of ``(t, q, qd, force)`` array tuples (SI units)."""
     total, count = 0.0, 0

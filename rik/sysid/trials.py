@@ -44,13 +44,16 @@ import re
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 
 from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
+
+if TYPE_CHECKING:
+    import pyarrow as pa
 
 MIN_SAMPLES = 50
 """Fewest samples a trial may have: below this no derivative or fit is meaningful."""
@@ -580,7 +583,7 @@ def _read_info(root: Path) -> tuple[str, dict[str, Any]]:
     return str(info_file), info
 
 
-def _ref_values(table: Any, ref: _FeatureRef, file: str) -> tuple[np.ndarray, np.ndarray]:
+def _ref_values(table: pa.Table, ref: _FeatureRef, file: str) -> tuple[np.ndarray, np.ndarray]:
     """(values, null mask) of one referenced number, per row of a data file's table."""
     import pyarrow as pa
 
@@ -591,7 +594,7 @@ def _ref_values(table: Any, ref: _FeatureRef, file: str) -> tuple[np.ndarray, np
     if pa.types.is_list(column.type) or pa.types.is_fixed_size_list(column.type) \
             or pa.types.is_large_list(column.type):
         null = column.is_null().to_numpy(zero_copy_only=False).astype(bool)
-        flat = column.flatten().cast(pa.float64()).to_numpy(zero_copy_only=False)
+        flat = cast("pa.ListArray", column).flatten().cast(pa.float64()).to_numpy(zero_copy_only=False)
         if null.any() or flat.size != rows * ref.size:
             raise TrialError(file, None, ref.text, f"rows do not all hold {ref.size} values as info.json says")
         return flat.reshape(rows, ref.size)[:, ref.index].astype(np.float64), np.zeros(rows, dtype=bool)
