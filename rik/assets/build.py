@@ -20,6 +20,7 @@ from rik.assets.workers import map_ids
 from rik.errors import RikError, UnknownIdError
 
 if TYPE_CHECKING:
+    import numpy as np
     import trimesh
 
     from rik.registry.catalog import Catalog
@@ -173,7 +174,7 @@ def _imported_base_parts(catalog: Catalog, asset_id: str, seed: int) -> list[Rig
     return parts
 
 
-def _box_hull(mesh: trimesh.Trimesh) -> tuple[Any, Any]:
+def _box_hull(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
     import numpy as np
 
     return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)

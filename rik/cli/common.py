@@ -5,9 +5,13 @@ from __future__ import annotations
 import os
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
+
+if TYPE_CHECKING:
+    from rich.console import Console
+    from rich.progress import Progress
 
 CatalogOption = Annotated[
     list[Path] | None,
@@ -49,7 +53,7 @@ def print_json(data: object) -> None:
     sys.stdout.write(json.dumps(data, indent=2, ensure_ascii=False) + "\n")
 
 
-def console() -> Any:
+def console() -> Console:
     """A rich console for data: no automatic highlighting or emoji codes (cells are data, and the regex
     highlighter costs more than the rest of a listing); when output is not a terminal, wide enough that tables
     are not folded."""
@@ -61,7 +65,7 @@ def console() -> Any:
     return Console(highlight=False, emoji=False, width=width)
 
 
-def progress_bar() -> Any:
+def progress_bar() -> Progress:
     """A rich progress bar for batch work: description, bar, done/total, elapsed time and the last item."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 

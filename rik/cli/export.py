@@ -5,13 +5,16 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from rik.cli.common import CatalogOption, WorkersOpt, console, overlays, progress_bar
 from rik.cli.rerender import CamerasOpt, EpisodesArg, ResOpt
 from rik.cli.sim import VariantsOpt
+
+if TYPE_CHECKING:
+    from rich.progress import TaskID
 
 
 def quiet_writers() -> None:
@@ -60,7 +63,7 @@ def export_lerobot(
                       fps, codec, spp, denoise, variant, shard_episodes)
     cat = load_catalog(overlays(catalog))
     with progress_bar() as progress:
-        tasks: dict[str, int] = {}
+        tasks: dict[str, TaskID] = {}
 
         def report(stage: str, done: int, total: int) -> None:
             if stage not in tasks:

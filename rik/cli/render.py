@@ -4,11 +4,16 @@ here; :mod:`rik.render.visual_gap` does the work."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from rik.cli.common import console, progress_bar
+
+if TYPE_CHECKING:
+    from rich.progress import TaskID
+
+    from rik.render.visual_gap import VisualGapResult
 
 
 def visual_gap(
@@ -46,7 +51,7 @@ def visual_gap(
         for spec in encoder or ["resnet18"]:
             task = progress.add_task(f"encoding ({spec.partition(':')[0]})", total=None, last="")
 
-            def step(done: int, total: int, name: str, task: Any = task) -> None:
+            def step(done: int, total: int, name: str, task: TaskID = task) -> None:
                 progress.update(task, completed=done, total=total, last=name)
 
             results.append(run(real, sim, rerendered, encoder_spec=spec, n=n, bootstrap=bootstrap, seed=seed,
@@ -64,7 +69,7 @@ def visual_gap(
         console().print(f"reports: {out / 'visual_gap.md'} and {out / 'visual_gap.json'}")
 
 
-def print_result(r: Any) -> None:
+def print_result(r: VisualGapResult) -> None:
     """One encoder's rich table: rows sim / rerendered / the real split-half floor; FID, KID, EMD with intervals."""
     from rich.table import Table
 

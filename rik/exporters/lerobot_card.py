@@ -6,7 +6,11 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from rik.exporters.lerobot_export import ExportSpec
+    from rik.registry.catalog import Catalog
 
 CITATION = """@misc{realikea,
   title  = {Real-IKEA: Physical Fidelity is the Prerequisite for Robust Manipulation},
@@ -16,7 +20,7 @@ CARD_FIELDS = "rik_card.json"
 """The card's fields, kept beside the dataset so that ``push`` can give the Hub the same card."""
 
 
-def _presets_table(catalog: Any) -> str:
+def _presets_table(catalog: Catalog) -> str:
     lines = ["| preset | slide damping (N·s/m) | slide friction (N) | hinge damping (N·m·s/rad) "
              "| hinge friction (N·m) |", "|---|---|---|---|---|"]
     for p in catalog.presets.values():
@@ -25,7 +29,7 @@ def _presets_table(catalog: Any) -> str:
     return "\n".join(lines)
 
 
-def _description(catalog: Any, spec: Any, fps: int, checks: dict[str, Any], info: dict[str, Any]) -> str:
+def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str, Any], info: dict[str, Any]) -> str:
     import rik
     images = [k for k, f in info["features"].items() if f.get("dtype") == "video"]
     sim_only = [k for k in images if not k.endswith("_rerendered")]
@@ -62,7 +66,7 @@ def card_fields(root: Path) -> dict[str, str]:
     return json.loads((Path(root) / "meta" / CARD_FIELDS).read_text(encoding="utf-8"))
 
 
-def write_card(catalog: Any, root: Path, spec: Any, fps: int, checks: dict[str, Any]) -> Path:
+def write_card(catalog: Catalog, root: Path, spec: ExportSpec, fps: int, checks: dict[str, Any]) -> Path:
     """Write ``README.md`` (lerobot's dataset card, filled in) and the card's fields into the dataset."""
     from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
     from lerobot.datasets.utils import create_lerobot_dataset_card

@@ -37,6 +37,7 @@ from rik.paths import write_atomic
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
+    from rik.schemas.episodes import EpisodeMeta
 
 STREAMS = tuple(STREAM_SUFFIX)
 """The image streams an export can hold: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
@@ -92,7 +93,7 @@ def _check_spec(spec: ExportSpec) -> None:
         raise RikError(f"--fps {spec.fps}: must be at least 1")
 
 
-def _episode_fps(metas: dict[Path, Any], spec: ExportSpec) -> int:
+def _episode_fps(metas: dict[Path, EpisodeMeta], spec: ExportSpec) -> int:
     rates = {m.fps for m in metas.values()}
     if spec.fps is not None:
         return spec.fps

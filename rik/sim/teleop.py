@@ -22,11 +22,16 @@ import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rik.errors import RikError
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+    from rik.schemas.episodes import EpisodeMeta
+    from rik.sim.scene import SimScene
 
 POSITION_STEP = 0.005
 """m per key press."""
@@ -61,7 +66,7 @@ class KeyboardDevice:
     finished: str | None = None
     """``save`` or ``discard`` once the operator ends the episode."""
 
-    def start(self, scene: Any) -> None:
+    def start(self, scene: SimScene) -> None:
         self.target = np.concatenate([scene.pose(), [0.0]])
 
     def on_key(self, key: int) -> None:
@@ -107,7 +112,7 @@ class SpaceMouseDevice:
                               "--device keyboard")
         self._mouse = pyspacemouse
 
-    def start(self, scene: Any) -> None:
+    def start(self, scene: SimScene) -> None:
         self.target = np.concatenate([scene.pose(), [0.0]])
 
     def on_key(self, key: int) -> None:
@@ -132,7 +137,7 @@ class SpaceMouseDevice:
 DEVICES = {"keyboard": KeyboardDevice, "spacemouse": SpaceMouseDevice}
 
 
-def make_device(name: str) -> Any:
+def make_device(name: str) -> KeyboardDevice | SpaceMouseDevice:
     """A device by name; a SpaceMouse is opened here, so a missing one fails before anything else happens."""
     if name not in DEVICES:
         raise DeviceError(f"unknown device '{name}' (devices: {', '.join(DEVICES)})")
@@ -142,8 +147,8 @@ def make_device(name: str) -> Any:
     return device
 
 
-def teleoperate(catalog: Any, variant: str, device_name: str, *, out: Path, variants: Path = Path("variants"),
-                front: str | None = None, seed: int = 0, max_seconds: float = 120.0) -> Any:
+def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, variants: Path = Path("variants"),
+                front: str | None = None, seed: int = 0, max_seconds: float = 120.0) -> EpisodeMeta | None:
     """Teleoperate ``variant`` in MuJoCo's viewer with a device, recording at the control rate; the episode is
     written when the operator presses Enter (or closes the window), not at all on Backspace or Ctrl+C.
     Returns the episode's meta, or ``None`` when discarded."""

@@ -23,7 +23,7 @@ carry a handle's width beyond its section.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import trimesh
@@ -295,7 +295,7 @@ _THICKNESS_CAP = {"round": 1.0, "square": 1.0, "hexagon": 1.0, "oval": 0.8, "fla
 """Largest thickness of each grip section, as a share of ``grip_diameter`` (its width)."""
 
 
-def _grip_section(kind: str, geometry: HandleGeometry, square_round: float) -> tuple[Any, float, float]:
+def _grip_section(kind: str, geometry: HandleGeometry, square_round: float) -> tuple[_Section, float, float]:
     """The cross-section of a bar or bow, with its width ``w_s`` (along y) and thickness ``t`` (m).
 
     round and oval are ellipses; square, flat and strap rounded rectangles (corner radius ``square_round`` x the
