@@ -9,9 +9,10 @@ decomposed with CoACD.)
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
+
+from rik.registry.geometry import vec3
 
 if TYPE_CHECKING:
     import trimesh
@@ -20,12 +21,6 @@ if TYPE_CHECKING:
 
 BACK_PANEL_THICKNESS = 0.006
 """Hardboard back panel, m."""
-
-
-def vec3(values: Iterable[float]) -> tuple[float, float, float]:
-    """Three numbers as a tuple of floats (a position or extents, m); ValueError unless exactly three."""
-    x, y, z = values
-    return float(x), float(y), float(z)
 
 
 @dataclass(frozen=True)

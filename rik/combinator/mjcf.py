@@ -27,10 +27,11 @@ import json
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rik.assets.base_units import Panel, vec3
+from rik.assets.base_units import Panel
 from rik.combinator.ids import VariantKey
 from rik.combinator.joints import add_effect_actuators, add_front_joint, add_joint_classes, joint_model
 from rik.combinator.placement import HandlePlacement, front_motion, place_handle
+from rik.registry.geometry import vec3
 
 if TYPE_CHECKING:
     from collections.abc import Sequence

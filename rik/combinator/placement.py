@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from rik.registry.fit import footprint
-from rik.registry.geometry import dot, site_axes, sub
+from rik.registry.geometry import dot, site_axes, sub, vec3
 
 if TYPE_CHECKING:
     from rik.schemas import BaseUnit, Front, Handle, HandleType
@@ -180,8 +180,8 @@ def edge_directions(unit: BaseUnit, handle: Handle) -> dict[str, tuple[float, fl
     for front in unit.fronts:
         _, du, dv = _edge_direction(unit, front, handle, front_motion(front))
         ex, ey, _ = site_axes(front.mount.quat)
-        out[front.id] = tuple(du * ex[i] + dv * ey[i] for i in range(3))
-    return out  # type: ignore[return-value]
+        out[front.id] = vec3(du * ex[i] + dv * ey[i] for i in range(3))
+    return out
 
 
 def place_handle(unit: BaseUnit, front: Front, handle: Handle, handle_type: HandleType,
@@ -234,9 +234,9 @@ def place_handle(unit: BaseUnit, front: Front, handle: Handle, handle_type: Hand
             rule = "catalog placement"
     ex, ey, _ = site_axes(front.mount.quat)
     m = front.mount.pos
-    pos = tuple(m[i] + u * ex[i] + v * ey[i] for i in range(3))
+    pos = vec3(m[i] + u * ex[i] + v * ey[i] for i in range(3))
     quat = _compose(front.mount.quat, _z_rotation(rotation))
-    return HandlePlacement(front.id, u, v, rotation, pos, quat, rule, edge, trim, axis)  # type: ignore[arg-type]
+    return HandlePlacement(front.id, u, v, rotation, pos, quat, rule, edge, trim, axis)
 
 
 def _z_rotation(degrees: int) -> tuple[float, float, float, float]:
@@ -244,11 +244,12 @@ def _z_rotation(degrees: int) -> tuple[float, float, float, float]:
     return (math.cos(half), 0.0, 0.0, math.sin(half))
 
 
-def _compose(a: tuple[float, float, float, float], b: tuple[float, float, float, float]) -> tuple[float, ...]:
+def _compose(a: tuple[float, float, float, float],
+             b: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
     """Quaternion product a * b (apply b, then a), normalised; (w, x, y, z)."""
     aw, ax, ay, az = a
     bw, bx, by, bz = b
     q = (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
          aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
     n = math.sqrt(sum(c * c for c in q))
-    return tuple(c / n for c in q)
+    return q[0] / n, q[1] / n, q[2] / n, q[3] / n

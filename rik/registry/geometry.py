@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 Vec = tuple[float, float, float]
+
+
+def vec3(values: Iterable[float]) -> Vec:
+    """Three numbers as a tuple of floats (a position, a direction or extents); ValueError unless exactly three."""
+    x, y, z = values
+    return float(x), float(y), float(z)
 
 
 def dot(a: Vec, b: Vec) -> float:

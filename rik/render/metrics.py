@@ -231,7 +231,7 @@ class RowTable:
         raise KeyError(name)
 
     def to_dict(self) -> dict[str, object]:
-        return asdict(self)  # type: ignore[call-overload]
+        return asdict(self)  # type: ignore[call-overload]  # RowTable is only mixed into dataclasses
 
 
 @dataclass
