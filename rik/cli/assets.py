@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -22,6 +22,9 @@ from rik.cli.common import (
     print_json,
     progress_bar,
 )
+
+if TYPE_CHECKING:
+    from rik.assets.build import BuildResult
 
 app = typer.Typer(help="Meshes, CoACD collision, collision fidelity and mesh statistics of handles and base units.",
                   no_args_is_help=True)
@@ -89,7 +92,7 @@ def build(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = 
     with progress_bar() as progress:
         task = progress.add_task("assets", total=len(wanted), last="")
 
-        def advance(result: Any) -> None:
+        def advance(result: BuildResult) -> None:
             if result.note:
                 notes.append(result.note)
             progress.update(task, advance=1, last=f"{result.id} ({result.status})")

@@ -9,12 +9,15 @@ from __future__ import annotations
 import sys
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from rik.cli.common import CatalogOption, HandleTypeOpt, OutputFormat, console, overlays, print_json
 from rik.errors import RikError
+
+if TYPE_CHECKING:
+    from rich.tree import Tree
 
 app = typer.Typer(help="Browse the catalog of handles, base units and resistance presets.", no_args_is_help=True)
 
@@ -105,7 +108,7 @@ def show(
     print("Lengths in m, masses in kg, angles in rad (SI).")
 
 
-def _add_branches(tree: Any, data: dict[str, Any]) -> None:
+def _add_branches(tree: Tree, data: dict[str, Any]) -> None:
     from rich.markup import escape
 
     for key, value in data.items():

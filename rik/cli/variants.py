@@ -6,7 +6,7 @@ Only parsing and printing here; :mod:`rik.combinator` does the work (MuJoCo load
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -22,6 +22,11 @@ from rik.cli.common import (
     progress_bar,
 )
 from rik.errors import RikError
+
+if TYPE_CHECKING:
+    from rik.combinator.build import VariantResult
+    from rik.combinator.ids import VariantKey
+    from rik.registry.catalog import Catalog
 
 app = typer.Typer(help="Validated MuJoCo variants: every base unit x handle x resistance preset.",
                   no_args_is_help=True)
@@ -86,8 +91,8 @@ def print_demo_episode(overlay_paths: list[Path], out: Path = Path("episodes"), 
     return dirs
 
 
-def _select(cat: Any, base: list[str] | None, handle_type: list[HandleTypeOpt] | None, handle: list[str] | None,
-            preset: list[str] | None) -> list[Any]:
+def _select(cat: Catalog, base: list[str] | None, handle_type: list[HandleTypeOpt] | None, handle: list[str] | None,
+            preset: list[str] | None) -> list[VariantKey]:
     from rik.combinator.ids import select_variants
 
     return select_variants(cat, bases=base or (), handle_types=[t.value for t in handle_type or ()],
@@ -169,7 +174,7 @@ def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g
     with progress_bar() as progress:
         task = progress.add_task("variants", total=len(keys), last="")
 
-        def advance(result: Any) -> None:
+        def advance(result: VariantResult) -> None:
             progress.update(task, advance=1, last=f"{result.id} ({result.status})")
 
         def assets_done(built: int) -> None:

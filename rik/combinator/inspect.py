@@ -23,6 +23,8 @@ from rik.combinator.ids import VariantKey, parse_variant_id
 from rik.errors import RikError
 
 if TYPE_CHECKING:
+    import mujoco
+
     from rik.registry.catalog import Catalog
 
 
@@ -50,7 +52,7 @@ def _model_file(target: str) -> Path | None:
     return None
 
 
-def _variant_text(model: Any, file: Path) -> dict[str, Any]:
+def _variant_text(model: mujoco.MjModel, file: Path) -> dict[str, Any]:
     import mujoco
 
     tid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXT, "rik.variant")

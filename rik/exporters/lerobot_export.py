@@ -118,7 +118,7 @@ def _check_same_features(dirs: list[Path]) -> None:
                            "dataset")
 
 
-def _plan(metas: dict[Path, Any], spec: ExportSpec, fps: int) -> dict[str, Any]:
+def _plan(metas: dict[Path, EpisodeMeta], spec: ExportSpec, fps: int) -> dict[str, Any]:
     return {"spec": {**asdict(spec), "fps": fps}, "episodes": [[m.id, m.states_sha256] for m in metas.values()]}
 
 

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel, ValidationError
 
 from rik.registry.sources import RawEntry
 from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
+
+if TYPE_CHECKING:
+    from pydantic_core import ErrorDetails
 
 #: Schema model of each section.
 SECTION_MODELS: dict[str, type[BaseModel]] = {
@@ -33,7 +36,7 @@ def parse_entry(entry: RawEntry) -> BaseModel:
         raise entry.error(field or None, describe_error(model, first) + more) from None
 
 
-def describe_error(model: type[BaseModel], error: Any) -> str:
+def describe_error(model: type[BaseModel], error: ErrorDetails) -> str:
     """A short, specific sentence for one pydantic error."""
     kind, msg = error["type"], error["msg"].removeprefix("Value error, ")
     if kind == "missing":
@@ -47,7 +50,7 @@ def describe_error(model: type[BaseModel], error: Any) -> str:
     return msg[0].lower() + msg[1:]
 
 
-def _fields_at(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
+def _fields_at(model: type[BaseModel], loc: tuple[int | str, ...]) -> list[str]:
     """Field names of the (nested) model found at ``loc``, or [] when it cannot be followed."""
     current: Any = model
     for part in loc:
@@ -62,7 +65,7 @@ def _fields_at(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
     return list(getattr(current, "model_fields", {}))
 
 
-def _model_of(annotation: Any) -> type[BaseModel] | None:
+def _model_of(annotation: object) -> type[BaseModel] | None:
     """The BaseModel class inside an annotation such as ``X``, ``X | None`` or ``tuple[X, ...]``."""
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return annotation

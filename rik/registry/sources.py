@@ -111,7 +111,7 @@ def read_file(path: Path, builtin: bool) -> list[RawEntry]:
     return entries
 
 
-def line_of(path: Path, loc: tuple[Any, ...]) -> int | None:
+def line_of(path: Path, loc: tuple[int | str, ...]) -> int | None:
     """1-based line of the deepest node along ``loc`` (section, index, field, ...) in a YAML file.
 
     Only called when reporting an error, so the file is parsed again here rather than on every load.

@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 import shutil
 from pathlib import Path
-from typing import Any, TypedDict
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
@@ -28,6 +28,10 @@ from rik.schemas.joints import JointType, Spring
 from rik.sysid.discover import Discovery, describe
 from rik.sysid.fit import Fit, Rows
 from rik.sysid.select import MIN_BIC_DROP, MIN_GAIN
+
+if TYPE_CHECKING:
+    from rik.sysid.effects import Effect
+    from rik.sysid.select import Score
 
 SUMMARY = "summary.json"
 REPORT = "report.md"
@@ -51,7 +55,7 @@ def _residuals(fit: Fit, rows: Rows) -> np.ndarray:
     return rows.f - fit.predict(rows)
 
 
-def _effect_dict(effect: Any) -> dict[str, Any] | None:
+def _effect_dict(effect: Effect | None) -> dict[str, Any] | None:
     if effect is None:
         return None
     data = effect.model_dump(mode="json")
@@ -93,7 +97,7 @@ def summary(d: Discovery) -> dict[str, Any]:
     }
 
 
-def _candidate(s: Any) -> dict[str, Any]:
+def _candidate(s: Score) -> dict[str, Any]:
     return {"kind": s.fit.kind, "kinds": list(s.fit.kinds), "title": " + ".join(f.title for f, _ in s.fit.terms),
             "hyper": s.fit.hyper, "effects": [_effect_dict(e) for e in s.fit.effects], "gain": s.gain,
             "bic_drop": s.bic_drop,
