@@ -9,7 +9,7 @@ Geoms without a catalog finish (the gripper, the floor) become plastics of their
 from __future__ import annotations
 
 from functools import cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -58,10 +58,10 @@ def _wood_bitmap(base_color: np.ndarray) -> mi.Bitmap:
     return mi.Bitmap(img)
 
 
-def finish_bsdf(finish: Finish) -> dict[str, Any]:
+def finish_bsdf(finish: Finish) -> dict[str, object]:
     """The Mitsuba BSDF dict of a catalog finish."""
     color = srgb_to_linear(finish.base_color)
-    bsdf: dict[str, Any] = {"type": "principled", "metallic": float(finish.metallic),
+    bsdf: dict[str, object] = {"type": "principled", "metallic": float(finish.metallic),
                             "roughness": float(max(finish.roughness, 0.03))}
     if finish.pattern == "wood_grain" or finish.kind == "wood":
         bsdf["base_color"] = {"type": "bitmap", "bitmap": _wood_bitmap(color), "wrap_mode": "mirror",
@@ -78,7 +78,7 @@ def finish_bsdf(finish: Finish) -> dict[str, Any]:
     return bsdf
 
 
-def plastic_bsdf(rgba: np.ndarray, roughness: float = 0.45) -> dict[str, Any]:
+def plastic_bsdf(rgba: np.ndarray, roughness: float = 0.45) -> dict[str, object]:
     """A dielectric of a MuJoCo colour (sRGB ``rgba``), for geoms without a catalog finish."""
     return {"type": "principled", "base_color": {"type": "rgb", "value": srgb_to_linear(rgba[:3]).tolist()},
             "metallic": 0.0, "roughness": roughness}
@@ -107,7 +107,7 @@ def _room_envmap(height: int = 64) -> np.ndarray:
     return env.astype(np.float32)
 
 
-def lighting(key_direction: np.ndarray, key_irradiance: float = 2.5, ambient: float = 1.0) -> dict[str, Any]:
+def lighting(key_direction: np.ndarray, key_irradiance: float = 2.5, ambient: float = 1.0) -> dict[str, object]:
     """Emitters for a Mitsuba scene dict: the room environment plus a directional key light along
     ``key_direction`` (world, MuJoCo's z up) that casts the shadows MuJoCo's key light casts."""
     import mitsuba as mi

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -167,7 +167,7 @@ def drawn_geoms(model: mujoco.MjModel) -> list[int]:
     return out
 
 
-def geom_bsdf(model: mujoco.MjModel, g: int, finishes: Mapping[str, Finish]) -> dict[str, Any]:
+def geom_bsdf(model: mujoco.MjModel, g: int, finishes: Mapping[str, Finish]) -> dict[str, object]:
     """The BSDF of a geom: its material's catalog finish (materials are named by finish id), else a plastic of
     its MuJoCo colour."""
     import mujoco
@@ -181,7 +181,7 @@ def geom_bsdf(model: mujoco.MjModel, g: int, finishes: Mapping[str, Finish]) -> 
     return plastic_bsdf(np.asarray(model.geom_rgba[g]))
 
 
-def _sensor(model: mujoco.MjModel, cam: int, width: int, height: int, sampler: dict[str, Any]) -> dict[str, Any]:
+def _sensor(model: mujoco.MjModel, cam: int, width: int, height: int, sampler: dict[str, object]) -> dict[str, object]:
     return {"type": "perspective", "fov_axis": "y", "fov": float(model.cam_fovy[cam]),
             "near_clip": 0.005, "far_clip": 100.0, "to_world": _camera_to_world(np.eye(4)),
             "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"},
@@ -208,7 +208,7 @@ def _key_light_direction(model: mujoco.MjModel) -> np.ndarray:
 
 
 def build_posed_scene(model: mujoco.MjModel, data: mujoco.MjData, finishes: Mapping[str, Finish], cameras: list[str],
-                      width: int, height: int, spp: int = 16, *, integrator: dict[str, Any] | None = None,
+                      width: int, height: int, spp: int = 16, *, integrator: Mapping[str, object] | None = None,
                       floor: bool = True, lights: bool = True, pixel_centres: bool = False) -> PosedScene:
     """Load the Mitsuba scene of ``model`` posed as in ``data`` (after ``mj_forward``), with one sensor per
     MuJoCo camera in ``cameras``, rendered by ``integrator`` (default :data:`PATH_TRACER`). With
@@ -216,13 +216,13 @@ def build_posed_scene(model: mujoco.MjModel, data: mujoco.MjData, finishes: Mapp
     import mitsuba as mi
     import mujoco
 
-    scene: dict[str, Any] = {"type": "scene"}
+    scene: dict[str, object] = {"type": "scene"}
     scene["integrator"] = integrator or PATH_TRACER
     if lights:
         scene.update(lighting(_key_light_direction(model)))
     moving: list[int] = []
     drawn = drawn_geoms(model)
-    bsdfs: dict[str, Any] = {}  # one instance per material: Dr.Jit traces every BSDF instance into the kernel
+    bsdfs: dict[str, mi.BSDF] = {}  # one instance per material: Dr.Jit traces every BSDF instance into the kernel
     for g in drawn:
         recipe = geom_bsdf(model, g, finishes)
         key = repr(recipe)
