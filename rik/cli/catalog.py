@@ -69,7 +69,7 @@ FILTER_KINDS = {"type": ("handles", "designs"), "design": ("handles",), "joint":
                 "min_length": ("handles",), "max_length": ("handles",)}
 
 
-def _check_filters(kind: str, **given: Any) -> None:
+def _check_filters(kind: str, **given: object) -> None:
     """Reject filters that do not apply to the kind listed (rather than silently ignoring them)."""
     for name, value in given.items():
         if value is not None and kind not in FILTER_KINDS[name]:

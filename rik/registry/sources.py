@@ -6,10 +6,13 @@ import os
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rik import CATALOG_SCHEMA
 from rik.errors import CatalogError
+
+if TYPE_CHECKING:
+    import yaml
 
 #: Top-level sections a catalog file may hold, each a list of entries.
 SECTIONS = ("finishes", "presets", "designs", "handles", "base_units")
@@ -19,11 +22,11 @@ NOUNS = {"finishes": "finish", "presets": "preset", "designs": "design", "handle
 
 BUILTIN_DIR = Path(__file__).parent / "data"
 
-def _yaml() -> tuple[Any, type]:
-    """PyYAML and its fastest safe loader (libyaml's, which PyYAML's wheels ship)."""
+def _safe_loader() -> type[yaml.CSafeLoader | yaml.SafeLoader]:
+    """PyYAML's fastest safe loader (libyaml's, which PyYAML's wheels ship)."""
     import yaml
 
-    return yaml, getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    return getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 @dataclass(frozen=True)
@@ -70,7 +73,9 @@ def catalog_files(path: Path) -> list[Path]:
 
 def read_file(path: Path, builtin: bool) -> list[RawEntry]:
     """Parse one catalog file into raw entries; raises :class:`CatalogError` on malformed YAML or layout."""
-    yaml, loader = _yaml()
+    import yaml
+
+    loader = _safe_loader()
     shown = display_path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -116,7 +121,9 @@ def line_of(path: Path, loc: tuple[int | str, ...]) -> int | None:
 
     Only called when reporting an error, so the file is parsed again here rather than on every load.
     """
-    yaml, loader = _yaml()
+    import yaml
+
+    loader = _safe_loader()
     try:
         node = yaml.compose(path.read_text(encoding="utf-8"), Loader=loader)
     except (OSError, UnicodeDecodeError, yaml.YAMLError):
