@@ -77,3 +77,12 @@ def main() -> None:
     except RikError as exc:
         print(f"rik: error: {exc}", file=sys.stderr)
         sys.exit(2)
+    except OSError as exc:  # the machine's fault, not the input's: one line and exit 1, never a traceback
+        import errno
+
+        if exc.errno not in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS):
+            raise
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"rik: error: {where}{exc.strerror} ({errno.errorcode[exc.errno]}); files being written were removed, "
+              "finished ones kept", file=sys.stderr)
+        sys.exit(1)
