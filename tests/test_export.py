@@ -20,6 +20,7 @@ from rik.errors import RikError
 from rik.exporters.lerobot_export import ExportSpec, export_lerobot
 from rik.exporters.lerobot_frames import resample_indices
 from rik.registry import load_catalog
+from rik.sim.episode import write_meta
 from rik.sim.record import record
 
 CAT = load_catalog()
@@ -215,7 +216,7 @@ def test_export_messages(rik, dataset: Path, work: Path, tmp_path: Path) -> None
         if i == 1:
             meta = json.loads((mixed / d.name / "meta.json").read_text())
             meta["fps"] = 10
-            (mixed / d.name / "meta.json").write_text(json.dumps(meta))
+            write_meta(mixed / d.name, meta)  # as if recorded at 10 Hz: sealed anew
     err = rik("export-lerobot", str(mixed), "--repo-id", REPO, "--out", str(tmp_path / "m")).err.strip()
     assert err.startswith("rik: error: the episodes were recorded at different rates (") and "pass --fps" in err
     import hashlib
@@ -228,7 +229,7 @@ def test_export_messages(rik, dataset: Path, work: Path, tmp_path: Path) -> None
     shorter = pa.array([row[:6] for row in table.column("action").to_pylist()], pa.list_(pa.float64()))
     pq.write_table(table.set_column(table.schema.get_field_index("action"), "action", shorter), path)
     meta["fps"], meta["states_sha256"] = 20, hashlib.sha256(path.read_bytes()).hexdigest()
-    (mixed / d.name / "meta.json").write_text(json.dumps(meta))
+    write_meta(mixed / d.name, meta)
     err = rik("export-lerobot", str(mixed), "--repo-id", REPO, "--out", str(tmp_path / "m")).err.strip()
     assert err == (f"rik: error: {path}: column 'action' has 6 numbers per row where the other episodes have 7 "
                    "(target_x, target_y, target_z, target_pitch, target_yaw, target_roll, gripper); export it to a "
