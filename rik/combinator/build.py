@@ -180,10 +180,20 @@ def _sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
+def _intact(path: Path, data: bytes) -> bool:
+    """True when the file at ``path`` holds exactly ``data``."""
+    try:
+        return path.stat().st_size == len(data) and path.read_bytes() == data
+    except OSError:
+        return False
+
+
 def _store_mesh(out: Path, data: bytes) -> Path:
-    """The content-addressed copy of a mesh file under ``<out>/.meshes`` (written once)."""
+    """The content-addressed copy of a mesh file under ``<out>/.meshes``, written when absent or when its
+    content no longer matches its name (a variant's hard link to it was written to). The rewrite replaces the
+    file with a new inode: variants still linked to the damaged one fail :func:`is_current` and are rebuilt."""
     store = out / MESH_STORE / f"{_sha256(data)}.stl"
-    if not store.exists():
+    if not _intact(store, data):
         store.parent.mkdir(parents=True, exist_ok=True)
         tmp = store.with_name(f".{store.name}.{os.getpid()}.tmp")
         tmp.write_bytes(data)
