@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from rik.combinator.checks import GEOMETRY_CHECKS, CheckResult, ModelContext, run_model_checks
 from rik.combinator.ids import VariantKey
 from rik.errors import RikError
+from rik.paths import atomic_path, inside
 
 if TYPE_CHECKING:
     from rik.assets.build import Asset
@@ -195,9 +196,8 @@ def _store_mesh(out: Path, data: bytes) -> Path:
     store = out / MESH_STORE / f"{_sha256(data)}.stl"
     if not _intact(store, data):
         store.parent.mkdir(parents=True, exist_ok=True)
-        tmp = store.with_name(f".{store.name}.{os.getpid()}.tmp")
-        tmp.write_bytes(data)
-        os.replace(tmp, store)
+        with atomic_path(store) as tmp:
+            tmp.write_bytes(data)
     return store
 
 
@@ -279,8 +279,9 @@ def is_current(directory: Path, digest: str) -> bool:
         report = json.loads((directory / "report.json").read_text(encoding="utf-8"))
         if report.get("spec_hash") != digest or report.get("status") != "valid":
             return False
-        return all(_sha256((directory / name).read_bytes()) == sha for name, sha in report["files"].items())
-    except (OSError, ValueError, KeyError, TypeError):
+        return all(_sha256(inside(directory, *name.split("/"), what="file").read_bytes()) == sha
+                   for name, sha in report["files"].items())
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, RikError):  # a name leading elsewhere too
         return False
 
 
