@@ -297,6 +297,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         shutil.rmtree(merged)
     shard_dirs = sorted(p for p in shard_root.iterdir() if p.is_dir())
     _aggregate(spec.repo_id, [p / "ds" for p in shard_dirs], merged)
+    _order_stats(merged)
     from rik.exporters.lerobot_card import write_card
     from rik.exporters.lerobot_check import check_dataset
 
@@ -306,6 +307,18 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     shutil.rmtree(partial_dir, ignore_errors=True)
     return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
                         sorted(features(cams, spec.streams, spec.width, spec.height)), len(jobs), skipped, checks)
+
+
+def _order_stats(root: Path) -> None:
+    """Write ``meta/stats.json`` with its features in info.json's order: lerobot's aggregation gathers them in a
+    set, whose order changes from one process to the next, and identical exports must be byte-identical."""
+    stats_file, info_file = root / "meta" / "stats.json", root / "meta" / "info.json"
+    if not stats_file.is_file():
+        return
+    stats = json.loads(stats_file.read_text(encoding="utf-8"))
+    order = list(json.loads(info_file.read_text(encoding="utf-8"))["features"])
+    ordered = {k: stats[k] for k in order if k in stats} | {k: stats[k] for k in sorted(stats) if k not in order}
+    write_atomic(stats_file, json.dumps(ordered, indent=4, ensure_ascii=False))  # lerobot's own layout
 
 
 def _publish(merged: Path, out: Path) -> None:
