@@ -28,16 +28,16 @@ def lock_file(folder: Path) -> Path:
 
 
 @contextmanager
-def exclusive(folder: Path, command: str) -> Iterator[Path]:
-    """Hold the lock of ``folder`` for the block; raise :class:`LockedError` at once when another process holds
-    it (``command`` names what holds it in the message: ``rik export-lerobot``)."""
+def exclusive(folder: Path, command: str, *, wait: bool = False) -> Iterator[Path]:
+    """Hold the lock of ``folder`` for the block. When another process holds it: with ``wait``, wait for it;
+    else raise :class:`LockedError` at once (``command`` names the holder in the message: ``rik export-lerobot``)."""
     path = lock_file(folder)
     made = [d for d in (path.parent, *path.parent.parents) if not d.exists()]  # removed again if still empty
     path.parent.mkdir(parents=True, exist_ok=True)
     while True:
         fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(fd, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
             os.close(fd)

@@ -326,3 +326,31 @@ def test_full_disk_in_a_command_is_one_line(tmp_path: Path) -> None:
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("rik: error: ") and "File too large (EFBIG)" in lines[0], lines
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]
+
+
+def test_two_renders_of_one_stream_render_it_once(episode: Path, work: Path, tmp_path: Path) -> None:
+    """While one process renders a stream (holding its lock), another waits, then reuses the finished stream
+    instead of rendering beside it into the same folder."""
+    from rik.render.episodes import render_episode
+    from rik.render.streams import StreamSpec
+
+    renders = tmp_path / "renders"
+    holder = subprocess.Popen([sys.executable, "-c", (
+        "import sys, time; from pathlib import Path\n"
+        "from rik.locks import exclusive; from rik.registry import load_catalog\n"
+        "from rik.render.episodes import _render_stream; from rik.render.streams import StreamSpec, stream_dir\n"
+        "from rik.sim.episode import read_meta\n"
+        "ep, renders, variants = map(Path, sys.argv[1:])\n"
+        "spec = StreamSpec('sim', 16, 16); final = stream_dir(renders, read_meta(ep).id, spec)\n"
+        "with exclusive(final, 'rik render'):\n"
+        "    print('held', flush=True); time.sleep(2)\n"
+        "    _render_stream(load_catalog(), ep, spec, final, variants, None, None)\n"),
+        str(episode), str(renders), str(work / "variants")], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        result = render_episode(CAT, episode, StreamSpec("sim", 16, 16), renders=renders, variants=work / "variants")
+        assert holder.wait(timeout=120) == 0
+    finally:
+        holder.kill()
+    assert result.rendered == 0 and result.frames == read_meta(episode).steps + 1
+    assert not [p for p in renders.rglob("*") if p.name.endswith((".lock", ".partial", ".tmp"))]
