@@ -82,6 +82,33 @@ def test_filter_that_does_not_apply_is_an_error(rik) -> None:
     assert result.err.strip() == "rik: error: --type filters handles and designs, not bases"
 
 
+def _entry(data, entry_id):
+    """The dict with ``id`` == entry_id anywhere inside parsed JSON (whatever the file's layout)."""
+    if isinstance(data, dict):
+        if data.get("id") == entry_id and "geometry" in data:
+            return data
+        data = list(data.values())
+    if isinstance(data, list):
+        for item in data:
+            if (found := _entry(item, entry_id)) is not None:
+                return found
+    return None
+
+
+def test_an_edited_index_is_rebuilt_not_served(rik, tmp_path, monkeypatch) -> None:
+    monkeypatch.setenv("RIK_CACHE", str(tmp_path / "cache"))
+    args = ("catalog", "list", "--design", "two_point/bow", "-f", "json")
+    true = {r["id"]: r for r in json.loads(rik(*args).out)}["two_point/bow-128"]["geometry"]["length"]
+    [index] = (tmp_path / "cache" / "catalog").glob("*.json")
+    written = index.read_bytes()
+    data = json.loads(written)
+    _entry(data, "two_point/bow-128")["geometry"]["length"] = 9.5  # still valid JSON, one figure changed
+    index.write_text(json.dumps(data))
+    listed = {r["id"]: r for r in json.loads(rik(*args).out)}
+    assert listed["two_point/bow-128"]["geometry"]["length"] == true != 9.5
+    assert index.read_bytes() == written  # rebuilt and rewritten
+
+
 def test_stats_and_demo(rik) -> None:
     numbers = json.loads(rik("catalog", "stats", "--format", "json").out)
     assert numbers["pairings"] == {"total": 1079, "fit": 1079}
