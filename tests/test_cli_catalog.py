@@ -8,6 +8,7 @@ import json
 import subprocess
 import sys
 
+import pytest
 from conftest import REPO
 
 
@@ -118,25 +119,46 @@ def test_stats_and_demo(rik) -> None:
 
 
 def test_catalog_commands_import_nothing_heavy(tmp_path) -> None:
-    """`rik catalog` must not import simulators, renderers or learning libraries; warm, not even the schemas."""
+    """`rik catalog` must not import simulators, renderers or learning libraries; warm, not even the schemas
+    or pydantic."""
     probe = (
-        "import sys, io, contextlib\n"
+        "import sys, io, json, contextlib\n"
         "from rik.cli.app import main\n"
-        "for args in (['catalog','list','--type','knob'], ['catalog','list','--type','knob'], ['catalog','stats']):\n"
+        "for args in json.loads(sys.argv[1]):\n"
         "    sys.argv = ['rik', *args]\n"
         "    with contextlib.redirect_stdout(io.StringIO()):\n"
         "        try: main()\n"
-        "        except SystemExit: pass\n"
-        "    if args == ['catalog','list','--type','knob']: first = set(sys.modules)\n"
+        "        except SystemExit as exc: assert not exc.code, (args, exc.code)\n"
         "print(' '.join(sorted(sys.modules)))\n"
     )
     env = {"RIK_CACHE": str(tmp_path), "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
-    cold = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True,
-                          cwd=REPO)
+    commands = [["catalog", "list", "--type", "knob"], ["catalog", "list", "--type", "knob"], ["catalog", "stats"]]
+    cold = subprocess.run([sys.executable, "-c", probe, json.dumps(commands)], env=env, capture_output=True,
+                          text=True, check=True, cwd=REPO)
     modules = set(cold.stdout.split())
     for heavy in ("mujoco", "coacd", "torch", "lerobot", "mitsuba", "trimesh", "numpy"):
         assert heavy not in modules, f"rik catalog imported {heavy}"
-    warm = subprocess.run([sys.executable, "-c", probe.replace("['catalog','list','--type','knob'], "
-                                                               "['catalog','list','--type','knob'], ", "")],
-                          env=env, capture_output=True, text=True, check=True, cwd=REPO)
-    assert "rik.schemas" not in warm.stdout.split(), "a warm `rik catalog` should read the index, not validate"
+    warm = subprocess.run([sys.executable, "-c", probe, json.dumps(commands[1:])], env=env, capture_output=True,
+                          text=True, check=True, cwd=REPO)
+    modules = set(warm.stdout.split())
+    assert "rik.cli.app" in modules
+    assert "rik.schemas" not in modules, "a warm `rik catalog` should read the index, not validate"
+    assert "pydantic" not in modules, "a warm `rik catalog` needs no pydantic (its import is ~20 ms)"
+
+
+def test_a_command_runs_with_the_same_help_as_in_the_full_app(rik) -> None:
+    """`main` builds only the group or command named first (start-up); what each prints must not change."""
+    from typer.main import get_command_name
+    from typer.testing import CliRunner
+
+    from rik.cli.app import app
+
+    names = [g.name for g in app.registered_groups] + [c.name or get_command_name(c.callback.__name__)
+                                                       for c in app.registered_commands]
+    assert len(names) == 13
+    for args in [[n, "--help"] for n in names] + [["catalog", "list", "--help"], ["catalog", "lst"], ["catalgo"]]:
+        full = CliRunner().invoke(app, args, prog_name="rik", env={"COLUMNS": "100"})
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("COLUMNS", "100")
+            fast = rik(*args)
+        assert (fast.code, fast.out + fast.err) == (full.exit_code, full.output), args
