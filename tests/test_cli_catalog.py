@@ -110,12 +110,15 @@ def test_an_edited_index_is_rebuilt_not_served(rik, tmp_path, monkeypatch) -> No
     assert index.read_bytes() == written  # rebuilt and rewritten
 
 
-def test_stats_and_demo(rik) -> None:
+def test_stats_and_demo(rik, tmp_path, monkeypatch) -> None:
     numbers = json.loads(rik("catalog", "stats", "--format", "json").out)
     assert numbers["pairings"] == {"total": 1079, "fit": 1079}
     assert numbers["by_type"]["two_point"] == {"designs": 17, "handles": 34}
+    monkeypatch.chdir(tmp_path)  # the demo writes into the working directory: here, not the repository
     demo = rik("demo")
     assert demo.code == 0 and "1079 of 1079" in demo.out
+    assert {"variants", "episodes", "renders", "datasets", "sysid-data", "sysid-report", "sysid-catalog"} <= {
+        p.name for p in tmp_path.iterdir()}
 
 
 def test_catalog_commands_import_nothing_heavy(tmp_path) -> None:
