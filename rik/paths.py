@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -15,12 +17,38 @@ def cache_dir() -> Path:
     return Path(base) / "rik"
 
 
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename: never half-written, and two processes
+def inside(root: Path, *parts: str, what: str = "path") -> Path:
+    """``root / part / ...``, checked to stay inside ``root`` (no '..', no absolute part, no symlink out of it).
+
+    ``parts`` come from data rik reads (episode and variant ids, stream keys); one that would lead elsewhere
+    raises :class:`rik.errors.RikError` naming it: rik never writes outside the folder it was given."""
+    from rik.errors import RikError
+
+    path = Path(root).joinpath(*parts)
+    base = Path(root).resolve()
+    if not path.resolve().is_relative_to(base) or any(p in ("", ".", "..") or "/" in p or "\\" in p for p in parts):
+        raise RikError(f"{what} {'/'.join(parts)!r} would lead outside {root}; refusing to write there")
+    return path
+
+
+@contextmanager
+def atomic_path(path: Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` to write to; renamed onto ``path`` when the block ends without an error,
+    removed when it raises (a full disk or a kill of the writer's work leaves no ``*.tmp`` behind). Two processes
     writing the same file do not share a temporary."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename (:func:`atomic_path`): never half-written."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
 
 
 def write_png(path: Path, pixels: Any, compress_level: int = 6) -> None:
@@ -28,9 +56,8 @@ def write_png(path: Path, pixels: Any, compress_level: int = 6) -> None:
     import numpy as np
     from PIL import Image
 
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    Image.fromarray(np.ascontiguousarray(pixels, np.uint8)).save(tmp, format="PNG", compress_level=compress_level)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        Image.fromarray(np.ascontiguousarray(pixels, np.uint8)).save(tmp, format="PNG", compress_level=compress_level)
 
 
 def pyplot() -> Any:
@@ -47,8 +74,9 @@ def save_figure(fig: Any, path: Path, dpi: int = 120) -> Path:
     """Save a matplotlib figure as PNG (no timestamp metadata, so reruns are byte-identical) through a temporary
     file and a rename, and close it."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    fig.savefig(tmp, dpi=dpi, format="png", metadata={"Software": None})
-    pyplot().close(fig)
-    os.replace(tmp, path)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=dpi, format="png", metadata={"Software": None})
+    finally:
+        pyplot().close(fig)
     return path

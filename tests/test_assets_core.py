@@ -4,6 +4,7 @@ closed-form answers, and the finger probe, on meshes the tests build themselves.
 from __future__ import annotations
 
 import itertools
+import json
 
 import numpy as np
 import pytest
@@ -76,6 +77,42 @@ def test_second_build_is_a_cache_hit_and_a_corrupt_entry_is_rebuilt(catalog, tmp
     assert third[0].status == "rebuilt"
     assert "failed its sha256 check" in third[0].note and str(cache.path(first[0].key)) in third[0].note
     assert build_assets(catalog, ["door/base-40-right"], cache=cache)[0].status == "cached"
+
+
+def test_an_edited_entry_meta_is_rebuilt(catalog, tmp_path):
+    cache = AssetCache(tmp_path / "assets")
+    [first] = build_assets(catalog, ["door/base-40-right"], cache=cache)
+    meta = cache.path(first.key) / "meta.json"
+    data = json.loads(meta.read_text())
+    data["parts"][0]["collision_vertices"] += 1000  # valid JSON, payload untouched
+    meta.write_text(json.dumps(data))
+    [again] = build_assets(catalog, ["door/base-40-right"], cache=cache)
+    assert again.status == "rebuilt" and again.collision_vertices == first.collision_vertices
+    assert build_assets(catalog, ["door/base-40-right"], cache=cache)[0].status == "cached"
+
+
+def _json_after_progress(out: str):
+    """The JSON document of ``out`` (the progress bar also writes to stdout)."""
+    return json.loads(out[out.index("{"):])
+
+
+def test_an_edited_fidelity_result_is_measured_again(rik, catalog, tmp_path):
+    from rik.assets.build import asset_key
+
+    args = ("assets", "fidelity", "knob/mushroom-30", "--points", "1000", "--workers", "1",
+            "--out", str(tmp_path / "fidelity"), "-f", "json")
+    first = rik(*args)
+    assert first.code == 0, first.err
+    true = _json_after_progress(first.out)["handles"][0]["eqp_mean_mm"]
+    stored = AssetCache().path(asset_key(catalog, "knob/mushroom-30")) / "fidelity-1000-0.json"
+    written = stored.read_bytes()
+    data = json.loads(written)
+    fid = data.get("data", data)  # the figures, wherever the file keeps them
+    fid["q_to_p"]["mean"] = 12.3  # mm: a figure changed, still valid JSON
+    stored.write_text(json.dumps(data, indent=1, sort_keys=True))
+    shown = _json_after_progress(rik(*args).out)["handles"][0]["eqp_mean_mm"]
+    assert shown == true != 12.3
+    assert stored.read_bytes() == written  # measured again and rewritten
 
 
 def test_keys_change_with_the_seed_and_are_stable(catalog):

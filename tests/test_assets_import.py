@@ -184,3 +184,52 @@ def test_build_reports_a_corrupt_cache_entry_and_rebuilds_it(rik):
     assert "0 built, 1 rebuilt after a failed hash check, 0 from the cache" in _flat(r.out)
     again = rik("assets", "build", "flap/drop-down-60")
     assert "1 from the cache" in _flat(again.out)
+
+
+# ---- size limit, and nothing registered before every stage has passed ------------------------------------------
+def test_a_mesh_over_the_face_limit_is_refused_before_anything_is_written(rik, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    trimesh.creation.icosphere(subdivisions=4, radius=0.015).export(tmp_path / "dense.stl")  # 5,120 triangles
+    r = rik("assets", "import", "dense.stl", "--type", "knob", "--id", "knob/dense", "--catalog-dir", "cat",
+            "--max-faces", "1000")
+    assert r.code == 2
+    assert r.err == ("rik: error: dense.stl: the mesh has 5,120 triangles, more than the limit of 1,000; simplify "
+                     "it, or raise the limit with --max-faces 5120\n")
+    assert _files(tmp_path / "cat") == []
+    ok = rik("assets", "import", "dense.stl", "--type", "knob", "--id", "knob/dense", "--catalog-dir", "cat",
+             "--max-faces", "5120")
+    assert ok.code == 0, ok.err
+
+
+def test_a_failure_after_the_decomposition_leaves_nothing_registered(rik, bar_files, tmp_path):
+    out = tmp_path / "cat"
+    out.mkdir()
+    (out / "pictures").write_text("a file where the pictures folder goes\n")
+    r = rik("assets", "import", str(bar_files / "bar_m.stl"), "--type", "two_point", "--id", "two_point/blocked",
+            "--hole-spacing", "0.128", "--catalog-dir", str(out))
+    assert r.code == 2
+    assert len(r.err.splitlines()) == 1 and "Traceback" not in r.err
+    assert "cannot create the folder" in _flat(r.err) and "pictures" in _flat(r.err)
+    assert _files(out) == ["pictures"]  # no YAML, no mesh: the handle is not registered
+    from rik.registry.load import load_catalog
+
+    assert "two_point/blocked-128" not in load_catalog([out]).handles
+
+
+@pytest.mark.parametrize(("broken", "faces"), [([0], 5), (slice(None), 320)])
+def test_a_mesh_with_nan_vertices_fails_with_one_line_and_no_warning(rik, tmp_path, monkeypatch, broken, faces):
+    import warnings
+
+    monkeypatch.chdir(tmp_path)
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=0.015)  # 320 triangles; vertex 0 is in 5
+    vertices = sphere.vertices.copy()
+    vertices[broken] = np.nan
+    trimesh.Trimesh(vertices, sphere.faces, process=False).export(tmp_path / "nan.stl")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = rik("assets", "import", "nan.stl", "--type", "knob", "--id", "knob/nan", "--catalog-dir", "cat")
+    assert r.code == 2
+    assert r.err == (f"rik: error: nan.stl: {faces} of its 320 triangles have corners that are not finite numbers "
+                     "(NaN or infinity); the file is damaged: export it again\n")
+    assert [str(w.message) for w in caught] == []  # no numpy RuntimeWarning before the error
+    assert _files(tmp_path / "cat") == []

@@ -102,3 +102,14 @@ def test_base_unit_needs_its_mapping(rik, glb, tmp_path):
     r = rik("assets", "import", str(glb), "--base-unit", "--id", "drawer/my-cabinet")
     assert r.code == 2
     assert "--base-unit needs --parts PARTS.yaml" in _flat(r.err)
+
+
+def test_a_base_unit_over_the_face_limit_is_refused_before_anything_is_written(rik, glb, tmp_path):
+    (tmp_path / "parts.yaml").write_text(MAPPING)
+    out = tmp_path / "cat"
+    r = rik("assets", "import", str(glb), "--base-unit", "--parts", str(tmp_path / "parts.yaml"), "--id",
+            "drawer/my-cabinet", "--catalog-dir", str(out), "--max-faces", "10")
+    assert r.code == 2
+    assert "cabinet.glb: the mesh has" in _flat(r.err)
+    assert "triangles, more than the limit of 10; simplify it, or raise the limit with --max-faces" in _flat(r.err)
+    assert _files(out) == []

@@ -8,6 +8,7 @@ import json
 import subprocess
 import sys
 
+import pytest
 from conftest import REPO
 
 
@@ -82,34 +83,85 @@ def test_filter_that_does_not_apply_is_an_error(rik) -> None:
     assert result.err.strip() == "rik: error: --type filters handles and designs, not bases"
 
 
-def test_stats_and_demo(rik) -> None:
+def _entry(data, entry_id):
+    """The dict with ``id`` == entry_id anywhere inside parsed JSON (whatever the file's layout)."""
+    if isinstance(data, dict):
+        if data.get("id") == entry_id and "geometry" in data:
+            return data
+        data = list(data.values())
+    if isinstance(data, list):
+        for item in data:
+            if (found := _entry(item, entry_id)) is not None:
+                return found
+    return None
+
+
+def test_an_edited_index_is_rebuilt_not_served(rik, tmp_path, monkeypatch) -> None:
+    monkeypatch.setenv("RIK_CACHE", str(tmp_path / "cache"))
+    args = ("catalog", "list", "--design", "two_point/bow", "-f", "json")
+    true = {r["id"]: r for r in json.loads(rik(*args).out)}["two_point/bow-128"]["geometry"]["length"]
+    [index] = (tmp_path / "cache" / "catalog").glob("*.json")
+    written = index.read_bytes()
+    data = json.loads(written)
+    _entry(data, "two_point/bow-128")["geometry"]["length"] = 9.5  # still valid JSON, one figure changed
+    index.write_text(json.dumps(data))
+    listed = {r["id"]: r for r in json.loads(rik(*args).out)}
+    assert listed["two_point/bow-128"]["geometry"]["length"] == true != 9.5
+    assert index.read_bytes() == written  # rebuilt and rewritten
+
+
+def test_stats_and_demo(rik, tmp_path, monkeypatch) -> None:
     numbers = json.loads(rik("catalog", "stats", "--format", "json").out)
     assert numbers["pairings"] == {"total": 1079, "fit": 1079}
     assert numbers["by_type"]["two_point"] == {"designs": 17, "handles": 34}
+    monkeypatch.chdir(tmp_path)  # the demo writes into the working directory: here, not the repository
     demo = rik("demo")
     assert demo.code == 0 and "1079 of 1079" in demo.out
+    assert {"variants", "episodes", "renders", "datasets", "sysid-data", "sysid-report", "sysid-catalog"} <= {
+        p.name for p in tmp_path.iterdir()}
 
 
 def test_catalog_commands_import_nothing_heavy(tmp_path) -> None:
-    """`rik catalog` must not import simulators, renderers or learning libraries; warm, not even the schemas."""
+    """`rik catalog` must not import simulators, renderers or learning libraries; warm, not even the schemas
+    or pydantic."""
     probe = (
-        "import sys, io, contextlib\n"
+        "import sys, io, json, contextlib\n"
         "from rik.cli.app import main\n"
-        "for args in (['catalog','list','--type','knob'], ['catalog','list','--type','knob'], ['catalog','stats']):\n"
+        "for args in json.loads(sys.argv[1]):\n"
         "    sys.argv = ['rik', *args]\n"
         "    with contextlib.redirect_stdout(io.StringIO()):\n"
         "        try: main()\n"
-        "        except SystemExit: pass\n"
-        "    if args == ['catalog','list','--type','knob']: first = set(sys.modules)\n"
+        "        except SystemExit as exc: assert not exc.code, (args, exc.code)\n"
         "print(' '.join(sorted(sys.modules)))\n"
     )
     env = {"RIK_CACHE": str(tmp_path), "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
-    cold = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True,
-                          cwd=REPO)
+    commands = [["catalog", "list", "--type", "knob"], ["catalog", "list", "--type", "knob"], ["catalog", "stats"]]
+    cold = subprocess.run([sys.executable, "-c", probe, json.dumps(commands)], env=env, capture_output=True,
+                          text=True, check=True, cwd=REPO)
     modules = set(cold.stdout.split())
     for heavy in ("mujoco", "coacd", "torch", "lerobot", "mitsuba", "trimesh", "numpy"):
         assert heavy not in modules, f"rik catalog imported {heavy}"
-    warm = subprocess.run([sys.executable, "-c", probe.replace("['catalog','list','--type','knob'], "
-                                                               "['catalog','list','--type','knob'], ", "")],
-                          env=env, capture_output=True, text=True, check=True, cwd=REPO)
-    assert "rik.schemas" not in warm.stdout.split(), "a warm `rik catalog` should read the index, not validate"
+    warm = subprocess.run([sys.executable, "-c", probe, json.dumps(commands[1:])], env=env, capture_output=True,
+                          text=True, check=True, cwd=REPO)
+    modules = set(warm.stdout.split())
+    assert "rik.cli.app" in modules
+    assert "rik.schemas" not in modules, "a warm `rik catalog` should read the index, not validate"
+    assert "pydantic" not in modules, "a warm `rik catalog` needs no pydantic (its import is ~20 ms)"
+
+
+def test_a_command_runs_with_the_same_help_as_in_the_full_app(rik) -> None:
+    """`main` builds only the group or command named first (start-up); what each prints must not change."""
+    from typer.main import get_command_name
+    from typer.testing import CliRunner
+
+    from rik.cli.app import app
+
+    names = [g.name for g in app.registered_groups] + [c.name or get_command_name(c.callback.__name__)
+                                                       for c in app.registered_commands]
+    assert len(names) == 13
+    for args in [[n, "--help"] for n in names] + [["catalog", "list", "--help"], ["catalog", "lst"], ["catalgo"]]:
+        full = CliRunner().invoke(app, args, prog_name="rik", env={"COLUMNS": "100"})
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("COLUMNS", "100")
+            fast = rik(*args)
+        assert (fast.code, fast.out + fast.err) == (full.exit_code, full.output), args

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from pathlib import Path
@@ -153,6 +154,37 @@ def test_rebuild_skips_valid_variants_and_repairs_damaged_ones(built: Path) -> N
     assert build_variant(CAT, key, built).status == "built"
     assert (built / BOW / "model.xml").read_bytes() == before  # deterministic: byte-identical MJCF
     assert not (built / ".staging").exists() or not any((built / ".staging").iterdir())
+
+
+
+def _files_match_report(directory: Path) -> bool:
+    report = json.loads((directory / "report.json").read_text())
+    return report["status"] == "valid" and all(
+        hashlib.sha256((directory / name).read_bytes()).hexdigest() == sha for name, sha in report["files"].items())
+
+
+@pytest.mark.parametrize("force", [False, True])
+def test_a_damaged_shared_mesh_is_rebuilt_in_every_variant(rik, tmp_path: Path, force: bool) -> None:
+    from rik.combinator.build import MESH_STORE, build_variants
+
+    keys = [VariantKey(base, "knob/mushroom-30", "normal") for base in ("drawer/bedside-45", "drawer/chest-80")]
+    out = tmp_path / "variants"
+    assert {r.status for r in build_variants(CAT, keys, out)} == {"built"}
+    first, second = (out / k.id for k in keys)
+    shared = sorted(n.name for n in (first / "meshes").iterdir() if (second / "meshes" / n.name).exists() and
+                    (first / "meshes" / n.name).stat().st_ino == (second / "meshes" / n.name).stat().st_ino)
+    assert shared, "the two variants share no mesh file"
+    with (first / "meshes" / shared[0]).open("ab") as fh:  # damages the store file and every variant linked to it
+        fh.write(b"x")
+    assert rik("variants", "validate", str(second)).code == 2
+    results = build_variants(CAT, keys, out, force=force)
+    assert [r.status for r in results] == ["built", "built"]
+    for directory in (first, second):
+        assert _files_match_report(directory), f"{directory.name} still holds the damaged mesh"
+        checked = rik("variants", "validate", str(directory))
+        assert checked.code == 0, checked.err
+    for stored in (out / MESH_STORE).iterdir():  # the store holds each mesh under its content's sha256
+        assert stored.stem == hashlib.sha256(stored.read_bytes()).hexdigest(), stored.name
 
 
 # ---- bad input: each rejected by a named check, nothing written ---------------------------------------------------

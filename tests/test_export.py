@@ -20,6 +20,7 @@ from rik.errors import RikError
 from rik.exporters.lerobot_export import ExportSpec, export_lerobot
 from rik.exporters.lerobot_frames import resample_indices
 from rik.registry import load_catalog
+from rik.sim.episode import write_meta
 from rik.sim.record import record
 
 CAT = load_catalog()
@@ -215,7 +216,7 @@ def test_export_messages(rik, dataset: Path, work: Path, tmp_path: Path) -> None
         if i == 1:
             meta = json.loads((mixed / d.name / "meta.json").read_text())
             meta["fps"] = 10
-            (mixed / d.name / "meta.json").write_text(json.dumps(meta))
+            write_meta(mixed / d.name, meta)  # as if recorded at 10 Hz: sealed anew
     err = rik("export-lerobot", str(mixed), "--repo-id", REPO, "--out", str(tmp_path / "m")).err.strip()
     assert err.startswith("rik: error: the episodes were recorded at different rates (") and "pass --fps" in err
     import hashlib
@@ -228,7 +229,7 @@ def test_export_messages(rik, dataset: Path, work: Path, tmp_path: Path) -> None
     shorter = pa.array([row[:6] for row in table.column("action").to_pylist()], pa.list_(pa.float64()))
     pq.write_table(table.set_column(table.schema.get_field_index("action"), "action", shorter), path)
     meta["fps"], meta["states_sha256"] = 20, hashlib.sha256(path.read_bytes()).hexdigest()
-    (mixed / d.name / "meta.json").write_text(json.dumps(meta))
+    write_meta(mixed / d.name, meta)
     err = rik("export-lerobot", str(mixed), "--repo-id", REPO, "--out", str(tmp_path / "m")).err.strip()
     assert err == (f"rik: error: {path}: column 'action' has 6 numbers per row where the other episodes have 7 "
                    "(target_x, target_y, target_z, target_pitch, target_yaw, target_roll, gripper); export it to a "
@@ -253,3 +254,24 @@ def test_push_to_hub_reaches_the_upload_and_says_why_it_failed(dataset: Path) ->
     msg = str(err.value)
     assert msg.startswith(f"{dataset}: cannot push {REPO} to the Hugging Face Hub: ")
     assert "offline" in msg.lower()
+
+
+def test_identical_exports_are_byte_identical(dataset: Path, work: Path, tmp_path: Path) -> None:
+    """The same episodes and settings exported by two processes (different hash seeds, so different set orders)
+    give the same bytes in every file."""
+    roots = []
+    for hash_seed in ("1", "2"):
+        out = tmp_path / f"ds-{hash_seed}"
+        script = (f"from pathlib import Path; from rik.registry import load_catalog; "
+                  f"from rik.exporters.lerobot_export import ExportSpec, export_lerobot; "
+                  f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(out)!r}), "
+                  f"ExportSpec({REPO!r}, shard_episodes=2, **{SPEC!r}), renders=Path({str(work / 'renders')!r}), "
+                  f"variants=Path({str(work / 'variants')!r}))")
+        done = subprocess.run([sys.executable, "-c", script], env={**os.environ, "PYTHONHASHSEED": hash_seed},
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        roots.append(out)
+    files = [sorted(p.relative_to(r) for p in r.rglob("*") if p.is_file()) for r in roots]
+    assert files[0] == files[1]
+    differ = [str(f) for f in files[0] if (roots[0] / f).read_bytes() != (roots[1] / f).read_bytes()]
+    assert differ == []

@@ -1,10 +1,13 @@
 """Content-addressed store of built assets under ``<cache>/assets/<key[:2]>/<key>/``.
 
 An entry holds ``asset.npz`` (visual mesh and convex parts of every rigid part) and ``meta.json`` (what was
-built, from what, the sha256 of ``asset.npz``). The key is a sha256 over everything that decides the output:
-the catalog entry, the generator's source code, the CoACD parameters, the seed and the library versions, so a
-change to any of them makes a new entry and a warm rebuild does no work. Entries are written to a temporary
-directory and renamed into place; one whose payload no longer matches its recorded hash is reported and rebuilt.
+built, from what, the sha256 of ``asset.npz``, and the sha256 of the rest of ``meta.json`` itself). The key is
+a sha256 over everything that decides the output: the catalog entry, the generator's source code, the CoACD
+parameters, the seed and the library versions, so a change to any of them makes a new entry and a warm rebuild
+does no work. Entries are written to a temporary
+directory and renamed into place; one whose payload or metadata no longer matches its recorded hash is reported
+and rebuilt. Derived results stored beside an entry (:meth:`AssetCache.write_extra`) carry their own sha256 and
+are measured again when it does not match.
 """
 
 from __future__ import annotations
@@ -21,8 +24,8 @@ from typing import Any
 
 from rik.paths import cache_dir, write_atomic
 
-ASSET_FORMAT = 1
-"""Bumped when the layout of an entry changes."""
+ASSET_FORMAT = 2
+"""Bumped when the layout of an entry changes (2: ``meta.json`` records its own sha256)."""
 
 VERSIONED_PACKAGES = ("coacd", "trimesh", "numpy", "manifold3d", "shapely")
 
@@ -51,6 +54,15 @@ def content_key(identity: dict[str, Any]) -> str:
     """sha256 of a JSON-able description of everything that decides an asset."""
     blob = json.dumps({"format": ASSET_FORMAT, **identity}, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(blob.encode()).hexdigest()
+
+
+def json_sha256(data: Any) -> str:
+    """sha256 of the canonical JSON of ``data`` (sorted keys, no spaces): what a stored JSON file is checked by."""
+    return hashlib.sha256(json.dumps(data, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
+def _meta_sha256(meta: dict[str, Any]) -> str:
+    return json_sha256({k: v for k, v in meta.items() if k != "meta_sha256"})
 
 
 def file_sha256(path: Path) -> str:
@@ -87,14 +99,16 @@ class AssetCache:
 
     def get(self, key: str) -> CacheEntry | None:
         """The verified entry for ``key``; ``None`` if absent. Raises :class:`CorruptEntry` (after removing the
-        entry) when its files are unreadable or the payload's sha256 differs from the recorded one."""
+        entry) when its files are unreadable, or the payload's or the metadata's sha256 differs from the recorded
+        one."""
         path = self.path(key)
         if not path.is_dir():
             return None
         try:
             meta = json.loads((path / "meta.json").read_text())
-            ok = file_sha256(path / "asset.npz") == meta["payload_sha256"]
-        except (OSError, ValueError, KeyError):
+            ok = (meta["meta_sha256"] == _meta_sha256(meta)
+                  and file_sha256(path / "asset.npz") == meta["payload_sha256"])
+        except (OSError, ValueError, KeyError, TypeError):
             ok = False
         if not ok:
             shutil.rmtree(path, ignore_errors=True)
@@ -112,6 +126,7 @@ class AssetCache:
             with (tmp / "asset.npz").open("wb") as fh:
                 np.savez_compressed(fh, **arrays)
             meta = {**meta, "key": key, "format": ASSET_FORMAT, "payload_sha256": file_sha256(tmp / "asset.npz")}
+            meta["meta_sha256"] = _meta_sha256(meta)
             (tmp / "meta.json").write_text(json.dumps(meta, indent=1, sort_keys=True))
             try:
                 os.rename(tmp, final)
@@ -123,11 +138,17 @@ class AssetCache:
         return CacheEntry(key, final, json.loads((final / "meta.json").read_text()))
 
     def write_extra(self, key: str, name: str, data: dict[str, Any]) -> None:
-        """Store a derived JSON result (for example fidelity figures) beside an entry, atomically."""
-        write_atomic(self.path(key) / name, json.dumps(data, indent=1, sort_keys=True))
+        """Store a derived JSON result (for example fidelity figures) beside an entry, atomically, with the
+        sha256 of its canonical JSON (:func:`json_sha256`)."""
+        write_atomic(self.path(key) / name, json.dumps({"sha256": json_sha256(data), "data": data}, indent=1,
+                                                       sort_keys=True))
 
     def read_extra(self, key: str, name: str) -> dict[str, Any] | None:
+        """A result stored by :meth:`write_extra`; ``None`` (compute it again) when absent, unreadable, or when
+        its content no longer matches its sha256."""
         try:
-            return json.loads((self.path(key) / name).read_text())
-        except (OSError, ValueError):
+            stored = json.loads((self.path(key) / name).read_text())
+            data, sha = stored["data"], stored["sha256"]
+        except (OSError, ValueError, KeyError, TypeError):
             return None
+        return data if isinstance(data, dict) and sha == json_sha256(data) else None

@@ -32,6 +32,11 @@ MIN_EXTENT = 0.008
 AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
 DEFAULT_DENSITY = 6600.0
 """Zinc die-cast, kg/m^3: the usual material of furniture hardware (assumed when no mass is given)."""
+MAX_FACES = 500_000
+"""Most triangles an imported file may have (``--max-faces`` raises it): over 100 times the catalog's own
+handles (172 to about 4,000) and well above a scan decimated for simulation (tens of thousands). Cleaning, ray
+casts and CoACD grow with the count: a 5.2-million-triangle STL ran for minutes, then the process died without
+a message (issue 16), so larger files are refused at once, before any work."""
 
 
 @dataclass(frozen=True)
@@ -61,6 +66,24 @@ def _load(path: Path, suffixes: tuple[str, ...], force: str, wrong_type: str) ->
         raise RikError(f"{shown}: cannot read the file ({exc.__class__.__name__}: {exc})") from None
 
 
+def check_finite(mesh: trimesh.Trimesh, shown: str) -> None:
+    """Refuse a mesh with NaN or infinite coordinates (before cleaning, whose numpy casts would warn on them)."""
+    import numpy as np
+
+    bad = ~np.isfinite(np.asarray(mesh.vertices, dtype=float)).all(axis=1)
+    if bad.any():
+        faces = int(bad[np.asarray(mesh.faces)].any(axis=1).sum())
+        raise RikError(f"{shown}: {faces} of its {len(mesh.faces)} triangles have corners that are not finite "
+                       "numbers (NaN or infinity); the file is damaged: export it again")
+
+
+def check_size(faces: int, shown: str, max_faces: int) -> None:
+    """Refuse a mesh of more than ``max_faces`` triangles (:data:`MAX_FACES` by default)."""
+    if faces > max_faces:
+        raise RikError(f"{shown}: the mesh has {faces:,} triangles, more than the limit of {max_faces:,}; "
+                       f"simplify it, or raise the limit with --max-faces {faces}")
+
+
 def read_mesh(path: Path) -> trimesh.Trimesh:
     """Read a mesh file as one triangle mesh (scenes are flattened); clear errors for every way it can fail."""
     import trimesh
@@ -70,6 +93,7 @@ def read_mesh(path: Path) -> trimesh.Trimesh:
                    + ", ".join(SUFFIXES))
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise RikError(f"{shown}: the mesh is empty (no triangles)")
+    check_finite(loaded, shown)
     return loaded
 
 
@@ -192,13 +216,19 @@ def _yaml_text(document: dict[str, Any], header: str) -> str:
     return f"# {header}\n" + yaml.safe_dump(document, sort_keys=False)
 
 
+Prepare = Callable[[Path], None]
+"""Work that must succeed before an import is registered (decomposition, measurements), given the staging
+directory: load the catalog with it as the last overlay. Files it writes there are moved in with the entry."""
+
+
 def _register(catalog_dir: Path, stem: str, meshes: dict[Path, trimesh.Trimesh],
-              yaml_text: Callable[[dict[Path, str]], str], what: str) -> Path:
+              yaml_text: Callable[[dict[Path, str]], str], what: str, prepare: Prepare | None = None) -> Path:
     """Add ``<stem>.yaml`` and ``meshes`` (paths relative to ``catalog_dir``) to the user catalog. Nothing is left
     behind on failure: the files are staged in a hidden directory inside ``catalog_dir`` (which catalog scans
-    skip), existing files are never overwritten, and the whole catalog (built-in + every overlay file already
-    there + the new one) must validate before the files are moved into place. ``yaml_text`` receives each mesh
-    file's sha256. Returns the YAML's path."""
+    skip), existing files are never overwritten, the whole catalog (built-in + every overlay file already
+    there + the new one) must validate and ``prepare`` must finish before the files are moved into place, and
+    every folder they go to is made first. ``yaml_text`` receives each mesh file's sha256. Returns the YAML's
+    path."""
     from rik.registry.load import load_catalog
 
     catalog_dir.mkdir(parents=True, exist_ok=True)
@@ -216,8 +246,19 @@ def _register(catalog_dir: Path, stem: str, meshes: dict[Path, trimesh.Trimesh],
                 raise RikError(f"{display_path(catalog_dir / rel)} already exists: {what} was imported before; "
                                "choose another --id or delete the files")
         load_catalog([catalog_dir, tmp])
-        for rel in (*meshes, yaml_rel):  # the YAML last: it is what makes the entry visible
-            (catalog_dir / rel).parent.mkdir(parents=True, exist_ok=True)
+        if prepare is not None:
+            prepare(tmp)
+        extras = sorted(p.relative_to(tmp) for p in tmp.rglob("*") if p.is_file() and p.relative_to(tmp) != yaml_rel
+                        and p.relative_to(tmp) not in meshes)  # what prepare wrote (pictures); replaced if there
+        order = (*extras, *meshes, yaml_rel)  # the YAML last: it is what makes the entry visible
+        for rel in order:
+            folder = (catalog_dir / rel).parent
+            try:
+                folder.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise RikError(f"{display_path(folder)}: cannot create the folder ({exc.strerror}); nothing was "
+                               f"registered") from None
+        for rel in order:
             os.replace(tmp / rel, catalog_dir / rel)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -229,12 +270,14 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
                   out_axis: str = "+z", long_axis: str = "+x", hole_spacing: float | None = None,
                   clearance: tuple[float, float] | None = None, grip_diameter: float | None = None,
                   mount: str | None = None, edge: str = "top", mass: float | None = None,
-                  density: float = DEFAULT_DENSITY, licence: str = "LicenseRef-user") -> ImportedHandle:
-    """Read ``path``, normalise it and register it in ``catalog_dir`` (created if needed).
+                  density: float = DEFAULT_DENSITY, licence: str = "LicenseRef-user", max_faces: int = MAX_FACES,
+                  prepare: Prepare | None = None) -> ImportedHandle:
+    """Read ``path``, normalise it and register it in ``catalog_dir`` (created if needed). A file of more than
+    ``max_faces`` triangles is refused before any work.
 
     Nothing is left behind on failure: files are written to a hidden directory inside ``catalog_dir``, the whole
-    catalog (built-in + every overlay file already there + the new one) is validated, and only then are the files
-    moved into place."""
+    catalog (built-in + every overlay file already there + the new one) is validated, ``prepare`` (the
+    decomposition) runs, and only then are the files moved into place."""
     import trimesh  # noqa: F401  (the mesh stack; fail early if it is missing)
 
 
@@ -242,6 +285,7 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
     if not design_id.startswith(f"{handle_type}/"):
         raise RikError(f"--id {design_id}: a {handle_type} design's id must start with '{handle_type}/'")
     mesh = read_mesh(path)
+    check_size(len(mesh.faces), shown, max_faces)
     mesh = clean(mesh, shown)
     mesh = scale_to_metres(mesh, units, handle_type, shown)
     mesh = to_mount_frame(mesh, out_axis, long_axis, shown)
@@ -266,7 +310,7 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
                           "Imported with `rik assets import`; lengths in metres. Edit the names freely; the mesh is "
                           "the data.")
 
-    yaml_path = _register(catalog_dir, stem, {mesh_rel: mesh}, yaml_text, f"design {design_id}")
+    yaml_path = _register(catalog_dir, stem, {mesh_rel: mesh}, yaml_text, f"design {design_id}", prepare)
     return ImportedHandle(handle_id, yaml_path, catalog_dir / mesh_rel, geometry)
 
 
@@ -329,6 +373,7 @@ def node_meshes(path: Path, nodes: dict[str, str], mapping_file: Path) -> dict[s
         if not pieces:
             raise RikError(f"{display_path(mapping_file)}, field '{field}': node '{node}' of {shown} has no mesh")
         out[field] = trimesh.util.concatenate(pieces)  # type: ignore[assignment]  # typed Geometry; of meshes, a Trimesh
+        check_finite(out[field], f"{shown} node '{node}'")
     return out
 
 
@@ -354,11 +399,13 @@ def _hinge(side: str, lo: Any, hi: Any, back: float) -> tuple[list[float], list[
 
 
 def import_base_unit(path: Path, mapping_path: Path, *, unit_id: str, catalog_dir: Path,
-                     licence: str = "LicenseRef-user") -> tuple[str, Path]:
+                     licence: str = "LicenseRef-user", max_faces: int = MAX_FACES,
+                     prepare: Prepare | None = None) -> tuple[str, Path]:
     """Read a GLB's named nodes as the rigid parts of a base unit (mapping in ``mapping_path``), normalise units
     and frame (origin at the bottom of the carcass's front plane, centred, +y out of the front, +z up), measure the
-    carcass and fronts, and register the unit with its part meshes in ``catalog_dir``. Validated as a whole before
-    anything is moved into place."""
+    carcass and fronts, and register the unit with its part meshes in ``catalog_dir``. A file whose parts have more
+    than ``max_faces`` triangles in all is refused before any work. Validated as a whole, and ``prepare`` (the
+    decomposition) finished, before anything is moved into place."""
     import numpy as np
 
 
@@ -366,6 +413,7 @@ def import_base_unit(path: Path, mapping_path: Path, *, unit_id: str, catalog_di
     fields = {"carcass.node": mapping.carcass.node,
               **{f"fronts.{i}.node": f.node for i, f in enumerate(mapping.fronts)}}
     raw = node_meshes(path, fields, mapping_path)
+    check_size(sum(len(m.faces) for m in raw.values()), display_path(path), max_faces)
     rotation = _frame_rotation(mapping.up, mapping.front, display_path(mapping_path))
     parts: dict[str, Any] = {}
     for field, mesh in raw.items():
@@ -418,5 +466,5 @@ def import_base_unit(path: Path, mapping_path: Path, *, unit_id: str, catalog_di
         return _yaml_text({"base_units": [entry]},
                           "Imported with `rik assets import --base-unit`; lengths in metres, angles in radians.")
 
-    yaml_path = _register(catalog_dir, stem, files, yaml_text, f"base unit {unit_id}")
+    yaml_path = _register(catalog_dir, stem, files, yaml_text, f"base unit {unit_id}", prepare)
     return unit_id, yaml_path

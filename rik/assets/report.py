@@ -53,8 +53,12 @@ def handle_ids(catalog: Catalog, ids: Sequence[str], everything: bool) -> list[s
     return list(dict.fromkeys(ids))
 
 
-def _fidelity_from_json(data: dict[str, Any]) -> Fidelity:
-    return Fidelity(**{k: Deviation(**v) for k, v in data.items()})
+def _fidelity_from_json(data: dict[str, Any]) -> Fidelity | None:
+    """The stored figures; ``None`` when they do not have the current shape (measure again)."""
+    try:
+        return Fidelity(**{k: Deviation(**v) for k, v in data.items()})
+    except TypeError:
+        return None
 
 
 def fidelity_row(catalog: Catalog, handle_id: str, *, out: Path | None = None, points: int = DEFAULT_POINTS,
@@ -68,13 +72,12 @@ def fidelity_row(catalog: Catalog, handle_id: str, *, out: Path | None = None, p
     asset, _ = build_asset(catalog, handle_id, seed, cache)
     part = asset.part("handle")
     name = f"fidelity-{points}-{seed}.json"
-    stored = cache.read_extra(asset.key, name)
+    stored = cache.read_extra(asset.key, name)  # verified against its sha256
+    fid = _fidelity_from_json(stored) if stored is not None else None
     samples = None
-    if stored is None:
+    if fid is None:
         fid, samples = measure(part.visual, part.hulls, part.baseline, points, seed)
         cache.write_extra(asset.key, name, asdict(fid))
-    else:
-        fid = _fidelity_from_json(stored)
     if out is not None:
         pictures = picture_dir(out, handle_id)
         stamp = pictures / "asset.key"  # the asset and drawing code the pictures show: redraw when either changes

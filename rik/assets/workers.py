@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -13,10 +14,56 @@ _CATALOG: Catalog | None = None
 """The catalog of this worker process."""
 
 
-def _load(overlays: list[Path]) -> None:
+PARENT_POLL_S = 0.5
+"""How often, in seconds, a worker's watch thread checks that its parent still lives."""
+
+
+def exit_with_parent(parent: int) -> None:
+    """Make this (worker) process exit when process ``parent`` dies, even by ``kill -9`` or the OOM killer, so
+    that no orphan keeps writing into the output or the cache, then hangs on a queue nobody reads.
+
+    On Linux the kernel sends SIGKILL on the parent's death (``prctl(PR_SET_PDEATHSIG)``), which stops the
+    worker even inside C code that holds the GIL (CoACD). Where that is unavailable, a daemon thread checks
+    ``os.getppid()`` every :data:`PARENT_POLL_S` seconds. A parent already dead before either was set up is
+    caught by comparing ``os.getppid()`` with ``parent``.
+
+    PR_SET_PDEATHSIG fires when the *thread* that spawned the worker ends, not the process. That is safe for
+    :func:`map_ids`: ProcessPoolExecutor (spawn context, Python 3.12) starts workers only in ``submit``, and
+    map_ids submits every call at once from the thread that iterates it, which stays inside map_ids (waiting
+    on the results) until the pool is shut down; the pool's manager thread spawns replacements only with
+    ``max_tasks_per_child``, which map_ids does not set."""
+    import sys
+    import threading
+
+    if sys.platform.startswith("linux"):
+        import ctypes
+        import signal
+
+        pr_set_pdeathsig = 1
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(pr_set_pdeathsig, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):
+            pass  # the watch thread below still covers it
+    if os.getppid() != parent:  # the parent died before the signal was asked for
+        os._exit(1)
+
+    def watch() -> None:
+        import time
+
+        while os.getppid() == parent:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="rik-parent-watch", daemon=True).start()
+
+
+def _load(overlays: list[Path], parent: int | None = None) -> None:
     global _CATALOG
     from rik.registry.load import load_catalog
 
+    if parent is not None:
+        exit_with_parent(parent)
     _CATALOG = load_catalog(overlays)
 
 
@@ -35,7 +82,7 @@ def map_ids(fn: Callable[[Catalog, str], Any], catalog: Catalog, ids: Sequence[s
         from multiprocessing import get_context
 
         with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_load,
-                                 initargs=(list(overlays),)) as pool:
+                                 initargs=(list(overlays), os.getpid())) as pool:
             for future in as_completed([pool.submit(_call, fn, i) for i in ids]):
                 yield future.result()
     else:

@@ -227,54 +227,68 @@ def import_(
     mass: Annotated[float | None, typer.Option(help="Mass, kg (default: volume x zinc density).")] = None,
     catalog_dir: Annotated[Path, typer.Option(help="User overlay catalog to register the handle in.")] = Path(
         "rik-catalog"),
+    # the default is rik.assets.importer.MAX_FACES, written out so that `rik --help` does not import the importer
+    max_faces: Annotated[int, typer.Option(min=1, help="Refuse files with more triangles than this (CoACD and the "
+                                           "checks would run for minutes and may run out of memory).")] = 500_000,
     seed: SeedOpt = 0,
     catalog: CatalogOption = None,
 ) -> None:
-    """Import a real handle mesh (or a base unit): clean it, normalise units and frame, register it in a user
-    catalog, then decompose it with CoACD and measure its collision fidelity (and the finger test for two-point
-    handles)."""
+    """Import a real handle mesh (or a base unit): clean it, normalise units and frame, decompose it with CoACD,
+    measure its collision fidelity (and the finger test for two-point handles), then register it in a user
+    catalog. Nothing is registered unless every step succeeds."""
     from rik.assets.importer import import_handle
-    from rik.assets.report import fidelity_row
+    from rik.assets.report import fidelity_row, picture_dir
     from rik.errors import RikError
     from rik.registry.load import load_catalog
 
     del handle
     if base_unit:
-        _import_base_unit(file, parts, design_id, catalog_dir, overlays(catalog), seed)
+        _import_base_unit(file, parts, design_id, catalog_dir, overlays(catalog), seed, max_faces)
         return
     if handle_type is None:
         raise RikError("--type is required for a handle: knob, two_point or finger_pull")
     size_label = size
     if size_label is None:
         size_label = f"{round(hole_spacing * 1000)}" if hole_spacing else "imported"
+    handle_id = f"{design_id}-{size_label}"
+    done: dict[str, Any] = {}
+
+    def decompose(staged: Path) -> None:
+        """CoACD, the fidelity figures and pictures (into the staging directory) and the finger test, before
+        anything is registered."""
+        cat = load_catalog([*overlays(catalog), catalog_dir, staged])
+        with console().status("decomposing with CoACD and measuring its fidelity ..."):
+            done["row"] = fidelity_row(cat, handle_id, out=staged / "pictures", seed=seed)
+        if handle_type is HandleTypeOpt.two_point:
+            from rik.assets.build import build_asset
+            from rik.assets.finger import finger_test
+
+            asset, _ = build_asset(cat, handle_id, seed)
+            done["finger"] = finger_test(asset.part("handle").hulls, cat.handles[handle_id].geometry)
+
     imported = import_handle(file, handle_type=handle_type.value, design_id=design_id, size=size_label,
                              catalog_dir=catalog_dir, name=name, finish=finish, units=units.value,
                              out_axis=out_axis.value, long_axis=long_axis.value, hole_spacing=hole_spacing,
-                             clearance=clearance, mass=mass)
+                             clearance=clearance, mass=mass, max_faces=max_faces, prepare=decompose)
     con = console()
     g = imported.geometry
     con.print(f"registered {imported.handle_id} in {imported.yaml_path} (mesh {imported.mesh_path}): "
               f"{g['length'] * 1e3:.1f} x {g['width'] * 1e3:.1f} mm, projection {g['projection'] * 1e3:.1f} mm"
               + (f", clearance {g['clearance']['depth'] * 1e3:.1f} x {g['clearance']['width'] * 1e3:.1f} mm"
                  if "clearance" in g else ""))
-    cat = load_catalog([*overlays(catalog), catalog_dir])
-    row = fidelity_row(cat, imported.handle_id, out=catalog_dir / "pictures", seed=seed)
+    row = done["row"]
     con.print(f"collision: {row['hulls']} convex parts; E_Q->P mean {row['eqp_mean_mm']:.2f} mm, E_P->Q mean "
               f"{row['epq_mean_mm']:.2f} mm (convex hull: {row['hull_eqp_mean_mm']:.2f} mm, "
-              f"{row['hull_over_coacd']:.1f}x); pictures in {catalog_dir / 'pictures'}")
-    if handle_type is HandleTypeOpt.two_point:
-        from rik.assets.build import build_asset
-        from rik.assets.finger import finger_test
-
-        asset, _ = build_asset(cat, imported.handle_id, seed)
-        result = finger_test(asset.part("handle").hulls, cat.handles[imported.handle_id].geometry)
+              f"{row['hull_over_coacd']:.1f}x); pictures in {picture_dir(catalog_dir / 'pictures', handle_id)}")
+    if "finger" in done:
+        result = done["finger"]
         verdict = "passes through the loop" if result.passes else "is blocked"
         con.print(f"finger test: a 10 mm finger {verdict} (closest {result.min_distance * 1e3:.1f} mm)")
     con.print(f"use it with --catalog {catalog_dir} (or RIK_CATALOG={catalog_dir})")
 
 
 def _import_base_unit(file: Path, parts: Path | None, unit_id: str, catalog_dir: Path, overlay_paths: list[Path],
-                      seed: int) -> None:
+                      seed: int, max_faces: int) -> None:
     from rik.assets.build import build_asset
     from rik.assets.importer import import_base_unit
     from rik.errors import RikError
@@ -283,16 +297,22 @@ def _import_base_unit(file: Path, parts: Path | None, unit_id: str, catalog_dir:
     if parts is None:
         raise RikError("--base-unit needs --parts PARTS.yaml: which node is the carcass and each front, and how "
                        "each front moves (format: rik/schemas/imports.py)")
-    unit_id, yaml_path = import_base_unit(file, parts, unit_id=unit_id, catalog_dir=catalog_dir)
+    con = console()
+    built: dict[str, Any] = {}
+
+    def decompose(staged: Path) -> None:
+        """CoACD on every rigid part, before anything is registered."""
+        with con.status("decomposing every rigid part with CoACD ..."):
+            built["asset"], _ = build_asset(load_catalog([*overlay_paths, catalog_dir, staged]), unit_id, seed)
+
+    unit_id, yaml_path = import_base_unit(file, parts, unit_id=unit_id, catalog_dir=catalog_dir,
+                                          max_faces=max_faces, prepare=decompose)
     cat = load_catalog([*overlay_paths, catalog_dir])
     unit = cat.base_units[unit_id]
-    con = console()
     c = unit.carcass
     con.print(f"registered {unit_id} in {yaml_path}: carcass {c.width * 1e3:.0f} x {c.height * 1e3:.0f} x "
               f"{c.depth * 1e3:.0f} mm (w x h x d), fronts: "
               + ", ".join(f"{f.id} ({f.kind}, {f.joint.type})" for f in unit.fronts))
-    with con.status("decomposing every rigid part with CoACD ..."):
-        asset, _ = build_asset(cat, unit_id, seed)
-    for p in asset.parts:
+    for p in built["asset"].parts:
         con.print(f"  {p.name}: {len(p.visual.faces)} triangles, {len(p.hulls)} convex parts")
     con.print(f"use it with --catalog {catalog_dir} (or RIK_CATALOG={catalog_dir})")

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from rik.combinator.checks import GEOMETRY_CHECKS, CheckResult, ModelContext, run_model_checks
 from rik.combinator.ids import VariantKey
 from rik.errors import RikError
+from rik.paths import atomic_path, inside
 
 if TYPE_CHECKING:
     from rik.assets.build import Asset
@@ -180,14 +181,23 @@ def _sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
+def _intact(path: Path, data: bytes) -> bool:
+    """True when the file at ``path`` holds exactly ``data``."""
+    try:
+        return path.stat().st_size == len(data) and path.read_bytes() == data
+    except OSError:
+        return False
+
+
 def _store_mesh(out: Path, data: bytes) -> Path:
-    """The content-addressed copy of a mesh file under ``<out>/.meshes`` (written once)."""
+    """The content-addressed copy of a mesh file under ``<out>/.meshes``, written when absent or when its
+    content no longer matches its name (a variant's hard link to it was written to). The rewrite replaces the
+    file with a new inode: variants still linked to the damaged one fail :func:`is_current` and are rebuilt."""
     store = out / MESH_STORE / f"{_sha256(data)}.stl"
-    if not store.exists():
+    if not _intact(store, data):
         store.parent.mkdir(parents=True, exist_ok=True)
-        tmp = store.with_name(f".{store.name}.{os.getpid()}.tmp")
-        tmp.write_bytes(data)
-        os.replace(tmp, store)
+        with atomic_path(store) as tmp:
+            tmp.write_bytes(data)
     return store
 
 
@@ -269,8 +279,9 @@ def is_current(directory: Path, digest: str) -> bool:
         report = json.loads((directory / "report.json").read_text(encoding="utf-8"))
         if report.get("spec_hash") != digest or report.get("status") != "valid":
             return False
-        return all(_sha256((directory / name).read_bytes()) == sha for name, sha in report["files"].items())
-    except (OSError, ValueError, KeyError, TypeError):
+        return all(_sha256(inside(directory, *name.split("/"), what="file").read_bytes()) == sha
+                   for name, sha in report["files"].items())
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, RikError):  # a name leading elsewhere too
         return False
 
 

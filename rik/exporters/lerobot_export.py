@@ -183,19 +183,49 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                    workers: int = 1, overlays: Sequence[Path] = (),
                    progress: Callable[[str, int, int], None] | None = None) -> ExportResult:
     """Export ``episodes`` (episode folders) to a LeRobot v3.0 dataset at ``out``; renders the image streams that
-    are missing first. ``progress(stage, done, total)`` reports stages ``render:<stream>``, ``shards``."""
-    from rik.render.episodes import render_episode
-    from rik.render.streams import StreamSpec
-    from rik.sim.episode import find_episodes, read_meta
+    are missing first. ``progress(stage, done, total)`` reports stages ``render:<stream>``, ``shards``. One export at a
+    time writes ``out`` (a lock beside it, :mod:`rik.locks`); a second one is refused at once."""
+    from rik.locks import exclusive
 
     _check_spec(spec)
     quiet_encoders()
     out = Path(out)
-    partial_dir = out.with_name(f"{out.name}.partial")
-    if out.exists():
-        raise RikError(f"{out}: already exists; choose another --out (or delete it)" if not resume else
-                       f"{out}: the export is already complete (nothing to resume); choose another --out to export "
+    _check_out_free(out, resume)
+    with exclusive(out, "rik export-lerobot"):
+        return _export_locked(catalog, episodes, out, spec, renders=renders, variants=variants, resume=resume,
+                              workers=workers, overlays=overlays, progress=progress)
+
+
+def _is_rik_export(folder: Path) -> bool:
+    """Whether ``folder`` holds a finished rik export (lerobot's info.json and rik's card fields)."""
+    from rik.exporters.lerobot_card import CARD_FIELDS
+
+    return (folder / "meta" / "info.json").is_file() and (folder / CARD_FIELDS).is_file()
+
+
+def _check_out_free(out: Path, resume: bool) -> None:
+    """``--out`` must not exist yet (an export publishes it whole, at the end)."""
+    if not out.exists():
+        return
+    if not resume:
+        raise RikError(f"{out}: already exists; choose another --out (or delete it)")
+    if _is_rik_export(out):
+        raise RikError(f"{out}: the export is already complete (nothing to resume); choose another --out to export "
                        "again")
+    raise RikError(f"{out}: exists and is not a rik export (no meta/info.json and rik_card.json), so there is nothing "
+                   "to resume there; choose another --out")
+
+
+def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: ExportSpec, *, renders: Path,
+                   variants: Path, resume: bool, workers: int, overlays: Sequence[Path],
+                   progress: Callable[[str, int, int], None] | None) -> ExportResult:
+    """:func:`export_lerobot` once it holds the lock of ``out``."""
+    from rik.render.episodes import render_episode
+    from rik.render.streams import StreamSpec
+    from rik.sim.episode import find_episodes, read_meta
+
+    _check_out_free(out, resume)  # again, now that it is ours: another export may have finished it meanwhile
+    partial_dir = out.with_name(f"{out.name}.partial")
     if partial_dir.exists() and not resume:
         raise RikError(f"{partial_dir}: an interrupted export is there; run again with --resume to continue it, or "
                        "delete it")
@@ -268,15 +298,41 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         shutil.rmtree(merged)
     shard_dirs = sorted(p for p in shard_root.iterdir() if p.is_dir())
     _aggregate(spec.repo_id, [p / "ds" for p in shard_dirs], merged)
+    _order_stats(merged)
     from rik.exporters.lerobot_card import write_card
     from rik.exporters.lerobot_check import check_dataset
 
     checks = check_dataset(merged, spec.repo_id, len(dirs))
     write_card(catalog, merged, spec, fps, checks)
-    os.replace(merged, out)
+    _publish(merged, out)
     shutil.rmtree(partial_dir, ignore_errors=True)
     return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
                         sorted(features(cams, spec.streams, spec.width, spec.height)), len(jobs), skipped, checks)
+
+
+def _order_stats(root: Path) -> None:
+    """Write ``meta/stats.json`` with its features in info.json's order: lerobot's aggregation gathers them in a
+    set, whose order changes from one process to the next, and identical exports must be byte-identical."""
+    stats_file, info_file = root / "meta" / "stats.json", root / "meta" / "info.json"
+    if not stats_file.is_file():
+        return
+    stats = json.loads(stats_file.read_text(encoding="utf-8"))
+    order = list(json.loads(info_file.read_text(encoding="utf-8"))["features"])
+    ordered = {k: stats[k] for k in order if k in stats} | {k: stats[k] for k in sorted(stats) if k not in order}
+    write_atomic(stats_file, json.dumps(ordered, indent=4, ensure_ascii=False))  # lerobot's own layout
+
+
+def _publish(merged: Path, out: Path) -> None:
+    """Rename the finished dataset to ``out``, which must still be free: a folder made there by something else
+    while the export ran is never replaced, and the finished dataset stays where it is for ``--resume``."""
+    try:
+        if out.exists():
+            raise FileExistsError
+        os.rename(merged, out)
+    except OSError:
+        raise RikError(f"{out}: was created by something else while the export ran, so the finished dataset was "
+                       f"not moved there (it is kept in {merged}); move {out} away and run again with --resume"
+                       ) from None
 
 
 def _shard_by_name(jobs: dict[str, tuple], catalog: Catalog, name: str) -> int:

@@ -35,6 +35,33 @@ def check_unique_ids(parsed: Parsed, noun: str) -> None:
         first[ident] = entry
 
 
+#: Sections whose ids go into variant ids (``<base unit>__<handle>__<preset>``, each ``/`` written ``-``).
+IN_VARIANT_IDS = ("base_units", "handles", "presets")
+
+
+def check_variant_id_parts(parsed: Parsed, section: str, noun: str) -> None:
+    """Ids that go into variant ids must keep them unambiguous: no ``__`` (the separator), no ``/`` in a preset
+    id, and no two ids of a section written the same once ``/`` becomes ``-`` (``drawer-chest-80`` and
+    ``drawer/chest-80`` would share every variant folder)."""
+    from rik.combinator.ids import SEPARATOR, slug
+
+    first: dict[str, RawEntry] = {}
+    for entry, model in parsed:
+        ident = model.id  # type: ignore[attr-defined]
+        if SEPARATOR in ident:
+            raise entry.error("id", f"'{SEPARATOR}' separates the parts of variant and episode ids; a {noun} id "
+                                    "may not contain it")
+        if section == "presets" and "/" in ident:
+            raise entry.error("id", "a preset id is one word (no '/'): it is the last part of variant ids")
+        written = slug(ident)
+        if written in first:
+            other = first[written]
+            raise entry.error("id", f"written '{written}' in variant ids, the same as {noun} "
+                                    f"'{other.data.get('id')}' ({display_path(other.file)}, {other.label}); "
+                                    "choose another id")
+        first[written] = entry
+
+
 def _ref(entry: RawEntry, field: str, wanted: str, known: Mapping[str, object], noun: str) -> None:
     if wanted not in known:
         raise entry.error(field, str(UnknownIdError(noun, wanted, known)))
@@ -100,6 +127,9 @@ def check_base_unit(entry: RawEntry, base: BaseUnit, finishes: Mapping[str, obje
     seen: set[str] = set()
     for i, front in enumerate(base.fronts):
         where = f"fronts.{i}"
+        if "/" in front.id or "__" in front.id:
+            raise entry.error(f"{where}.id", f"front id '{front.id}' must be one word without '/' or '__': it is part "
+                                             "of episode ids and folder names")
         if front.id in seen:
             raise entry.error(f"{where}.id", f"duplicate front id '{front.id}' in this base unit")
         seen.add(front.id)

@@ -4,7 +4,8 @@ Building the typed :class:`~rik.registry.catalog.Catalog` means creating the sch
 every entry, which costs more than the rest of a ``rik catalog list`` call. The index holds the same entries
 as JSON-ready dicts in definition order (plus a few derived fields), written only after full validation, under
 ``<cache>/catalog/<sha256>.json``; the key hashes every source file, the schema and registry code, and the
-library versions, so any change to them rebuilds it. Errors are never cached.
+library versions, so any change to them rebuilds it. The file also records the sha256 of its payload, checked
+on every read: an edited or damaged index is rebuilt, never served. Errors are never cached.
 """
 
 from __future__ import annotations
@@ -130,10 +131,9 @@ def build_index(catalog: Catalog, key: str = "") -> CatalogIndex:
 
 def fingerprint(files: Sequence[tuple[Path, bool]]) -> str:
     """sha256 of the source files (path, role, bytes), the schema and registry code, and library versions."""
-    import pydantic  # cheap: pydantic's top-level import is lazy
-
     digest = hashlib.sha256()
-    digest.update(f"rik {rik.__version__} schema {rik.CATALOG_SCHEMA} pydantic {pydantic.VERSION}\n".encode())
+    digest.update(f"rik {rik.__version__} schema {rik.CATALOG_SCHEMA}\n".encode())
+    digest.update(_pydantic_version())
     package = Path(rik.__file__).parent
     code = sorted((package / "schemas").glob("*.py")) + sorted((package / "registry").glob("*.py"))
     for path, builtin in [(p, True) for p in code] + list(files):
@@ -142,21 +142,56 @@ def fingerprint(files: Sequence[tuple[Path, bool]]) -> str:
     return digest.hexdigest()
 
 
+INDEX_FORMAT = 2
+"""Layout of the cached file: a header (format, fingerprint, the sha256 of the payload) then the payload."""
+
+
+def _header(key: str, sha: str) -> bytes:
+    return f'{{"format": {INDEX_FORMAT}, "fingerprint": "{key}", "sha256": "{sha}", "index": '.encode()
+
+
+def _pydantic_version() -> bytes:
+    """What identifies the installed pydantic: the bytes of its ``version.py``, found without importing pydantic
+    (that import, ~20 ms, was most of a warm ``rik catalog``'s own start-up); its ``VERSION`` if not found."""
+    from importlib.util import find_spec
+
+    spec = find_spec("pydantic")
+    if spec is not None and spec.origin:
+        try:
+            return Path(spec.origin).with_name("version.py").read_bytes()
+        except OSError:
+            pass
+    import pydantic
+
+    return f"pydantic {pydantic.VERSION}".encode()
+
+
 def _read(path: Path, key: str) -> CatalogIndex | None:
+    """The cached index, verified: its payload (the bytes after the header) must hash to the header's sha256;
+    anything else (missing, partial, edited, another layout or key) is a miss and gets rebuilt."""
     try:
-        data = json.loads(path.read_bytes())
-        if data["fingerprint"] != key:
-            return None
-        return CatalogIndex(data["fingerprint"], data["sections"], data["pairings"])
-    except (OSError, ValueError, KeyError, TypeError):  # missing, partial or foreign: rebuild
+        raw = path.read_bytes()
+    except OSError:
+        return None
+    start = len(_header(key, "0" * 64))
+    head, payload = raw[:start], raw[start:-1]
+    sha = hashlib.sha256(payload).hexdigest()
+    if head != _header(key, sha) or raw[-1:] != b"}":
+        return None
+    try:
+        data = json.loads(payload)
+        return CatalogIndex(key, data["sections"], data["pairings"])
+    except (ValueError, KeyError, TypeError):
         return None
 
 
 def _write(path: Path, index: CatalogIndex) -> None:
-    """Write atomically; a cache that cannot be written (read-only home) is not an error."""
+    """Write atomically, with the sha256 of the payload in the header; a cache that cannot be written (read-only
+    home) is not an error."""
+    payload = json.dumps({"sections": index.sections, "pairings": index.pairings})
+    sha = hashlib.sha256(payload.encode()).hexdigest()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(path, json.dumps({"fingerprint": index.fingerprint, "sections": index.sections,
-                                       "pairings": index.pairings}))
+        write_atomic(path, _header(index.fingerprint, sha).decode() + payload + "}")
     except OSError:
         pass

@@ -33,6 +33,8 @@ def build_catalog(entries: Sequence[RawEntry]) -> Catalog:
         parsed[entry.section].append((entry, parse_entry(entry)))
     for section, items in parsed.items():
         checks.check_unique_ids(items, NOUNS[section])
+    for section in checks.IN_VARIANT_IDS:
+        checks.check_variant_id_parts(parsed[section], section, NOUNS[section])
     by_id = {s: {m.id: m for _, m in items} for s, items in parsed.items()}  # type: ignore[attr-defined]
     designs, finishes, presets = by_id["designs"], by_id["finishes"], by_id["presets"]
     for entry, handle in parsed["handles"]:

@@ -64,17 +64,40 @@ def render_episode(catalog: Catalog, directory: Path, spec: StreamSpec, *, rende
                    progress: Callable[[int], None] | None = None) -> StreamResult:
     """Render one stream of the episode in ``directory`` into ``renders``; resumes an interrupted render and
     returns at once when the stream is already finished. ``progress(n)`` is called as frames are done."""
-    from rik.sim.episode import read_meta, states
+    from rik.locks import exclusive
+    from rik.sim.episode import read_meta
 
     meta = read_meta(directory)
     final = stream_dir(renders, meta.id, spec)
-    if is_done(final, meta.states_sha256):
-        manifest = read_manifest(final) or {}
-        if not cameras or set(cameras) <= set(manifest.get("cameras", [])):
-            if progress:
-                progress(int(manifest.get("frames", 0)))
-            return StreamResult(meta.id, final, int(manifest.get("frames", 0)), tuple(manifest.get("cameras", ())),
-                                0, float(manifest.get("seconds_per_frame", 0.0)))
+    done = _finished(final, meta, cameras, progress)
+    if done is not None:
+        return done
+    with exclusive(final, "rik render", wait=True):  # one process renders a stream; others wait, then reuse it
+        done = _finished(final, meta, cameras, progress)
+        if done is not None:
+            return done
+        return _render_stream(catalog, directory, spec, final, variants, cameras, progress)
+
+
+def _finished(final: Path, meta: EpisodeMeta, cameras: Sequence[str] | None,
+              progress: Callable[[int], None] | None) -> StreamResult | None:
+    """The result of the finished stream at ``final`` when it holds these states and cameras, else None."""
+    if not is_done(final, meta.states_sha256):
+        return None
+    manifest = read_manifest(final) or {}
+    if cameras and not set(cameras) <= set(manifest.get("cameras", [])):
+        return None
+    if progress:
+        progress(int(manifest.get("frames", 0)))
+    return StreamResult(meta.id, final, int(manifest.get("frames", 0)), tuple(manifest.get("cameras", ())),
+                        0, float(manifest.get("seconds_per_frame", 0.0)))
+
+
+def _render_stream(catalog: Catalog, directory: Path, spec: StreamSpec, final: Path, variants: Path,
+                   cameras: Sequence[str] | None, progress: Callable[[int], None] | None) -> StreamResult:
+    """Render (or resume) the stream of the episode in ``directory`` into ``final``, holding its lock."""
+    from rik.sim.episode import states
+
     meta, table, scene = _episode_scene(catalog, directory, variants)
     cams = scene_cameras(scene.model, cameras, str(directory))
     recorded = states(table)

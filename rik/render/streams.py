@@ -22,7 +22,7 @@ from typing import Any, Literal
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import write_atomic, write_png
+from rik.paths import inside, write_atomic, write_png
 
 DEFAULT_RENDERS = Path("renders")
 MANIFEST = "stream.json"
@@ -66,7 +66,8 @@ def parse_resolution(text: str) -> tuple[int, int]:
 
 
 def stream_dir(renders: Path, episode_id: str, spec: StreamSpec) -> Path:
-    return Path(renders) / episode_id / spec.key
+    """``<renders>/<episode id>/<key>``, refused (:class:`RikError`) if the id would lead outside ``renders``."""
+    return inside(Path(renders), episode_id, spec.key, what="episode id")
 
 
 def frame_name(index: int) -> str:

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable
 from enum import StrEnum
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 #: A strictly positive length in metres.
 Length = Annotated[float, Field(gt=0, allow_inf_nan=False)]
@@ -23,6 +25,30 @@ Quat = tuple[Real, Real, Real, Real]
 Unit = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
 #: A catalog id: lower-case words joined by '-', '_', '.', grouped by '/' (for example ``two_point/bow-128``).
 CatalogId = Annotated[str, Field(pattern=r"^[a-z0-9][a-z0-9_.\-]*(/[a-z0-9][a-z0-9_.\-]*)*$", max_length=120)]
+SIMPLE_ID = r"^[a-z0-9][a-z0-9_.\-]*$"
+"""A catalog id without '/' and without '__' (a preset or a front): one component of variant and episode ids."""
+PATH_COMPONENT = r"^[A-Za-z0-9][A-Za-z0-9_.\-]*$"
+"""One component of a path that rik builds from data it reads (an episode or variant id): letters, digits, '_', '.'
+and '-', not starting with '.', so it can never climb out of its folder ('..'), be absolute, hidden or empty."""
+
+
+def _matches(pattern: str, what: str) -> Callable[[str], str]:
+    compiled = re.compile(pattern)
+
+    def check(value: str) -> str:
+        if not compiled.fullmatch(value) or len(value) > 255:
+            raise ValueError(f"{value!r} is not {what}")
+        return value
+
+    return check
+
+
+#: A preset or front id (see :data:`SIMPLE_ID`).
+SimpleId = Annotated[str, AfterValidator(_matches(
+    SIMPLE_ID, "a simple id (lower-case letters, digits, '_', '.', '-'; no '/')"))]
+#: An id that becomes a folder name (see :data:`PATH_COMPONENT`).
+PathComponent = Annotated[str, AfterValidator(_matches(
+    PATH_COMPONENT, "a safe folder name (letters, digits, '_', '.', '-'; not starting with '.'; no '/')"))]
 
 
 class Frozen(BaseModel):

@@ -6,9 +6,12 @@ from typing import Literal
 
 from pydantic import Field
 
-from rik.schemas.common import Frozen
+from rik.schemas.common import CatalogId, Frozen, PathComponent, SimpleId
 
-EPISODE_FORMAT = 1
+EPISODE_FORMAT = 2
+"""2: ``meta_sha256`` seals meta.json itself (format 1 episodes, without it, are still read)."""
+MAX_SEED = 2**63 - 1
+"""Largest seed: seeds are stored as signed 64-bit integers (Parquet, LeRobot's episode columns)."""
 
 
 class GripperInfo(Frozen):
@@ -25,26 +28,29 @@ class EpisodeMeta(Frozen):
     """One recorded episode. ``states.parquet`` has ``steps + 1`` rows: the state before each control step with
     the action applied during it, then the final state (its action repeats the last one)."""
 
-    format: int = EPISODE_FORMAT
-    id: str
-    variant: str
-    base_unit: str
-    handle: str
+    format: int = Field(default=EPISODE_FORMAT, ge=1, le=EPISODE_FORMAT)
+    id: PathComponent
+    """The episode's folder name, also the name of its render folder."""
+    variant: PathComponent
+    base_unit: CatalogId
+    handle: CatalogId
     handle_type: str
-    preset: str
-    front: str
+    preset: SimpleId
+    front: SimpleId
     operator: str = Field(description="strategy, device or policy name")
     operator_kind: Literal["strategy", "device", "policy"]
-    seed: int
-    fps: int = Field(description="control and recording rate, Hz")
-    timestep: float = Field(description="physics step, s")
-    steps: int = Field(description="control steps taken")
+    seed: int = Field(ge=0, le=MAX_SEED)
+    fps: int = Field(ge=1, le=10_000, description="control and recording rate, Hz")
+    timestep: float = Field(gt=0, allow_inf_nan=False, description="physics step, s")
+    steps: int = Field(ge=0, description="control steps taken")
     state_spec: str = "mjSTATE_INTEGRATION"
-    state_size: int
+    state_size: int = Field(ge=1)
     outcome: Literal["F", "P", "S"]
-    final_opening: float = Field(description="fraction of the front's range")
-    max_opening: float
+    final_opening: float = Field(allow_inf_nan=False, description="fraction of the front's range")
+    max_opening: float = Field(allow_inf_nan=False)
     gripper: GripperInfo
     versions: dict[str, str]
     log: tuple[str, ...] = ()
-    states_sha256: str
+    states_sha256: str = Field(pattern=r"^[0-9a-f]{64}$")
+    meta_sha256: str | None = Field(default=None, pattern=r"^[0-9a-f]{64}$")
+    """sha256 of this file's other fields (:func:`rik.sim.episode.meta_digest`); required from format 2 on."""

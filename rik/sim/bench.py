@@ -64,6 +64,10 @@ def _choose(catalog: Catalog, handle_type: str, preset: str, rng: np.random.Gene
     raise RikError(f"no valid {handle_type} variant on a {'/'.join(kinds)} base unit with preset {preset}")
 
 
+MAX_BENCH_SEED = (2**63 - 1) // 1_000_003 - 1
+"""Largest ``rik bench --seed``: episode seeds are ``seed * 1_000_003 + ...`` and must stay below 2^63."""
+
+
 def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, presets: Sequence[str] = DEFAULT_PRESETS,
                strategies: Sequence[str] = DEFAULT_STRATEGIES, per_cell: int = 10, seed: int = 0,
                kinds: Sequence[str] = DEFAULT_KINDS, grip_forces: Sequence[float | None] = (None,)) -> list[BenchTask]:
@@ -72,6 +76,9 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
     from rik.combinator.ids import select_variants
     from rik.sim.operators import make_operator
 
+    if not 0 <= seed <= MAX_BENCH_SEED:
+        raise RikError(f"--seed {seed}: the benchmark's seed must lie in 0 .. {MAX_BENCH_SEED} (each episode's seed is "
+                       "derived from it and must fit in 64 bits)")
     for s in strategies:
         make_operator(s)
     for p in presets:

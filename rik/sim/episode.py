@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from rik.errors import RikError
+from rik.paths import inside, write_atomic
 from rik.sim.outcome import classify
 from rik.sim.scene import SimScene
 
@@ -125,6 +126,7 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
 
     s = recorder.scene
     table = recorder.table()
+    inside(out, episode, what="episode id")  # before any work: an id that would lead outside ``out`` is refused
     out.mkdir(parents=True, exist_ok=True)
     staging = out / f"{STAGING_PREFIX}{episode}-{os.getpid()}"
     shutil.rmtree(staging, ignore_errors=True)
@@ -143,8 +145,8 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
             gripper=GripperInfo(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
                                 arm_force=g.arm_force),
             versions=_versions(), log=tuple(log), states_sha256=digest)
-        (staging / META).write_text(json.dumps(meta.model_dump(mode="json"), indent=2) + "\n", encoding="utf-8")
-        final = out / episode
+        meta = write_meta(staging, meta.model_dump(mode="json"))
+        final = inside(out, episode, what="episode id")
         if final.exists():
             shutil.rmtree(final)
         os.replace(staging, final)
@@ -154,8 +156,27 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
     return meta
 
 
+def meta_digest(data: dict[str, Any]) -> str:
+    """sha256 of a meta.json's fields other than ``meta_sha256`` (canonical JSON: sorted keys, no spaces)."""
+    fields = {k: v for k, v in data.items() if k != "meta_sha256"}
+    return hashlib.sha256(json.dumps(fields, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
+def write_meta(directory: Path, data: dict[str, Any]) -> EpisodeMeta:
+    """Write ``directory/meta.json`` sealed with its :func:`meta_digest` (atomically); returns the validated meta.
+
+    The one writer of episode metas: anything that changes a meta on purpose goes through it."""
+    from rik.schemas.episodes import EPISODE_FORMAT, EpisodeMeta
+
+    data = {**data, "format": EPISODE_FORMAT}
+    data["meta_sha256"] = meta_digest(data)
+    meta = EpisodeMeta.model_validate(data)
+    write_atomic(Path(directory) / META, json.dumps(data, indent=2) + "\n")
+    return meta
+
+
 def read_meta(directory: Path) -> EpisodeMeta:
-    """The validated meta of the episode in ``directory``."""
+    """The validated meta of the episode in ``directory``; an edited meta.json (its seal differs) is refused."""
     from pydantic import ValidationError
 
     from rik.schemas.episodes import EpisodeMeta
@@ -164,18 +185,25 @@ def read_meta(directory: Path) -> EpisodeMeta:
     if not file.is_file():
         raise EpisodeError(f"{file}: no such file; {directory} is not a recorded episode")
     try:
-        return EpisodeMeta.model_validate(json.loads(file.read_text(encoding="utf-8")))
-    except json.JSONDecodeError as exc:
-        raise EpisodeError(f"{file}: not valid JSON (line {exc.lineno}): {exc.msg}") from None
+        data = json.loads(file.read_text(encoding="utf-8"))
+        meta = EpisodeMeta.model_validate(data)
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        line = f" (line {exc.lineno})" if isinstance(exc, json.JSONDecodeError) else ""
+        raise EpisodeError(f"{file}: not valid JSON{line}: {getattr(exc, 'msg', exc)}") from None
     except ValidationError as exc:
         err = exc.errors()[0]
-        where = ".".join(str(p) for p in err["loc"])
+        where = ".".join(str(p) for p in err["loc"]) or "(top level)"
         raise EpisodeError(f"{file}: field '{where}': {err['msg']}") from None
+    if meta.format >= 2 and meta.meta_sha256 != meta_digest(data):
+        raise EpisodeError(f"{file}: edited or corrupt (its fields no longer match their meta_sha256); record the "
+                           "episode again, or restore the file")
+    return meta
 
 
 def read_episode(directory: Path) -> tuple[EpisodeMeta, pa.Table]:
-    """(meta, states table) of a recorded episode, checked whole: the states file's hash and row count must
-    match the meta."""
+    """(meta, states table) of a recorded episode, checked whole: the states file's hash, its layout (columns, types,
+    vector widths) and row count must match the meta."""
+    import pyarrow as pa
     import pyarrow.parquet as pq
 
     meta = read_meta(directory)
@@ -184,11 +212,38 @@ def read_episode(directory: Path) -> tuple[EpisodeMeta, pa.Table]:
         raise EpisodeError(f"{file}: no such file; the episode is incomplete")
     if hashlib.sha256(file.read_bytes()).hexdigest() != meta.states_sha256:
         raise EpisodeError(f"{file}: truncated or corrupt (its sha256 differs from the one in meta.json)")
-    table = pq.read_table(file)
+    try:
+        table = pq.read_table(file)
+    except (pa.ArrowException, OSError) as exc:
+        raise EpisodeError(f"{file}: not a readable Parquet file ({type(exc).__name__}: "
+                           f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
     if table.num_rows != meta.steps + 1 or list(table.column_names) != list(COLUMNS):
         raise EpisodeError(f"{file}: {table.num_rows} rows and columns {table.column_names}, expected "
                            f"{meta.steps + 1} rows and {list(COLUMNS)}")
+    for name, width in (("state", meta.state_size), ("action", None), ("tcp", 3)):
+        _check_vectors(file, table, name, width)
+    for name in COLUMNS:
+        if name not in ("state", "action", "tcp") and not pa.types.is_integer(table.schema.field(name).type) \
+                and not pa.types.is_floating(table.schema.field(name).type):
+            raise EpisodeError(f"{file}: column '{name}' holds {table.schema.field(name).type}, expected numbers")
     return meta, table
+
+
+def _check_vectors(file: Path, table: Any, name: str, width: int | None) -> None:
+    """Column ``name`` must hold finite-width float vectors, all ``width`` long (``None``: all the same length)."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    kind = table.schema.field(name).type
+    if not (pa.types.is_list(kind) or pa.types.is_fixed_size_list(kind) or pa.types.is_large_list(kind)) \
+            or not pa.types.is_floating(kind.value_type):
+        raise EpisodeError(f"{file}: column '{name}' holds {kind}, expected lists of floats")
+    lengths = pc.list_value_length(table.column(name)).to_numpy(zero_copy_only=False)
+    want = width if width is not None else (int(lengths[0]) if len(lengths) else 0)
+    if len(lengths) and (lengths.min() != want or lengths.max() != want):
+        row = int(np.argmax(lengths != want))
+        raise EpisodeError(f"{file}: column '{name}' has {int(lengths[row])} numbers in row {row}, expected {want}"
+                           + (" (meta.json's state_size)" if name == "state" else ""))
 
 
 def find_episodes(paths: list[Path]) -> list[Path]:

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.errors import RikError
+from rik.paths import inside
 from rik.sim.episode import DEFAULT_EPISODES, EpisodeRecorder, episode_id, run_operator, write_episode
 from rik.sim.gripper import HAND_E, GripperSpec
 from rik.sim.operators import make_operator
@@ -29,10 +30,20 @@ def variant_dir(catalog: Catalog, variant: str, variants: Path) -> Path:
     from rik.combinator.ids import parse_variant_id
 
     key = parse_variant_id(catalog, variant)
+    directory = inside(variants, key.id, what="variant id")
     result = build_variant(catalog, key, variants)
     if result.status == "rejected":
         raise RikError(f"variant {key.id} cannot be simulated: check {result.failed_check} failed: {result.reason}")
-    return variants / key.id
+    return directory
+
+
+def check_seeds(seed: int, episodes: int) -> None:
+    """Seeds ``seed`` .. ``seed + episodes - 1`` must lie in 0 .. 2^63 - 1 (stored as signed 64-bit integers)."""
+    from rik.schemas.episodes import MAX_SEED
+
+    if seed < 0 or seed + episodes - 1 > MAX_SEED:
+        last = f", and the last of {episodes} episodes takes seed {seed + episodes - 1}" if seed >= 0 else ""
+        raise RikError(f"--seed {seed}: seeds must lie in 0 .. {MAX_SEED} (2^63 - 1){last}")
 
 
 def randomise_start(scene: SimScene, rng: np.random.Generator) -> None:
@@ -46,6 +57,7 @@ def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, 
            progress: Callable[[Any], None] | None = None) -> list[Any]:
     """Record ``episodes`` episodes of ``strategy`` on ``variant`` (seeds ``seed``, ``seed + 1``, ...) into
     ``out``; returns their metas."""
+    check_seeds(seed, episodes)
     make_operator(strategy)  # unknown strategy: fail before building anything
     directory = variant_dir(catalog, variant, variants)
     metas = []

@@ -152,6 +152,9 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
     """Teleoperate ``variant`` in MuJoCo's viewer with a device, recording at the control rate; the episode is
     written when the operator presses Enter (or closes the window), not at all on Backspace or Ctrl+C.
     Returns the episode's meta, or ``None`` when discarded."""
+    from rik.sim.record import check_seeds
+
+    check_seeds(seed, 1)
     device = make_device(device_name)
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         raise DeviceError("teleoperation needs a display for MuJoCo's viewer (no DISPLAY is set); for headless "
