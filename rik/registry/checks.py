@@ -6,25 +6,27 @@ Each check raises :class:`rik.errors.CatalogError` through the offending entry, 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-
-from pydantic import BaseModel
+from typing import TYPE_CHECKING
 
 from rik.errors import UnknownIdError
 from rik.registry.geometry import cross, dot, site_axes, sub
 from rik.registry.sources import RawEntry, display_path
 from rik.schemas import BaseUnit, Front, Handle, HandleDesign, HandleType, JointType
 
+if TYPE_CHECKING:
+    from rik.registry.entries import CatalogModel
+
 TOL = 1e-6
 """Geometric tolerance, m."""
 
-Parsed = Sequence[tuple[RawEntry, BaseModel]]
+Parsed = Sequence[tuple[RawEntry, "CatalogModel"]]
 
 
 def check_unique_ids(parsed: Parsed, noun: str) -> None:
     """No id twice in a section; an overlay may not redefine a built-in id."""
     first: dict[str, RawEntry] = {}
     for entry, model in parsed:
-        ident = model.id  # type: ignore[attr-defined]
+        ident = model.id
         if ident in first:
             before = first[ident]
             if before.builtin and not entry.builtin:
@@ -47,7 +49,7 @@ def check_variant_id_parts(parsed: Parsed, section: str, noun: str) -> None:
 
     first: dict[str, RawEntry] = {}
     for entry, model in parsed:
-        ident = model.id  # type: ignore[attr-defined]
+        ident = model.id
         if SEPARATOR in ident:
             raise entry.error("id", f"'{SEPARATOR}' separates the parts of variant and episode ids; a {noun} id "
                                     "may not contain it")

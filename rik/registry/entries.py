@@ -12,8 +12,11 @@ from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
 if TYPE_CHECKING:
     from pydantic_core import ErrorDetails
 
+CatalogModel = Finish | ResistancePreset | HandleDesign | Handle | BaseUnit
+"""A catalog entry's model (each has an ``id``)."""
+
 #: Schema model of each section.
-SECTION_MODELS: dict[str, type[BaseModel]] = {
+SECTION_MODELS: dict[str, type[CatalogModel]] = {
     "finishes": Finish,
     "presets": ResistancePreset,
     "designs": HandleDesign,
@@ -22,7 +25,7 @@ SECTION_MODELS: dict[str, type[BaseModel]] = {
 }
 
 
-def parse_entry(entry: RawEntry) -> BaseModel:
+def parse_entry(entry: RawEntry) -> CatalogModel:
     """Validate one raw entry against its section's model; raises :class:`rik.errors.CatalogError`."""
     model = SECTION_MODELS[entry.section]
     try:

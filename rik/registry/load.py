@@ -9,12 +9,11 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
-from pydantic import BaseModel
-
 from rik.registry import checks
 from rik.registry.catalog import Catalog, Origin
-from rik.registry.entries import SECTION_MODELS, parse_entry
+from rik.registry.entries import SECTION_MODELS, CatalogModel, parse_entry
 from rik.registry.sources import NOUNS, RawEntry, catalog_sources, read_file
+from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
 
 
 def load_catalog(overlays: Iterable[Path] | None = None) -> Catalog:
@@ -28,21 +27,37 @@ def load_catalog(overlays: Iterable[Path] | None = None) -> Catalog:
 
 def build_catalog(entries: Sequence[RawEntry]) -> Catalog:
     """Validate raw entries (each against its schema, then the cross-entry checks) into a :class:`Catalog`."""
-    parsed: dict[str, list[tuple[RawEntry, BaseModel]]] = {s: [] for s in SECTION_MODELS}
+    parsed: dict[str, list[tuple[RawEntry, CatalogModel]]] = {s: [] for s in SECTION_MODELS}
     for entry in entries:
         parsed[entry.section].append((entry, parse_entry(entry)))
     for section, items in parsed.items():
         checks.check_unique_ids(items, NOUNS[section])
     for section in checks.IN_VARIANT_IDS:
         checks.check_variant_id_parts(parsed[section], section, NOUNS[section])
-    by_id = {s: {m.id: m for _, m in items} for s, items in parsed.items()}  # type: ignore[attr-defined]
-    designs, finishes, presets = by_id["designs"], by_id["finishes"], by_id["presets"]
-    for entry, handle in parsed["handles"]:
-        checks.check_handle(entry, handle, designs, finishes)  # type: ignore[arg-type]
-    used = [h.design for h in by_id["handles"].values()]  # type: ignore[attr-defined]
-    for entry, design in parsed["designs"]:
-        checks.check_design(entry, design, used.count(design.id))  # type: ignore[arg-type, attr-defined]
-    for entry, base in parsed["base_units"]:
-        checks.check_base_unit(entry, base, finishes, presets)  # type: ignore[arg-type]
-    origins = {(s, m.id): Origin(str(e.file), e.builtin) for s, items in parsed.items() for e, m in items}  # type: ignore[attr-defined]
-    return Catalog(**by_id, origins=origins)  # type: ignore[arg-type]
+    finishes = dict(_items(parsed, "finishes", Finish))
+    presets = dict(_items(parsed, "presets", ResistancePreset))
+    designs = dict(_items(parsed, "designs", HandleDesign))
+    handles = dict(_items(parsed, "handles", Handle))
+    base_units = dict(_items(parsed, "base_units", BaseUnit))
+    for entry, handle in _entries(parsed, "handles", Handle):
+        checks.check_handle(entry, handle, designs, finishes)
+    used = [h.design for h in handles.values()]
+    for entry, design in _entries(parsed, "designs", HandleDesign):
+        checks.check_design(entry, design, used.count(design.id))
+    for entry, base in _entries(parsed, "base_units", BaseUnit):
+        checks.check_base_unit(entry, base, finishes, presets)
+    origins = {(s, m.id): Origin(str(e.file), e.builtin) for s, items in parsed.items() for e, m in items}
+    return Catalog(designs=designs, handles=handles, base_units=base_units, presets=presets, finishes=finishes,
+                   origins=origins)
+
+
+def _entries[M: CatalogModel](parsed: dict[str, list[tuple[RawEntry, CatalogModel]]], section: str,
+                              kind: type[M]) -> list[tuple[RawEntry, M]]:
+    """The (entry, model) pairs of ``section``, whose models are all ``kind`` (:data:`SECTION_MODELS`)."""
+    return [(e, m) for e, m in parsed[section] if isinstance(m, kind)]
+
+
+def _items[M: CatalogModel](parsed: dict[str, list[tuple[RawEntry, CatalogModel]]], section: str,
+                            kind: type[M]) -> list[tuple[str, M]]:
+    """(id, model) of every entry of ``section``, in definition order."""
+    return [(m.id, m) for _, m in _entries(parsed, section, kind)]
