@@ -5,12 +5,15 @@ and from Mitsuba 3 (the offline path-traced ``rerendered`` stream). Only parsing
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, TypedDict, Unpack
 
 import typer
 
 from rik.cli.common import CatalogOption, WorkersOpt, console, overlays, progress_bar
 from rik.cli.sim import VariantsOpt
+
+if TYPE_CHECKING:
+    from rik.render.streams import StreamKind
 
 EpisodesArg = Annotated[list[Path], typer.Argument(help="Episode directories, or directories of them.",
                                                    show_default=False)]
@@ -21,15 +24,23 @@ RendersOpt = Annotated[Path, typer.Option("--out", "-o", help="Root of rendered 
                                           "<out>/<episode>/<stream>/<camera>/<frame>.png.")]
 
 
-def _run(episodes: list[Path], kind: str, res: str, cameras: str | None, out: Path, variants: Path, workers: int,
-         catalog: list[Path] | None, sheet: bool = False, **quality: object) -> None:
+class _Quality(TypedDict, total=False):
+    """The re-render's quality options (:class:`rik.render.streams.StreamSpec`'s)."""
+
+    spp: int
+    denoise: bool
+    variant: str
+
+
+def _run(episodes: list[Path], kind: StreamKind, res: str, cameras: str | None, out: Path, variants: Path, workers: int,
+         catalog: list[Path] | None, sheet: bool = False, **quality: Unpack[_Quality]) -> None:
     from rik.registry.load import load_catalog
     from rik.render.episodes import render_episodes
     from rik.render.streams import StreamSpec, parse_resolution
     from rik.sim.episode import find_episodes, read_meta
 
     width, height = parse_resolution(res)
-    spec = StreamSpec(kind, width, height, **quality)  # type: ignore[arg-type]
+    spec = StreamSpec(kind, width, height, **quality)
     if kind == "rerendered":
         from rik.render.backend import use_variant
 
