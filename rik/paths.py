@@ -6,7 +6,13 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from types import ModuleType
+
+    import numpy as np
+    from matplotlib.figure import Figure
 
 
 def cache_dir() -> Path:
@@ -51,7 +57,7 @@ def write_atomic(path: Path, text: str) -> None:
         tmp.write_text(text, encoding="utf-8")
 
 
-def write_png(path: Path, pixels: Any, compress_level: int = 6) -> None:
+def write_png(path: Path, pixels: np.ndarray, compress_level: int = 6) -> None:
     """Write an (H, W, 3) uint8 image as PNG through a temporary file and a rename (like :func:`write_atomic`)."""
     import numpy as np
     from PIL import Image
@@ -60,7 +66,7 @@ def write_png(path: Path, pixels: Any, compress_level: int = 6) -> None:
         Image.fromarray(np.ascontiguousarray(pixels, np.uint8)).save(tmp, format="PNG", compress_level=compress_level)
 
 
-def pyplot() -> Any:
+def pyplot() -> ModuleType:
     """matplotlib's pyplot on the headless Agg backend (imported on first use)."""
     import matplotlib
 
@@ -70,7 +76,7 @@ def pyplot() -> Any:
     return plt
 
 
-def save_figure(fig: Any, path: Path, dpi: int = 120) -> Path:
+def save_figure(fig: Figure, path: Path, dpi: int = 120) -> Path:
     """Save a matplotlib figure as PNG (no timestamp metadata, so reruns are byte-identical) through a temporary
     file and a rename, and close it."""
     path.parent.mkdir(parents=True, exist_ok=True)

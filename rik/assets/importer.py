@@ -20,7 +20,10 @@ from rik.errors import RikError
 from rik.registry.sources import display_path
 
 if TYPE_CHECKING:
+    import numpy as np
     import trimesh
+
+    from rik.schemas.imports import BaseUnitMapping
 
 SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
 """Mesh files rik reads (through trimesh)."""
@@ -194,8 +197,8 @@ def measure_geometry(mesh: trimesh.Trimesh, handle_type: str, shown: str, hole_s
         sides = [_first_hit(mesh, (0.0, 0.0, depth / 2), (s, 0.0, 0.0)) for s in (1.0, -1.0)]
         if None in sides:
             raise RikError(f"{shown}: no legs found on both sides of the loop: is --long the handle's long axis?")
-        # BUG (mypy, left to this file's owner): `top` is None when no surface lies below the probe, and then this
-        # raises TypeError instead of a RikError
+        # the ignores: `top` is never None here (to_mount_frame put the back face on z = 0, so the ray down from
+        # above the top crosses the grip that `depth` hit), and `sides` holds no None after the check above
         geometry |= {"grip_diameter": round(grip_diameter or (projection + 0.01 - top - depth), 5),  # type: ignore[operator]
                      "hole_spacing": hole_spacing,
                      "clearance": {"depth": round(depth, 5), "width": round(sum(sides), 5)}}  # type: ignore[arg-type]
@@ -315,7 +318,7 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
 
 
 # ---- base units from a GLB with named nodes ---------------------------------------------------------------------
-def read_mapping(path: Path) -> Any:
+def read_mapping(path: Path) -> BaseUnitMapping:
     """The mapping file of a base-unit import, validated; errors name the file, line and field."""
     from pydantic import ValidationError
 
@@ -377,7 +380,7 @@ def node_meshes(path: Path, nodes: dict[str, str], mapping_file: Path) -> dict[s
     return out
 
 
-def _frame_rotation(up: str, front: str, shown: str) -> Any:
+def _frame_rotation(up: str, front: str, shown: str) -> np.ndarray:
     import numpy as np
 
     u, f = np.array(AXES[up], float), np.array(AXES[front], float)
@@ -388,7 +391,7 @@ def _frame_rotation(up: str, front: str, shown: str) -> Any:
     return rotation
 
 
-def _hinge(side: str, lo: Any, hi: Any, back: float) -> tuple[list[float], list[float]]:
+def _hinge(side: str, lo: np.ndarray, hi: np.ndarray, back: float) -> tuple[list[float], list[float]]:
     """Axis and anchor of a hinge on ``side`` of a front spanning ``lo``..``hi`` whose back face is at ``back``;
     the axis is signed so that positive angles swing the front outward (+y)."""
     cx, cz = float(lo[0] + hi[0]) / 2, float(lo[2] + hi[2]) / 2

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -67,13 +67,13 @@ def _load(overlays: list[Path], parent: int | None = None) -> None:
     _CATALOG = load_catalog(overlays)
 
 
-def _call(fn: Callable[[Catalog, str], Any], item: str) -> tuple[str, Any]:
+def _call[T](fn: Callable[[Catalog, str], T], item: str) -> tuple[str, T]:
     assert _CATALOG is not None
     return item, fn(_CATALOG, item)
 
 
-def map_ids(fn: Callable[[Catalog, str], Any], catalog: Catalog, ids: Sequence[str], *, workers: int = 1,
-            overlays: Sequence[Path] = ()) -> Iterator[tuple[str, Any]]:
+def map_ids[T](fn: Callable[[Catalog, str], T], catalog: Catalog, ids: Sequence[str], *, workers: int = 1,
+               overlays: Sequence[Path] = ()) -> Iterator[tuple[str, T]]:
     """``(id, fn(catalog, id))`` for every id, as each finishes. With ``workers`` > 1 and more than one id the
     calls run in that many spawned processes (``fn`` must be picklable: a module-level function, or a
     ``functools.partial`` of one), which load the catalog from ``overlays`` themselves; otherwise here, in order."""
