@@ -56,7 +56,7 @@ def content_key(identity: dict[str, Any]) -> str:
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
-def json_sha256(data: Any) -> str:
+def json_sha256(data: object) -> str:
     """sha256 of the canonical JSON of ``data`` (sorted keys, no spaces): what a stored JSON file is checked by."""
     return hashlib.sha256(json.dumps(data, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
 

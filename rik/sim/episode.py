@@ -229,7 +229,7 @@ def read_episode(directory: Path) -> tuple[EpisodeMeta, pa.Table]:
     return meta, table
 
 
-def _check_vectors(file: Path, table: Any, name: str, width: int | None) -> None:
+def _check_vectors(file: Path, table: pa.Table, name: str, width: int | None) -> None:
     """Column ``name`` must hold finite-width float vectors, all ``width`` long (``None``: all the same length)."""
     import pyarrow as pa
     import pyarrow.compute as pc
