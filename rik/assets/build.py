@@ -98,7 +98,7 @@ def asset_kind(catalog: Catalog, asset_id: str) -> str:
     raise UnknownIdError("handle or base unit", asset_id, [*catalog.handles, *catalog.base_units])
 
 
-def asset_identity(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) -> dict[str, Any]:
+def asset_identity(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) -> dict[str, object]:
     """Everything that decides an asset's files: the catalog entry, generator code, CoACD parameters, seed and
     library versions. Its :func:`content_key` addresses the cache."""
     kind = asset_kind(catalog, asset_id)
@@ -181,7 +181,7 @@ def _box_hull(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ---- (de)serialisation -------------------------------------------------------------------------------------------
-def _arrays(parts: Sequence[RigidPart]) -> dict[str, Any]:
+def _arrays(parts: Sequence[RigidPart]) -> dict[str, object]:
     import numpy as np
 
     out: dict[str, Any] = {}

@@ -180,7 +180,7 @@ def _first_hit(mesh: trimesh.Trimesh, origin: tuple[float, float, float], direct
 
 
 def measure_geometry(mesh: trimesh.Trimesh, handle_type: str, shown: str, hole_spacing: float | None,
-                     clearance: tuple[float, float] | None, grip_diameter: float | None) -> dict[str, Any]:
+                     clearance: tuple[float, float] | None, grip_diameter: float | None) -> dict[str, object]:
     """The handle's catalog geometry measured on the mesh (mount frame). For two-point handles the loop's
     clearance is found by casting rays from the mount centre: up to the grip (depth), then sideways to the legs
     (width)."""

@@ -96,7 +96,7 @@ def _code_digest() -> str:
     return source_digest(sorted(COMBINATOR_DIR.glob("*.py")))
 
 
-def spec_identity(catalog: Catalog, key: VariantKey) -> dict[str, Any]:
+def spec_identity(catalog: Catalog, key: VariantKey) -> dict[str, object]:
     """Everything that decides a variant's files: the catalog entries, the asset keys, the combinator's code
     and the library versions."""
     from rik.assets.build import asset_key

@@ -59,7 +59,7 @@ class CheckResult:
     reason: str
     details: dict[str, Any] = field(default_factory=dict)
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> dict[str, object]:
         return {"name": self.name, "passed": self.passed, "reason": self.reason, "details": self.details}
 
 

@@ -44,7 +44,7 @@ class CatalogIndex:
     def entries(self, section: str) -> list[dict[str, Any]]:
         return self.sections[section]
 
-    def get(self, section: str, entry_id: str) -> dict[str, Any]:
+    def get(self, section: str, entry_id: str) -> dict[str, object]:
         """One entry by id; :class:`UnknownIdError` with suggestions when absent."""
         for entry in self.sections[section]:
             if entry["id"] == entry_id:

@@ -98,7 +98,7 @@ def table(section: str, rows: list[Row]) -> tuple[list[str], list[list[str]]]:
     return [h for h, _ in columns], [[cell(r) for _, cell in columns] for r in rows]
 
 
-def flatten(row: Row, prefix: str = "") -> dict[str, Any]:
+def flatten(row: Row, prefix: str = "") -> dict[str, object]:
     """Nested dicts as dotted keys (``geometry.length``); lists of scalars joined by spaces; others as JSON."""
     import json
 

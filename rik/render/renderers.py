@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -30,7 +30,7 @@ class FrameRenderer(Protocol):
         """Every camera's (H, W, 3) uint8 image of the state in ``data``; ``index`` seeds the sampler."""
         ...
 
-    def info(self) -> dict[str, Any]:
+    def info(self) -> dict[str, object]:
         """What rendered the frames (library versions, variant, seconds spent)."""
         ...
 
@@ -78,7 +78,7 @@ class MujocoFrames:
         self.seconds += time.perf_counter() - start
         return out
 
-    def info(self) -> dict[str, Any]:
+    def info(self) -> dict[str, object]:
         import mujoco
 
         return {"renderer": "mujoco", "versions": {"mujoco": mujoco.__version__}, "render_seconds": self.seconds}
@@ -152,7 +152,7 @@ class MitsubaFrames:
 
         return {cam: linear_to_srgb8(img) for cam, img in self.render_linear(data, index).items()}
 
-    def info(self) -> dict[str, Any]:
+    def info(self) -> dict[str, object]:
         import mitsuba
 
         versions = {"mitsuba": mitsuba.__version__}

@@ -97,7 +97,7 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
     return tasks
 
 
-def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) -> dict[str, Any]:
+def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) -> dict[str, object]:
     """Run one benchmark episode (not written to disk); returns its row for the results table."""
     from rik.sim.episode import run_operator
     from rik.sim.gripper import HAND_E

@@ -131,7 +131,7 @@ class OpenFrontEnv(gym.Env):
     def _obs(self) -> dict[str, np.ndarray]:
         return observe(self.scene, self._get_renderer() if self._images else None)
 
-    def _info(self) -> dict[str, Any]:
+    def _info(self) -> dict[str, object]:
         return {"variant": self.scene.info["id"], "front": self.scene.front.id, "opening": self.scene.opening(),
                 "max_opening": self._max_opening, "outcome": classify(self.scene.opening())}
 

@@ -26,7 +26,7 @@ def preset_file(catalog_dir: Path, name: str) -> Path:
 
 
 def _entry(resistance: JointResistance, joint_type: JointType, name: str, base_preset: ResistancePreset,
-           description: str) -> dict[str, Any]:
+           description: str) -> dict[str, object]:
     from rik.schemas.common import Provenance
     from rik.schemas.joints import JointType as JT
 

@@ -62,7 +62,7 @@ def _effect_dict(effect: Effect | None) -> dict[str, Any] | None:
     return {"kind": "spring", **data} if isinstance(effect, Spring) else data
 
 
-def summary(d: Discovery) -> dict[str, Any]:
+def summary(d: Discovery) -> dict[str, object]:
     """The JSON summary of a discovery (SI units; see :data:`FORMAT`)."""
     sel = d.selection
     base = sel.baseline.baseline
@@ -97,7 +97,7 @@ def summary(d: Discovery) -> dict[str, Any]:
     }
 
 
-def _candidate(s: Score) -> dict[str, Any]:
+def _candidate(s: Score) -> dict[str, object]:
     return {"kind": s.fit.kind, "kinds": list(s.fit.kinds), "title": " + ".join(f.title for f, _ in s.fit.terms),
             "hyper": s.fit.hyper, "effects": [_effect_dict(e) for e in s.fit.effects], "gain": s.gain,
             "bic_drop": s.bic_drop,
