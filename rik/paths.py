@@ -45,6 +45,17 @@ def atomic_path(path: Path) -> Iterator[Path]:
         raise
 
 
+def json_sha256(data: Any, exclude: tuple[str, ...] = ()) -> str:
+    """sha256 of the canonical JSON of ``data`` (sorted keys, no spaces), leaving out the top-level keys
+    ``exclude`` (the checksum field of a file that seals itself, such as ``meta_sha256``)."""
+    import hashlib
+    import json
+
+    if exclude:
+        data = {k: v for k, v in data.items() if k not in exclude}
+    return hashlib.sha256(json.dumps(data, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
 def write_atomic(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file and a rename (:func:`atomic_path`): never half-written."""
     with atomic_path(path) as tmp:
