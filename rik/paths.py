@@ -6,7 +6,7 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from types import ModuleType
@@ -49,6 +49,17 @@ def atomic_path(path: Path) -> Iterator[Path]:
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+
+
+def json_sha256(data: Any, exclude: tuple[str, ...] = ()) -> str:
+    """sha256 of the canonical JSON of ``data`` (sorted keys, no spaces), leaving out the top-level keys
+    ``exclude`` (the checksum field of a file that seals itself, such as ``meta_sha256``)."""
+    import hashlib
+    import json
+
+    if exclude:
+        data = {k: v for k, v in data.items() if k not in exclude}
+    return hashlib.sha256(json.dumps(data, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
 
 
 def write_atomic(path: Path, text: str) -> None:

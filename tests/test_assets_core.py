@@ -91,11 +91,6 @@ def test_an_edited_entry_meta_is_rebuilt(catalog, tmp_path):
     assert build_assets(catalog, ["door/base-40-right"], cache=cache)[0].status == "cached"
 
 
-def _json_after_progress(out: str):
-    """The JSON document of ``out`` (the progress bar also writes to stdout)."""
-    return json.loads(out[out.index("{"):])
-
-
 def test_an_edited_fidelity_result_is_measured_again(rik, catalog, tmp_path):
     from rik.assets.build import asset_key
 
@@ -103,14 +98,14 @@ def test_an_edited_fidelity_result_is_measured_again(rik, catalog, tmp_path):
             "--out", str(tmp_path / "fidelity"), "-f", "json")
     first = rik(*args)
     assert first.code == 0, first.err
-    true = _json_after_progress(first.out)["handles"][0]["eqp_mean_mm"]
+    true = json.loads(first.out)["handles"][0]["eqp_mean_mm"]
     stored = AssetCache().path(asset_key(catalog, "knob/mushroom-30")) / "fidelity-1000-0.json"
     written = stored.read_bytes()
     data = json.loads(written)
     fid = data.get("data", data)  # the figures, wherever the file keeps them
     fid["q_to_p"]["mean"] = 12.3  # mm: a figure changed, still valid JSON
     stored.write_text(json.dumps(data, indent=1, sort_keys=True))
-    shown = _json_after_progress(rik(*args).out)["handles"][0]["eqp_mean_mm"]
+    shown = json.loads(rik(*args).out)["handles"][0]["eqp_mean_mm"]  # stdout is the JSON alone: the bar is on stderr
     assert shown == true != 12.3
     assert stored.read_bytes() == written  # measured again and rewritten
 

@@ -165,3 +165,10 @@ def test_a_command_runs_with_the_same_help_as_in_the_full_app(rik) -> None:
             mp.setenv("COLUMNS", "100")
             fast = rik(*args)
         assert (fast.code, fast.out + fast.err) == (full.exit_code, full.output), args
+
+
+def test_version_prints_without_a_command(rik) -> None:
+    from rik import __version__
+
+    result = rik("--version")
+    assert (result.code, result.out, result.err) == (0, f"rik {__version__}\n", "")

@@ -22,7 +22,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
-from rik.paths import cache_dir, write_atomic
+from rik.paths import cache_dir, json_sha256, write_atomic
 
 ASSET_FORMAT = 2
 """Bumped when the layout of an entry changes (2: ``meta.json`` records its own sha256)."""
@@ -56,13 +56,8 @@ def content_key(identity: dict[str, Any]) -> str:
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
-def json_sha256(data: object) -> str:
-    """sha256 of the canonical JSON of ``data`` (sorted keys, no spaces): what a stored JSON file is checked by."""
-    return hashlib.sha256(json.dumps(data, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
-
-
 def _meta_sha256(meta: dict[str, Any]) -> str:
-    return json_sha256({k: v for k, v in meta.items() if k != "meta_sha256"})
+    return json_sha256(meta, exclude=("meta_sha256",))
 
 
 def file_sha256(path: Path) -> str:

@@ -11,12 +11,18 @@ from rik.cli.common import CatalogOption, overlays
 from rik.errors import RikError
 
 
-def _root(version: bool = typer.Option(False, "--version", help="Print rik's version and exit.")) -> None:
-    if version:
+def _print_version(value: bool) -> None:
+    """``--version``: print and exit while the options are parsed (eagerly), before a command is required."""
+    if value:
         from rik import __version__
 
         print(f"rik {__version__}")
         raise typer.Exit()
+
+
+def _root(version: bool = typer.Option(False, "--version", help="Print rik's version and exit.", is_eager=True,
+                                       callback=_print_version)) -> None:
+    """rik (Real-IKEA kit): articulated furniture for contact-rich robot manipulation."""
 
 
 def _new_app() -> typer.Typer:

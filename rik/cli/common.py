@@ -66,8 +66,11 @@ def console() -> Console:
 
 
 def progress_bar() -> Progress:
-    """A rich progress bar for batch work: description, bar, done/total, elapsed time and the last item."""
+    """A rich progress bar for batch work: description, bar, done/total, elapsed time and the last item. It draws on
+    stderr, so that what a command prints on stdout (a table, JSON, CSV) stays whole for scripts."""
+    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                    TextColumn("{task.fields[last]}"), console=console(), transient=False)
+                    TextColumn("{task.fields[last]}"), console=Console(stderr=True, highlight=False, emoji=False),
+                    transient=False)

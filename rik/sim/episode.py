@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import inside, write_atomic
+from rik.paths import inside, json_sha256, write_atomic
 from rik.sim.outcome import classify
 from rik.sim.scene import SimScene
 
@@ -158,8 +158,7 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
 
 def meta_digest(data: dict[str, Any]) -> str:
     """sha256 of a meta.json's fields other than ``meta_sha256`` (canonical JSON: sorted keys, no spaces)."""
-    fields = {k: v for k, v in data.items() if k != "meta_sha256"}
-    return hashlib.sha256(json.dumps(fields, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    return json_sha256(data, exclude=("meta_sha256",))
 
 
 def write_meta(directory: Path, data: dict[str, Any]) -> EpisodeMeta:
