@@ -42,6 +42,10 @@ STREAMS = tuple(STREAM_SUFFIX)
 """The image streams an export can hold: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
 CODECS = ("libsvtav1", "h264", "hevc")
 """Video codecs offered: the software encoders of lerobot's PyAV build (never ``auto``: it picks NVENC)."""
+ENCODER_OPTIONS: dict[str, dict[str, str]] = {"h264": {"x264-params": "mbtree=0"}}
+"""Extra encoder options per codec, so that identical inputs give identical bytes: x264's macroblock-tree rate
+control (on by default) reads memory it never wrote, so the same frames encode to different bytes (and different
+pixels) from one process to the next; without it x264 is repeatable. libsvtav1 and hevc were repeatable as they are."""
 DONE = "DONE"
 PLAN = "plan.json"
 
@@ -151,7 +155,9 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     ds = LeRobotDataset.create(repo_id=repo_id, fps=fps, features=features(cameras, spec.streams, spec.width,
                                                                              spec.height),
                                root=root / "ds", robot_type=ROBOT_TYPE, use_videos=True, video_backend="pyav",
-                               rgb_encoder=RGBEncoderConfig(vcodec=spec.codec), image_writer_threads=4)
+                               rgb_encoder=RGBEncoderConfig(vcodec=spec.codec,
+                                                             extra_options=dict(ENCODER_OPTIONS.get(spec.codec, {}))),
+                               image_writer_threads=4)
     extra: dict[str, Any] = {}
     save_meta = ds.meta.save_episode
 
