@@ -67,10 +67,20 @@ def console() -> Console:
 
 def progress_bar() -> Progress:
     """A rich progress bar for batch work: description, bar, done/total, elapsed time and the last item. It draws on
-    stderr, so that what a command prints on stdout (a table, JSON, CSV) stays whole for scripts."""
+    stderr, so that what a command prints on stdout (a table, JSON, CSV) stays whole for scripts; and it is wiped
+    when the work stops with an error, so that the error is the one line left on stderr."""
+    from types import TracebackType
+
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                    TextColumn("{task.fields[last]}"), console=Console(stderr=True, highlight=False, emoji=False),
-                    transient=False)
+    class WipedOnError(Progress):
+        def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                     tb: TracebackType | None) -> None:
+            if exc_type is not None:
+                self.live.transient = True
+            super().__exit__(exc_type, exc, tb)
+
+    return WipedOnError(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                        TextColumn("{task.fields[last]}"), console=Console(stderr=True, highlight=False, emoji=False),
+                        transient=False)

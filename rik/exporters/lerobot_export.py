@@ -125,7 +125,8 @@ def _check_same_features(dirs: list[Path]) -> None:
 
 
 def _plan(metas: dict[Path, EpisodeMeta], spec: ExportSpec, fps: int) -> dict[str, Any]:
-    return {"spec": {**asdict(spec), "fps": fps}, "episodes": [[m.id, m.states_sha256] for m in metas.values()]}
+    return {"spec": {**asdict(spec), "fps": fps}, "encoder_options": ENCODER_OPTIONS.get(spec.codec, {}),
+            "episodes": [[m.id, m.states_sha256] for m in metas.values()]}  # an older partial export is not mixed in
 
 
 def _shards(items: list[Path], size: int) -> list[list[Path]]:
