@@ -236,3 +236,30 @@ def test_cli_messages(rik, episode: Path, tmp_path: Path) -> None:
 def test_unknown_front_is_named(variants: Path) -> None:
     with pytest.raises(RikError, match="has no front 'drawer-9' \\(fronts: drawer-1"):
         build_scene(variants / BOW_HIGH, "drawer-9")
+
+
+def test_a_new_scene_starts_in_front_of_the_handle(variants: Path) -> None:
+    """The start pose is computed from positions MuJoCo has computed: before the fix the handle read (0, 0, 0) and
+    the gripper started near the floor, 65 cm below it (what teleoperation starts from)."""
+    scene = build_scene(variants / BOW_HIGH, None)
+    grasp, tcp = scene.grasp_point(), scene.tcp()
+    assert grasp[2] > 0.3  # the handle is on the chest, not at the origin
+    assert np.allclose(tcp, grasp + [0.0, 0.25, 0.0], atol=1e-3)
+
+
+@pytest.mark.parametrize("seed", [0, 7])
+def test_env_reset_reproduces_the_first_state_of_rik_record(variants: Path, tmp_path: Path, seed: int) -> None:
+    """gym's reset(seed=S) starts exactly where ``rik record --seed S`` started, so learned and scripted runs can
+    be compared pair by pair (also after other episodes have run in the same environment)."""
+    import gymnasium as gym
+
+    import rik.sim.env  # noqa: F401  (registers rik/OpenFront-v0)
+
+    meta = record(CAT, KNOB, "grasp_vertical", seed=seed, out=tmp_path, variants=variants, max_seconds=0.2)[0]
+    first = read_episode(tmp_path / meta.id)[1].column("state")[0].as_py()
+    env = gym.make("rik/OpenFront-v0", variant=KNOB, variants_dir=str(variants)).unwrapped
+    for _ in range(2):  # a second reset, after steps, gives the same start again
+        env.reset(seed=seed)
+        assert np.array_equal(env.scene.state(), np.asarray(first))
+        env.step(np.array([0, -1, 0, 0, 0, 0, 1], np.float32))
+    env.close()

@@ -108,8 +108,6 @@ class OpenFrontEnv(gym.Env):
         return self._renderer
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
-        import mujoco
-
         from rik.combinator.ids import VariantKey, parse_variant_id
         from rik.sim.record import randomise_start
 
@@ -120,7 +118,7 @@ class OpenFrontEnv(gym.Env):
             key = parse_variant_id(self._catalog, variant)
             variant = VariantKey(key.base, key.handle, options["preset"]).id
         self.scene = self._scene(variant, options.get("front", self._front))
-        mujoco.mj_resetData(self.scene.model, self.scene.data)
+        self.scene.reset()  # positions computed before the start pose is read: as rik record starts
         randomise_start(self.scene, self.np_random)
         self._target = self.scene.pose()
         self._opening = self.scene.opening()

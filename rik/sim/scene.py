@@ -156,6 +156,16 @@ class SimScene:
         return {"contacts": float(count), "normal_force": normal, "tangential_force": tangential}
 
     # ---- control ----------------------------------------------------------------------------------------------
+    def reset(self) -> None:
+        """Back to the state of a freshly built scene: MuJoCo's initial state, every position computed from it
+        (before that, the handle's site reads (0, 0, 0)), then the gripper at rest at :func:`start_pose`, in
+        front of the operated handle."""
+        import mujoco
+
+        mujoco.mj_resetData(self.model, self.data)
+        mujoco.mj_forward(self.model, self.data)
+        self.set_pose(start_pose(self))
+
     def set_pose(self, pose: np.ndarray, grip: float = 0.0) -> None:
         """Put the gripper at ``pose`` at rest (fingers at the grip command's opening) and run kinematics."""
         import mujoco
@@ -311,7 +321,7 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     scene = SimScene(model, data, info, front_info, gripper, Path(variant_dir), control_fps, base_qpos, finger_qpos,
                      gripper_geoms, front_bodies, name2id(mujoco.mjtObj.mjOBJ_SITE, GRIPPER_PREFIX + "tcp"),
                      arm_ctrl, jaw_ctrl, front_effects(model, info["fronts"]))
-    scene.set_pose(start_pose(scene))
+    scene.reset()
     return scene
 
 
