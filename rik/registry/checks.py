@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
+from rik.combinator.ids import SEPARATOR
 from rik.errors import UnknownIdError
 from rik.registry.geometry import cross, dot, site_axes, sub
 from rik.registry.sources import RawEntry, display_path
@@ -45,7 +46,7 @@ def check_variant_id_parts(parsed: Parsed, section: str, noun: str) -> None:
     """Ids that go into variant ids must keep them unambiguous: no ``__`` (the separator), no ``/`` in a preset
     id, and no two ids of a section written the same once ``/`` becomes ``-`` (``drawer-chest-80`` and
     ``drawer/chest-80`` would share every variant folder)."""
-    from rik.combinator.ids import SEPARATOR, slug
+    from rik.combinator.ids import slug
 
     first: dict[str, RawEntry] = {}
     for entry, model in parsed:
@@ -129,9 +130,9 @@ def check_base_unit(entry: RawEntry, base: BaseUnit, finishes: Mapping[str, obje
     seen: set[str] = set()
     for i, front in enumerate(base.fronts):
         where = f"fronts.{i}"
-        if "/" in front.id or "__" in front.id:
-            raise entry.error(f"{where}.id", f"front id '{front.id}' must be one word without '/' or '__': it is part "
-                                             "of episode ids and folder names")
+        if "/" in front.id or SEPARATOR in front.id:
+            raise entry.error(f"{where}.id", f"front id '{front.id}' must be one word without '/' or '{SEPARATOR}': it "
+                                             "is part of episode ids and folder names")
         if front.id in seen:
             raise entry.error(f"{where}.id", f"duplicate front id '{front.id}' in this base unit")
         seen.add(front.id)

@@ -26,7 +26,8 @@ Unit = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
 #: A catalog id: lower-case words joined by '-', '_', '.', grouped by '/' (for example ``two_point/bow-128``).
 CatalogId = Annotated[str, Field(pattern=r"^[a-z0-9][a-z0-9_.\-]*(/[a-z0-9][a-z0-9_.\-]*)*$", max_length=120)]
 SIMPLE_ID = r"^[a-z0-9][a-z0-9_.\-]*$"
-"""A catalog id without '/' and without '__' (a preset or a front): one component of variant and episode ids."""
+"""A catalog id without '/' (a preset or a front): one component of variant and episode ids. The catalog's checks
+also refuse '__' in them (:mod:`rik.registry.checks`)."""
 PATH_COMPONENT = r"^[A-Za-z0-9][A-Za-z0-9_.\-]*$"
 """One component of a path that rik builds from data it reads (an episode or variant id): letters, digits, '_', '.'
 and '-', not starting with '.', so it can never climb out of its folder ('..'), be absolute, hidden or empty."""

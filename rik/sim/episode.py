@@ -126,7 +126,7 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
 
     s = recorder.scene
     table = recorder.table()
-    inside(out, episode, what="episode id")  # before any work: an id that would lead outside ``out`` is refused
+    final = inside(out, episode, what="episode id")  # before any work: an id leading outside ``out`` is refused
     out.mkdir(parents=True, exist_ok=True)
     staging = out / f"{STAGING_PREFIX}{episode}-{os.getpid()}"
     shutil.rmtree(staging, ignore_errors=True)
@@ -146,7 +146,6 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
                                 arm_force=g.arm_force),
             versions=_versions(), log=tuple(log), states_sha256=digest)
         meta = write_meta(staging, meta.model_dump(mode="json"))
-        final = inside(out, episode, what="episode id")
         if final.exists():
             shutil.rmtree(final)
         os.replace(staging, final)
