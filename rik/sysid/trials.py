@@ -1,7 +1,7 @@
 """Measured trials in: CSV or Parquet files, or a LeRobot dataset, read into SI numpy arrays and checked.
 
-Files (:func:`load_trials`)
----------------------------
+Files (:func:`load_trials`; LeRobot datasets: :func:`load_lerobot_trials`)
+--------------------------------------------------------------------------
 ``.csv`` (comma-separated, UTF-8, first line the header) or ``.parquet``/``.pq``. One row per sample; a file may
 hold several trials told apart by a ``trial`` column (its rows need not be contiguous; trials keep the order of
 their first row), and several files may be read at once. A column header is a name, then the unit in square
@@ -21,6 +21,13 @@ trial      ``trial``                none (optional; any values)             none
 Position is the joint coordinate (0 closed, positive opening, as in :class:`rik.schemas.joints.JointSpec`); force
 is the applied force (slide) or torque (hinge) along it. Other columns are ignored. A trial without a ``trial``
 column is named after its file's stem.
+
+Other headers (a logger's ``timestamp_ms``, ``enc_pos``, ``ft_fx``; plain ``t,q,f``) are read through a
+:class:`ColumnMap` (the ``rik sysid fit`` options ``--time``, ``--position``, ``--force``, ``--velocity``,
+``--trial`` and ``--time-unit``, ``--position-unit``, ``--force-unit``, ``--velocity-unit``): it names the column
+of a quantity (its header then may say anything) and declares the unit of a column whose header has none, from
+the table above. A unit is needed for every column read; a header's own valid unit must agree with a declared one.
+A named column not in a file is refused with the file's columns listed (and the closest, if one is close).
 
 Messages name rows as the 0-based index among the file's data rows (what pandas or pyarrow show); CSV rows add
 their line number in the file (the header is line 1).
