@@ -39,22 +39,43 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
         delay: Annotated[float | None, typer.Option("--delay", help="Force-to-position delay, s (default: "
                                                     "estimated).")] = None,
         position: Annotated[str | None, typer.Option(help="LeRobot: the position feature, e.g. "
-                                                     "'observation.state[2]'.")] = None,
-        position_unit: Annotated[str, typer.Option(help="LeRobot: its unit.")] = "m",
-        force: Annotated[str | None, typer.Option(help="LeRobot: the force or torque feature.")] = None,
-        force_unit: Annotated[str, typer.Option(help="LeRobot: its unit.")] = "N") -> None:
+                                                     "'observation.state[2]'; a profile: the position column.")]
+        = None,
+        position_unit: Annotated[str | None, typer.Option(help="Its unit (LeRobot default m; a profile: from "
+                                                          "the header unless given; 'bin' = 1° angle bins).")]
+        = None,
+        force: Annotated[str | None, typer.Option(help="LeRobot: the force or torque feature; a profile: the "
+                                                  "force column.")] = None,
+        force_unit: Annotated[str | None, typer.Option(help="Its unit (LeRobot default N; a profile: from the "
+                                                       "header unless given; N on a hinge: at the handle).")]
+        = None,
+        quasi_static: Annotated[bool, typer.Option("--quasi-static", help="The data is a force-against-position "
+                                                   "profile with no time axis (default when it has no time "
+                                                   "column).")] = False,
+        trial: Annotated[str | None, typer.Option(help="Profile: the column naming each opening (default "
+                                                  "'trial').")] = None,
+        group: Annotated[str | None, typer.Option(help="Profile: the column naming each mechanism; one report "
+                                                  "per group.")] = None,
+        drop_nan: Annotated[bool, typer.Option("--drop-nan", help="Profile: leave out rows with an empty or NaN "
+                                               "cell (counted) instead of stopping.")] = False) -> None:
     """Fit the baseline joint model, find the unmodelled effect, extend the model and measure the gain; write a
     report (report.md with plots, summary.json) that names the cause."""
     from rik.sysid.discover import discover
+    from rik.sysid.profile import has_time_column
     from rik.sysid.report import write_report
     from rik.sysid.trials import load_lerobot_trials, load_trials
 
     con = console()
-    if len(data) == 1 and data[0].is_dir():
+    folder = len(data) == 1 and data[0].is_dir()
+    if quasi_static or (not folder and not has_time_column(data)):
+        fit_profiles(data, joint, report, heldout, position=position, position_unit=position_unit, force=force,
+                     force_unit=force_unit, trial=trial, group=group, drop_nan=drop_nan)
+        return
+    if folder:
         if position is None or force is None:
             raise RikError(f"{data[0]}: a LeRobot dataset needs --position and --force naming its features")
-        trials = load_lerobot_trials(data[0], joint.value, position=position, position_unit=position_unit,
-                                     force=force, force_unit=force_unit)
+        trials = load_lerobot_trials(data[0], joint.value, position=position, position_unit=position_unit or "m",
+                                     force=force, force_unit=force_unit or "N")
     else:
         trials = load_trials(data, joint.value)
     with con.status(f"fitting {len(trials)} trials"):
@@ -63,6 +84,34 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
     con.print(found.sentence())
     for text in found.selection.separation:
         con.print(f"  cannot tell apart from this data: {text}")
+    con.print(f"report: {out / 'report.md'}  (summary: {out / 'summary.json'})")
+
+
+def fit_profiles(data: list[Path], joint: JointOpt, report: Path, heldout: list[int] | None, *,
+                 position: str | None, position_unit: str | None, force: str | None, force_unit: str | None,
+                 trial: str | None, group: str | None, drop_nan: bool) -> None:
+    """``rik sysid fit --quasi-static``: fit force-against-position profiles (rik.sysid.profile_fit) and write one
+    report per group."""
+    from rik.sysid.profile import read_profiles
+    from rik.sysid.profile_fit import NOT_IDENTIFIED, fit_profile
+    from rik.sysid.profile_report import verdict, write_profile_report
+
+    con = console()
+    profiles = read_profiles(data, joint.value, position=position, position_unit=position_unit, force=force,
+                             force_unit=force_unit, trial=trial, group=group, drop_nan=drop_nan)
+    if profiles.dropped:
+        con.print(f"left out {profiles.dropped} rows with an empty or NaN cell (first: "
+                  f"{profiles.dropped_rows[0]})")
+    if profiles.bins:
+        con.print("positions are angle bins, read as 1 bin = 1°")
+    with con.status(f"fitting {len(profiles.groups)} quasi-static profile group(s)"):
+        fits = [fit_profile(g, profiles.joint, profiles.force_unit, heldout) for g in profiles.groups]
+        out = write_profile_report(profiles, fits, report)
+    for f in fits:
+        con.print(verdict(f))
+    if profiles.handle_force:
+        con.print("forces are at the handle, in N (no lever arm given)")
+    con.print("not identifiable from a quasi-static profile: " + "; ".join(t.split(":")[0] for t in NOT_IDENTIFIED))
     con.print(f"report: {out / 'report.md'}  (summary: {out / 'summary.json'})")
 
 
