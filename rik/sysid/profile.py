@@ -159,8 +159,19 @@ def _force_table(joint: JointType) -> dict[str, float]:
 def has_time_column(paths: Sequence[str | Path], time: str | None = None) -> bool:
     """Whether the first of ``paths`` (CSV or Parquet) has a time column (``time`` named, or one named ``time``
     or ``t``): data without one can only be a quasi-static profile."""
-    raw = _read(Path(paths[0]))
-    return find_column(raw, time, "time", COLUMN_NAMES["time"], required=False) is not None
+    path = Path(paths[0])
+    if path.suffix.lower() == ".csv" and path.is_file():
+        import csv
+
+        with path.open(encoding="utf-8-sig", newline="") as handle:
+            header = next((row for row in csv.reader(handle) if any(c.strip() for c in row)), [])
+        headers = [c.strip() for c in header]
+    else:
+        headers = _read(path).headers
+    names = [h.strip().lower() for h in headers] + [_parse_header(h)[0] for h in headers]
+    if time is not None:
+        return time in headers or time.strip().lower() in names
+    return any(n in COLUMN_NAMES["time"] for n in names)
 
 
 def _bad_rows(values: np.ndarray, empty: np.ndarray) -> np.ndarray:
