@@ -119,7 +119,8 @@ def summary(fit: ProfileFit, data: ProfileData) -> dict[str, object]:
     }
 
 
-def plot_profile(fit: ProfileFit, path: Path, ax: Any = None, title: str | None = None) -> Path | None:
+def plot_profile(fit: ProfileFit, path: Path, ax: Any = None, title: str | None = None,
+                 legend: bool = True) -> Path | None:
     """Force against position: openings thin (held-out dashed), median thick, the selected model over it. Draws
     into ``ax`` when given (returns None), else saves a figure at ``path``."""
     plt = pyplot()
@@ -147,7 +148,8 @@ def plot_profile(fit: ProfileFit, path: Path, ax: Any = None, title: str | None 
     ax.set_xlabel(f"position, {unit}" if fit.joint is JointType.slide else f"angle, {unit}", fontsize=7)
     ax.set_ylabel(force_label(fit), fontsize=7)
     ax.tick_params(labelsize=6)
-    ax.legend(fontsize=6, frameon=False)
+    if legend:
+        ax.legend(fontsize=6, frameon=False)
     if fig is not None:
         fig.tight_layout()
         return save_figure(fig, path)
