@@ -147,6 +147,7 @@ def test_cli_detects_a_profile_without_a_time_column_and_groups(rik, tmp_path: P
     res = rik("sysid", "fit", str(path), "--joint", "hinge", "--position", "angle bin", "--position-unit", "bin",
               "--force", "force [N]", "--group", "mechanism", "--report", str(report))
     assert res.code == 0, res.err
+    assert "no time column: reading the data as a quasi-static force profile" in res.out
     assert "cabinet one: no position-dependent effect; friction level (or constant force) 2.48 N" in res.out
     assert (report / "report.md").is_file()
 

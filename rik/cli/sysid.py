@@ -68,6 +68,8 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
     con = console()
     folder = len(data) == 1 and data[0].is_dir()
     if quasi_static or (not folder and not has_time_column(data)):
+        if not quasi_static:
+            con.print("no time column: reading the data as a quasi-static force profile (force against position)")
         fit_profiles(data, joint, report, heldout, position=position, position_unit=position_unit, force=force,
                      force_unit=force_unit, trial=trial, group=group, drop_nan=drop_nan)
         return
