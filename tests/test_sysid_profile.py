@@ -176,3 +176,38 @@ def test_cli_bad_profile_is_one_line_error(rik, tmp_path: Path) -> None:
     assert res.code == 2
     assert res.err.strip() == (f"rik: error: {path}: no force column (looked for 'force' or 'torque' or 'f'); name "
                                "it with --force COLUMN; the columns are: 'trial', 'angle bin', 'pull [N]'")
+
+
+def test_parquet_with_a_loggers_column_names(rik, tmp_path: Path) -> None:
+    """Any column names, mapped on the command line; a slide in mm; one opening held out by --heldout."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    rng = np.random.default_rng(3)
+    q = np.linspace(0.0, 300.0, 60)
+    runs, pos, force = [], [], []
+    for k in range(4):
+        runs += [f"run{k}"] * q.size
+        pos += list(q)
+        force += list(4.0 + 0.2 * np.maximum(40.0 - q, 0.0) + rng.normal(0.0, 0.2, q.size))
+    path = tmp_path / "drawer.parquet"
+    pq.write_table(pa.table({"run": runs, "enc_pos": pos, "ft_fx": force}), path)
+    res = rik("sysid", "fit", str(path), "--position", "enc_pos", "--position-unit", "mm", "--force", "ft_fx",
+              "--force-unit", "N", "--trial", "run", "--heldout", "0", "--report", str(tmp_path / "r"))
+    assert res.code == 0, res.err
+    assert "drawer: self-closing spring: a pull of 7.96 N at closed, falling linearly to 0 at 40.5 mm" in res.out
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["trials"]["heldout"] == ["run0"] and summary["units"] == {"position": "m", "force": "N"}
+    res = rik("sysid", "fit", str(path), "--position", "enc_pos", "--position-unit", "mm", "--force", "ft_fx",
+              "--force-unit", "N", "--trial", "run", "--heldout", "9", "--report", str(tmp_path / "r"))
+    assert res.code == 2
+    assert res.err.strip() == ("rik: error: drawer: held-out trials must be some but not all of its 4 openings (0 to "
+                               "3), got [9]")
+
+
+def test_too_few_points_to_hold_out(tmp_path: Path) -> None:
+    path = write_profiles(tmp_path / "door.csv", friction_openings(n=1))
+    with pytest.raises(RikError) as exc:
+        _fit(path)
+    assert str(exc.value) == ("door: only 9 points in the held-out openings (0), at least 16 needed: measure more "
+                              "openings or more points per opening")

@@ -37,7 +37,7 @@ import numpy as np
 from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.sysid.effects import FAMILY, Baseline, Effect, Family, Motion
-from rik.sysid.fit import MIN_ROWS, Fit, Term
+from rik.sysid.fit import Fit, Term
 from rik.sysid.profile import ProfileGroup
 from rik.sysid.select import Selection, pair_allowed, select, select_pair
 
@@ -46,6 +46,9 @@ OPENING = 1.0
 the position families)."""
 SINGLE_TRIAL_EVERY = 4
 """With a single opening, every this-many-th point is held out."""
+MIN_FIT_POINTS = 16
+"""Fewest points the training openings, and the held-out ones, may have (a profile has far fewer points than a
+time series: about 36 per door opening in the shared profiles)."""
 QUASI_STATIC_COLUMNS: dict[JointType, dict[str, tuple[int, ...]]] = {
     JointType.slide: {"magnetic_catch": (0,), "self_close": (0,), "spring": (0,)},
     JointType.hinge: {"magnetic_catch": (0,), "self_close": (0,), "spring": (0,), "tilt": (1,)},
@@ -119,9 +122,9 @@ def profile_rows(group: ProfileGroup) -> ProfileRows:
     return ProfileRows(q, f, trial.astype(int), tuple(p.name for p in group.profiles))
 
 
-def split_profile(rows: ProfileRows, heldout: Sequence[int] | None = None
+def split_profile(rows: ProfileRows, heldout: Sequence[int] | None = None, group: str = "profile"
                   ) -> tuple[ProfileRows, ProfileRows, tuple[int, ...]]:
-    """Training and held-out points (module docstring)."""
+    """Training and held-out points (module docstring); errors name ``group``."""
     n = len(rows.names)
     if n == 1:
         out = np.arange(len(rows)) % SINGLE_TRIAL_EVERY == SINGLE_TRIAL_EVERY - 1
@@ -129,15 +132,14 @@ def split_profile(rows: ProfileRows, heldout: Sequence[int] | None = None
     else:
         chosen = tuple(sorted(set(heldout))) if heldout is not None else tuple(range(n - max(1, n // 4), n))
         if not chosen or any(not 0 <= i < n for i in chosen) or len(chosen) == n:
-            raise RikError(f"held-out trials must be some but not all of the {n} openings (0 to {n - 1}), "
+            raise RikError(f"{group}: held-out trials must be some but not all of its {n} openings (0 to {n - 1}), "
                            f"got {list(heldout or [])}")
         out = np.isin(rows.trial, chosen)
     train, test = rows.take(~out), rows.take(out)
-    minimum = min(MIN_ROWS, 2 * SINGLE_TRIAL_EVERY * 4)
     for part, r in (("training", train), ("held-out", test)):
-        if len(r) < minimum:
-            raise RikError(f"only {len(r)} points in the {part} openings ({', '.join(rows.names)}), at least "
-                           f"{minimum} needed: measure more openings or more points per opening")
+        if len(r) < MIN_FIT_POINTS:
+            raise RikError(f"{group}: only {len(r)} points in the {part} openings ({', '.join(rows.names)}), at "
+                           f"least {MIN_FIT_POINTS} needed: measure more openings or more points per opening")
     return train, test, chosen
 
 
@@ -231,7 +233,7 @@ def fit_profile(group: ProfileGroup, joint: JointType, force_unit: str,
                 heldout: Sequence[int] | None = None) -> ProfileFit:
     """Fit every identifiable family (and pairs of them) to a group's openings and select on held-out ones."""
     rows = profile_rows(group)
-    train, test, chosen = split_profile(rows, heldout)
+    train, test, chosen = split_profile(rows, heldout, group.name)
     baseline = fit_terms(train, test, joint, None)
     singles = [fit_terms(train, test, joint, f) for f in families(joint)]
     selection = select(baseline, singles)

@@ -78,12 +78,16 @@ def verdict(fit: ProfileFit) -> str:
     n = len(fit.rows.names)
     level = f"friction level (or constant force) {fit.level:.3g} {unit}"
     if not sel.found:
-        return f"{fit.group}: no position-dependent effect; {level} ({n} openings)"
+        return f"{fit.group}: no position-dependent effect; {level} ({openings(n)})"
     parts = "; ".join(f"{f.title}: {describe(e, fit.joint, fit.force_unit)}"
                       for (f, _), e in zip(sel.final.terms, sel.final.effects, strict=True))
     others = [s.fit for s in (*sel.alternatives, *sel.pair_alternatives)]
     alt = f" (or: {', '.join(' + '.join(a.kinds) for a in others)})" if others else ""
-    return f"{fit.group}: {parts}{alt}; {level}; held-out gain {sel.gain:.0%} ({n} openings)"
+    return f"{fit.group}: {parts}{alt}; {level}; held-out gain {sel.gain:.0%} ({openings(n)})"
+
+
+def openings(n: int) -> str:
+    return f"{n} opening" + ("" if n == 1 else "s")
 
 
 def summary(fit: ProfileFit, data: ProfileData) -> dict[str, object]:
@@ -162,7 +166,7 @@ def markdown(fit: ProfileFit, data: dict[str, Any]) -> str:
     unit = "N" if fit.force_unit.startswith("N at") else fit.force_unit
     lines = [f"# Quasi-static profile: {fit.group}", "", data["sentence"], "",
              f"![force against position]({PLOT})", "",
-             f"{len(fit.rows.names)} openings, {len(fit.rows)} points; held out: "
+             f"{openings(len(fit.rows.names))}, {len(fit.rows)} points; held out: "
              f"{', '.join(data['trials']['heldout'])}"
              + (f" (every {SINGLE_TRIAL_EVERY}th point)" if len(fit.rows.names) == 1 else "") + ".", ""]
     if data["position_bins"]:
