@@ -90,8 +90,8 @@ def test_missing_column_lists_the_columns(tmp_path: Path) -> None:
     path = write_profiles(tmp_path / "door.csv", friction_openings(n=2))
     with pytest.raises(RikError) as exc:
         read_profiles(path, "hinge", position="angle", force="force [N]")
-    assert str(exc.value) == (f"{path}, column 'angle': not found (the position column); the columns are: 'trial', "
-                              "'angle bin', 'force [N]'")
+    assert str(exc.value) == (f"{path}, column 'angle': no such column (--position); did you mean 'angle bin'? "
+                              "(columns: 'trial', 'angle bin', 'force [N]')")
 
 
 def test_nan_names_the_row_or_is_dropped_and_counted(tmp_path: Path) -> None:

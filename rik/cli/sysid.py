@@ -5,12 +5,11 @@ from __future__ import annotations
 
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from rik.cli.common import CatalogOption, console, overlays
-from rik.errors import RikError
 
 app = typer.Typer(help="Model discovery: what the simulation gets wrong about a measured joint, the cause, the "
                        "extended joint model and the gain on held-out data.", no_args_is_help=True)
@@ -23,6 +22,17 @@ class JointOpt(StrEnum):
 
 JointOption = Annotated[JointOpt, typer.Option("--joint", help="Joint type: slide (drawer, m and N) or hinge "
                                                                "(door or flap, rad and N·m).")]
+
+
+def _column(role: str, header: str, feature: str) -> Any:
+    return typer.Option(f"--{role}", help=f"The {role} column when not found by its usual name: a header such as "
+                                          f"'{header}', or a LeRobot feature such as '{feature}'.",
+                        show_default=False)
+
+
+def _unit(role: str, units: str) -> Any:
+    return typer.Option(f"--{role}-unit", help=f"Unit of the {role} column ({units}), when its header has none "
+                                               "(LeRobot: always).", show_default=False)
 
 
 @app.command()
@@ -38,24 +48,22 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
                                                      "shortest whose velocity noise is low enough).")] = None,
         delay: Annotated[float | None, typer.Option("--delay", help="Force-to-position delay, s (default: "
                                                     "estimated).")] = None,
-        position: Annotated[str | None, typer.Option(help="LeRobot: the position feature, e.g. "
-                                                     "'observation.state[2]'; a profile: the position column.")]
-        = None,
-        position_unit: Annotated[str | None, typer.Option(help="Its unit (LeRobot default m; a profile: from "
-                                                          "the header unless given; 'bin' = 1° angle bins).")]
-        = None,
-        force: Annotated[str | None, typer.Option(help="LeRobot: the force or torque feature; a profile: the "
-                                                  "force column.")] = None,
-        force_unit: Annotated[str | None, typer.Option(help="Its unit (LeRobot default N; a profile: from the "
-                                                       "header unless given; N on a hinge: at the handle).")]
-        = None,
+        time: Annotated[str | None, _column("time", "timestamp_ms", "timestamp")] = None,
+        time_unit: Annotated[str | None, _unit("time", "s or ms")] = None,
+        position: Annotated[str | None, _column("position", "enc_pos", "observation.state[2]")] = None,
+        position_unit: Annotated[str | None, _unit("position", "m, mm, cm; hinge: rad, deg")] = None,
+        force: Annotated[str | None, _column("force", "ft_fx", "action[0]")] = None,
+        force_unit: Annotated[str | None, _unit("force", "N, kN; hinge: N·m, N·mm")] = None,
+        velocity: Annotated[str | None, _column("velocity", "enc_vel", "observation.state[3]")] = None,
+        velocity_unit: Annotated[str | None, _unit("velocity", "m/s, mm/s, cm/s; hinge: rad/s, deg/s")] = None,
+        trial: Annotated[str | None, typer.Option("--trial", help="The column that tells trials apart in a file "
+                                                  "(default: 'trial', if any).", show_default=False)] = None,
         quasi_static: Annotated[bool, typer.Option("--quasi-static", help="The data is a force-against-position "
                                                    "profile with no time axis (default when it has no time "
-                                                   "column).")] = False,
-        trial: Annotated[str | None, typer.Option(help="Profile: the column naming each opening (default "
-                                                  "'trial').")] = None,
-        group: Annotated[str | None, typer.Option(help="Profile: the column naming each mechanism; one report "
-                                                  "per group.")] = None,
+                                                   "column); position unit 'bin' reads 1° angle bins, a force in "
+                                                   "N on a hinge is a force at the handle.")] = False,
+        group: Annotated[str | None, typer.Option("--group", help="Profile: the column naming each mechanism; one "
+                                                  "report per group.", show_default=False)] = None,
         drop_nan: Annotated[bool, typer.Option("--drop-nan", help="Profile: leave out rows with an empty or NaN "
                                                "cell (counted) instead of stopping.")] = False) -> None:
     """Fit the baseline joint model, find the unmodelled effect, extend the model and measure the gain; write a
@@ -63,23 +71,24 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
     from rik.sysid.discover import discover
     from rik.sysid.profile import has_time_column
     from rik.sysid.report import write_report
-    from rik.sysid.trials import load_lerobot_trials, load_trials
+    from rik.sysid.trials import ColumnMap, load_lerobot_trials, load_trials
 
     con = console()
     folder = len(data) == 1 and data[0].is_dir()
-    if quasi_static or (not folder and not has_time_column(data)):
+    if quasi_static or (not folder and time is None and not has_time_column(data)):
         if not quasi_static:
-            con.print("no time column: reading the data as a quasi-static force profile (force against position)")
+            con.print("no time column: reading the data as a quasi-static force profile (force against position; "
+                      "pass --time COLUMN if it has one)")
         fit_profiles(data, joint, report, heldout, position=position, position_unit=position_unit, force=force,
                      force_unit=force_unit, trial=trial, group=group, drop_nan=drop_nan)
         return
+    columns = ColumnMap(time=time, position=position, force=force, velocity=velocity, trial=trial,
+                        time_unit=time_unit, position_unit=position_unit, force_unit=force_unit,
+                        velocity_unit=velocity_unit)
     if folder:
-        if position is None or force is None:
-            raise RikError(f"{data[0]}: a LeRobot dataset needs --position and --force naming its features")
-        trials = load_lerobot_trials(data[0], joint.value, position=position, position_unit=position_unit or "m",
-                                     force=force, force_unit=force_unit or "N")
+        trials = load_lerobot_trials(data[0], joint.value, columns)
     else:
-        trials = load_trials(data, joint.value)
+        trials = load_trials(data, joint.value, columns=columns)
     with con.status(f"fitting {len(trials)} trials"):
         found = discover(trials, heldout=heldout, window_s=window, delay_s=delay)
         out = write_report(found, report)

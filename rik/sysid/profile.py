@@ -38,6 +38,7 @@ from rik.sysid.trials import (
     POSITION_UNITS,
     TRIAL_COLUMN,
     TrialError,
+    _match_header,
     _parse_header,
     _Raw,
     _read,
@@ -109,18 +110,11 @@ def _columns_text(raw: _Raw) -> str:
 
 def find_column(raw: _Raw, wanted: str | None, role: str, defaults: Sequence[str] = (),
                 required: bool = True) -> str | None:
-    """The header of ``role``: the one named ``wanted`` (whole, or its name without the bracketed unit,
-    case-insensitively), else the first whose name is one of ``defaults``. A named column that is not there, or a
-    required one with no default match, raises :class:`TrialError` listing the file's columns."""
+    """The header of ``role``: the one named ``wanted`` (as :mod:`rik.sysid.trials` matches a named column), else
+    the first whose name is one of ``defaults``. A named column that is not there, or a required one with no
+    default match, raises :class:`TrialError` listing the file's columns."""
     if wanted is not None:
-        if wanted in raw.headers:
-            return wanted
-        key = wanted.strip().lower()
-        for header in raw.headers:
-            if header.strip().lower() == key or _parse_header(header)[0] == key:
-                return header
-        raise TrialError(raw.file, None, wanted, f"not found (the {role} column); the columns are: "
-                                                 f"{_columns_text(raw)}")
+        return _match_header(raw, wanted, role)
     for header in raw.headers:
         if _parse_header(header)[0] in defaults:
             return header
