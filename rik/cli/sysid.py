@@ -57,18 +57,35 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
         velocity: Annotated[str | None, _column("velocity", "enc_vel", "observation.state[3]")] = None,
         velocity_unit: Annotated[str | None, _unit("velocity", "m/s, mm/s, cm/s; hinge: rad/s, deg/s")] = None,
         trial: Annotated[str | None, typer.Option("--trial", help="The column that tells trials apart in a file "
-                                                  "(default: 'trial', if any).", show_default=False)] = None) -> None:
+                                                  "(default: 'trial', if any).", show_default=False)] = None,
+        quasi_static: Annotated[bool, typer.Option("--quasi-static", help="The data is a force-against-position "
+                                                   "profile with no time axis (default when it has no time "
+                                                   "column); position unit 'bin' reads 1° angle bins, a force in "
+                                                   "N on a hinge is a force at the handle.")] = False,
+        group: Annotated[str | None, typer.Option("--group", help="Profile: the column naming each mechanism; one "
+                                                  "report per group.", show_default=False)] = None,
+        drop_nan: Annotated[bool, typer.Option("--drop-nan", help="Profile: leave out rows with an empty or NaN "
+                                               "cell (counted) instead of stopping.")] = False) -> None:
     """Fit the baseline joint model, find the unmodelled effect, extend the model and measure the gain; write a
     report (report.md with plots, summary.json) that names the cause."""
     from rik.sysid.discover import discover
+    from rik.sysid.profile import has_time_column
     from rik.sysid.report import write_report
     from rik.sysid.trials import ColumnMap, load_lerobot_trials, load_trials
 
     con = console()
+    folder = len(data) == 1 and data[0].is_dir()
+    if quasi_static or (not folder and time is None and not has_time_column(data)):
+        if not quasi_static:
+            con.print("no time column: reading the data as a quasi-static force profile (force against position; "
+                      "pass --time COLUMN if it has one)")
+        fit_profiles(data, joint, report, heldout, position=position, position_unit=position_unit, force=force,
+                     force_unit=force_unit, trial=trial, group=group, drop_nan=drop_nan)
+        return
     columns = ColumnMap(time=time, position=position, force=force, velocity=velocity, trial=trial,
                         time_unit=time_unit, position_unit=position_unit, force_unit=force_unit,
                         velocity_unit=velocity_unit)
-    if len(data) == 1 and data[0].is_dir():
+    if folder:
         trials = load_lerobot_trials(data[0], joint.value, columns)
     else:
         trials = load_trials(data, joint.value, columns=columns)
@@ -78,6 +95,34 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
     con.print(found.sentence())
     for text in found.selection.separation:
         con.print(f"  cannot tell apart from this data: {text}")
+    con.print(f"report: {out / 'report.md'}  (summary: {out / 'summary.json'})")
+
+
+def fit_profiles(data: list[Path], joint: JointOpt, report: Path, heldout: list[int] | None, *,
+                 position: str | None, position_unit: str | None, force: str | None, force_unit: str | None,
+                 trial: str | None, group: str | None, drop_nan: bool) -> None:
+    """``rik sysid fit --quasi-static``: fit force-against-position profiles (rik.sysid.profile_fit) and write one
+    report per group."""
+    from rik.sysid.profile import read_profiles
+    from rik.sysid.profile_fit import NOT_IDENTIFIED, fit_profile
+    from rik.sysid.profile_report import verdict, write_profile_report
+
+    con = console()
+    profiles = read_profiles(data, joint.value, position=position, position_unit=position_unit, force=force,
+                             force_unit=force_unit, trial=trial, group=group, drop_nan=drop_nan)
+    if profiles.dropped:
+        con.print(f"left out {profiles.dropped} rows with an empty or NaN cell (first: "
+                  f"{profiles.dropped_rows[0]})")
+    if profiles.bins:
+        con.print("positions are angle bins, read as 1 bin = 1°")
+    with con.status(f"fitting {len(profiles.groups)} quasi-static profile group(s)"):
+        fits = [fit_profile(g, profiles.joint, profiles.force_unit, heldout) for g in profiles.groups]
+        out = write_profile_report(profiles, fits, report)
+    for f in fits:
+        con.print(verdict(f))
+    if profiles.handle_force:
+        con.print("forces are at the handle, in N (no lever arm given)")
+    con.print("not identifiable from a quasi-static profile: " + "; ".join(t.split(":")[0] for t in NOT_IDENTIFIED))
     con.print(f"report: {out / 'report.md'}  (summary: {out / 'summary.json'})")
 
 
