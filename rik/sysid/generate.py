@@ -143,11 +143,11 @@ class _Excite:
 
 EXCITE = {
     JointType.slide: _Excite(speed=(0.05, 0.5), block_speed=(0.1, 0.5), slow=(0.01, 0.02), throw=(0.12, 0.3),
-                             near_closed=(0.015, 0.03), push=(0.01, 0.025), creep=(0.003, 0.006),
-                             creep_length=(0.008, 0.015)),
+                             near_closed=(0.015, 0.03), push=(0.01, 0.025), creep=(0.004, 0.006),
+                             creep_length=(0.006, 0.01)),
     JointType.hinge: _Excite(speed=(0.2, 2.0), block_speed=(0.4, 2.0), slow=(0.025, 0.05), throw=(0.5, 1.2),
                              near_closed=(0.05, 0.15), push=(math.radians(3.0), math.radians(8.0)),
-                             creep=(0.015, 0.025), creep_length=(0.035, 0.06)),
+                             creep=(0.02, 0.03), creep_length=(0.025, 0.04)),
 }
 CREEP_STIFFNESS = 10.0
 """The hand's stiffness during a creep, as a multiple of its usual kp (its damping scales with the square root):
