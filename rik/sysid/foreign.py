@@ -17,8 +17,8 @@ One hidden effect per case, keyed by rik's kind names (other shapes than rik's l
 ==================  =============================================================================================
 kind                force on the joint (positive opens; q ≥ 0 from closed)
 ==================  =============================================================================================
-stiction            LuGre ``g(v) = Fc + (Fs - Fc) exp(-|v| / vs)`` (Tustin's exponential Stribeck curve),
-                    Fs = 1.4-2 Fc
+stiction            LuGre ``g(v) = Fc + (Fs - Fc) / (1 + (v / vs)^2)`` (a Lorentzian Stribeck curve: flat at
+                    rest, a long tail), Fs = 1.4-2 Fc
 magnetic_catch      ``-F0 / (1 + q/d)^3`` (a cubic falloff)
 self_close          ``-(preload + k (zone - q)) · clip((zone - q) / play, 0, 1)`` inside the zone: a preloaded
                     spring picked up over a few millimetres of play
@@ -143,6 +143,14 @@ BRISTLE_ZETA = 0.7
 HAND_OMEGA2 = 400.0 / 6.0
 """kp / mass of the hand at least, 1/s² (400 N/m on 6 kg)."""
 HAND_ZETA = 0.6
+HAND_INTEGRAL_S = 0.4
+"""Integral time of the hand (ki = kp / this), s: a person corrects a lasting error within a few tenths of a
+second, so a held front settles at its target against a closer or a magnet."""
+HAND_INTEGRAL_SHARE = 0.25
+"""The integral term is clamped to this share of the largest hand force (a push held against a stop is not
+wound up to the limit)."""
+FORCE_RAMP = 0.2
+"""A ``force`` segment reaches its force over this time (a raised cosine), s."""
 
 
 # -------------------------------------------------------------------------------------------------- truth
@@ -353,15 +361,16 @@ def effect_force(truth: ForeignTruth, q: np.ndarray, v: np.ndarray) -> np.ndarra
 
 
 def hand_gains(truth: ForeignTruth) -> tuple[float, float]:
-    """(kp, kd) of the hand: kp = mass · 400/6 at least, raised so that the static friction (plus the largest
-    effect force at rest over the outer half of the range) moves the front within the deadband."""
+    """(kp, kd) of the hand: kp = mass · 400/6 at least, raised so that the static friction plus the largest
+    effect force at rest anywhere in the range is met within the joint's deadband (a person holds a drawer
+    firmly: 1 cm for the pull of a closer)."""
     c = JOINTS[truth.joint]
     upper = truth.range[1]
     law, extra = effect_law(truth), friction_levels(truth)
     grid = np.linspace(0.0, upper, 101).tolist()
     static = truth.static + max(extra(q) for q in grid)
-    load = static + (max(abs(law(q, 0.0)) for q in grid[50:]) if law else 0.0)
-    kp = max(truth.mass * HAND_OMEGA2, static / c.deadband, load / (2.0 * c.deadband))
+    load = static + (max(abs(law(q, 0.0)) for q in grid) if law else 0.0)
+    kp = max(truth.mass * HAND_OMEGA2, load / c.deadband)
     return kp, 2.0 * HAND_ZETA * math.sqrt(kp * truth.mass)
 
 
@@ -372,7 +381,8 @@ class Segment:
     """One piece of the hand's plan. ``move``: minimum-jerk to ``goal`` at peak speed ``speed``; ``creep``:
     constant ``speed`` to ``goal``; ``hold``: keep the target for ``duration`` s; ``release``: hand force exactly 0
     for ``duration`` s; ``throw``: minimum-jerk towards closed at peak ``speed``, let go once q < ``goal``;
-    ``force``: a constant hand force ``force`` (N or N·m) for ``duration`` s. Units m, m/s or rad, rad/s."""
+    ``force``: a hand force ``force`` (N or N·m) for ``duration`` s, reached over :data:`FORCE_RAMP` s from 0.
+    Units m, m/s or rad, rad/s."""
 
     kind: str
     goal: float = 0.0
@@ -427,7 +437,7 @@ def excitation(joint: JointType | str, upper: float, rng: np.random.Generator, *
     near = _uniform(rng, (c.release_near_closed[0] * 0.3, c.release_near_closed[1] * 1.5))
     for where in (near, _uniform(rng, (0.2 * upper, 0.9 * upper))):
         blocks.append([Segment("move", where, _log_uniform(rng, c.stroke_speed)),
-                       Segment("hold", duration=_uniform(rng, (0.2, 0.4))),
+                       Segment("hold", duration=_uniform(rng, (0.4, 0.7))),
                        Segment("release", duration=_uniform(rng, (0.5, 1.0)))])
     blocks.append([Segment("move", _uniform(rng, (0.4 * upper, 0.7 * upper)), _log_uniform(rng, c.stroke_speed)),
                    Segment("throw", _uniform(rng, c.release_near_closed), _uniform(rng, c.throw_speed)),
@@ -486,7 +496,9 @@ class Run:
 def run(truth: ForeignTruth, segments: Sequence[Segment], *, start: float = 0.0, duration_s: float = 12.0,
         dt: float = TIMESTEP) -> Run:
     """Integrate ``truth`` driven by the hand through ``segments`` from rest at ``start`` (m or rad) for
-    ``duration_s`` s (padded with a hold), semi-implicit Euler at ``dt`` s with an implicit bristle update."""
+    ``duration_s`` s (padded with a hold), semi-implicit Euler at ``dt`` s with an implicit bristle update. The
+    hand is a PID on the target (see :func:`hand_gains`, :data:`HAND_INTEGRAL_S`), clipped to the joint's
+    ``hand_max``; its integral restarts after every release."""
     if not isinstance(truth, ForeignTruth):
         raise RikError(f"truth must be a ForeignTruth, got {type(truth).__name__}")
     if not (math.isfinite(duration_s) and duration_s > 0 and math.isfinite(dt) and 0 < dt <= 1e-3):
@@ -503,20 +515,22 @@ def run(truth: ForeignTruth, segments: Sequence[Segment], *, start: float = 0.0,
     law = effect_law(truth)
     extra = friction_levels(truth) if truth.kind == "load_friction" else None
     kp, kd = hand_gains(truth)
+    ki = kp / HAND_INTEGRAL_S
     fmax = JOINTS[truth.joint].hand_max
+    imax = HAND_INTEGRAL_SHARE * fmax
+    integral = 0.0
     q, v, z = float(start), 0.0, 0.0
     target = q
     after_release = False
     queue = list(segments)
     k = 0
-    exp = math.exp
     while k < steps:
         seg = queue.pop(0) if queue else Segment("hold", duration=(steps - k) * dt)
         stop_below = seg.goal if seg.kind == "throw" else -math.inf
         pd = seg.kind not in ("release", "force")
         if pd:
             if after_release:
-                target, after_release = q, False
+                target, after_release, integral = q, False, 0.0
             tq, tv = _profile(seg, target, dt)
             target = tq[-1]
             n = len(tq)
@@ -525,17 +539,24 @@ def run(truth: ForeignTruth, segments: Sequence[Segment], *, start: float = 0.0,
             after_release = True
         n = min(n, steps - k)
         hand = seg.force if seg.kind == "force" else 0.0
+        ramp = max(int(round(FORCE_RAMP / dt)), 1)
         for i in range(n):
             if q < stop_below:
                 break
             if pd:
-                f = kp * (tq[i] - q) + kd * (tv[i] - v)
+                error = tq[i] - q
+                integral += ki * error * dt
+                if integral > imax:
+                    integral = imax
+                elif integral < -imax:
+                    integral = -imax
+                f = kp * error + kd * (tv[i] - v) + integral
                 if f > fmax:
                     f = fmax
                 elif f < -fmax:
                     f = -fmax
             else:
-                f = hand
+                f = hand if i >= ramp else hand * 0.5 * (1.0 - math.cos(math.pi * i / ramp))
                 free[k] = True
             qs[k], vs_[k], fs[k] = q, v, f
             # friction: LuGre with an implicit bristle update
@@ -543,7 +564,11 @@ def run(truth: ForeignTruth, segments: Sequence[Segment], *, start: float = 0.0,
             if extra is not None:
                 e = extra(q)
                 fc, fst = fc + e, fst + e
-            g = fc + (fst - fc) * exp(-abs(v) / vstr) if stribeck else fst
+            if stribeck:
+                r = v / vstr
+                g = fc + (fst - fc) / (1.0 + r * r)
+            else:
+                g = fst
             z_new = (z + v * dt) / (1.0 + s0 * abs(v) * dt / g)
             friction = s0 * z_new + s1 * (z_new - z) / dt
             z = z_new
