@@ -40,6 +40,7 @@ sample at time t is the true position at t - delay) and returns :class:`rik.sysi
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from collections.abc import Callable, Sequence
@@ -143,7 +144,7 @@ BRISTLE_ZETA = 0.7
 HAND_OMEGA2 = 400.0 / 6.0
 """kp / mass of the hand at least, 1/s² (400 N/m on 6 kg)."""
 HAND_ZETA = 0.6
-HAND_INTEGRAL_S = 0.4
+HAND_INTEGRAL_S = 0.3
 """Integral time of the hand (ki = kp / this), s: a person corrects a lasting error within a few tenths of a
 second, so a held front settles at its target against a closer or a magnet."""
 HAND_INTEGRAL_SHARE = 0.25
@@ -419,35 +420,64 @@ CREEP_RAMP = 0.1
 
 def excitation(joint: JointType | str, upper: float, rng: np.random.Generator, *, duration_s: float = 12.0,
                start: float | None = None) -> tuple[float, list[Segment]]:
-    """(start position, segments) of one trial: pushes held 0.5-1.5 s against both stops, a creep at constant
+    """(start position, segments) of one trial: pushes held 0.5-1.2 s against both stops, a creep at constant
     slow speed, holds and releases at two positions (one near closed), a throw towards closed let go near closed,
-    in random order, then strokes of random speed until ``duration_s`` s are filled."""
+    in random order, with moves between them at random speeds (the slowest sped up until the blocks fit in
+    ``duration_s`` s; of :data:`ORDER_TRIES` random block orders the first that fits, else the shortest, so in
+    rare plans the last block is cut), then strokes of random speed until ``duration_s`` s are filled."""
     c = JOINTS[_joint(joint)]
     at = _uniform(rng, (0.1 * upper, 0.9 * upper)) if start is None else float(start)
     blocks: list[list[Segment]] = [
         [Segment("move", -_uniform(rng, c.beyond), _log_uniform(rng, c.stroke_speed)),
-         Segment("hold", duration=_uniform(rng, (0.5, 1.5)))],
+         Segment("hold", duration=_uniform(rng, (0.5, 1.2)))],
         [Segment("move", upper + _uniform(rng, c.beyond), _log_uniform(rng, c.stroke_speed)),
-         Segment("hold", duration=_uniform(rng, (0.5, 1.5)))],
+         Segment("hold", duration=_uniform(rng, (0.5, 1.2)))],
     ]
-    speed, span = _log_uniform(rng, c.creep_speed), _uniform(rng, (1.5, 2.5))
+    speed, span = _log_uniform(rng, c.creep_speed), _uniform(rng, (1.0, 2.0))
     a = _uniform(rng, (0.05 * upper, 0.95 * upper - speed * span))
     ends = (a, a + speed * span) if rng.random() < 0.5 else (a + speed * span, a)
     blocks.append([Segment("move", ends[0], _log_uniform(rng, c.stroke_speed)), Segment("creep", ends[1], speed)])
     near = _uniform(rng, (c.release_near_closed[0] * 0.3, c.release_near_closed[1] * 1.5))
     for where in (near, _uniform(rng, (0.2 * upper, 0.9 * upper))):
         blocks.append([Segment("move", where, _log_uniform(rng, c.stroke_speed)),
-                       Segment("hold", duration=_uniform(rng, (0.4, 0.7))),
-                       Segment("release", duration=_uniform(rng, (0.5, 1.0)))])
+                       Segment("hold", duration=_uniform(rng, (0.3, 0.5))),
+                       Segment("release", duration=_uniform(rng, (0.4, 0.8)))])
     blocks.append([Segment("move", _uniform(rng, (0.4 * upper, 0.7 * upper)), _log_uniform(rng, c.stroke_speed)),
                    Segment("throw", _uniform(rng, c.release_near_closed), _uniform(rng, c.throw_speed)),
-                   Segment("release", duration=_uniform(rng, (0.8, 1.2)))])
-    order = rng.permutation(len(blocks))
-    segments = [s for i in order for s in blocks[int(i)]]
+                   Segment("release", duration=_uniform(rng, (0.5, 0.9)))])
+    best: list[Segment] = []
+    for _ in range(ORDER_TRIES):  # the first order that fits, else the shortest
+        order = rng.permutation(len(blocks))
+        segments = _fit_moves([s for i in order for s in blocks[int(i)]], at, duration_s - 0.3, c.stroke_speed[1])
+        if not best or nominal_duration(segments, at) < nominal_duration(best, at):
+            best = segments
+        if nominal_duration(best, at) <= duration_s - 0.3:
+            break
+    segments = best
     while nominal_duration(segments, at) < duration_s + 0.5:
         segments.append(Segment("move", _uniform(rng, (0.05 * upper, 0.95 * upper)),
                                 _log_uniform(rng, c.stroke_speed)))
     return at, segments
+
+
+ORDER_TRIES = 20
+"""Block orders :func:`excitation` tries before it takes the shortest."""
+
+
+def _fit_moves(segments: list[Segment], at: float, budget: float, fast: float) -> list[Segment]:
+    """``segments`` with the longest moves sped up (doubled, at most to ``fast``) until the plan lasts at most
+    ``budget`` s or no move can be shortened."""
+    segments = list(segments)
+    while nominal_duration(segments, at) > budget:
+        times, here = [], at
+        for s in segments:
+            times.append(_move_time(abs(s.goal - here), s.speed) if s.kind == "move" and s.speed < fast else 0.0)
+            here = s.goal if s.kind in ("move", "creep", "throw") else here
+        longest = int(np.argmax(times))
+        if times[longest] <= 0.25 + 1e-9:
+            break  # every move is as short or as fast as it gets
+        segments[longest] = dataclasses.replace(segments[longest], speed=min(2.0 * segments[longest].speed, fast))
+    return segments
 
 
 def _profile(seg: Segment, at: float, dt: float) -> tuple[list[float], list[float]]:
