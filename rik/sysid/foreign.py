@@ -31,11 +31,15 @@ tilt                slide: ``-m g sin(a (1 + 0.2 q / upper))`` (a tilted runner 
 none                the base only
 ==================  =============================================================================================
 
-A simulated hand (PD on a target, force-limited like a person) runs an excitation written here: strokes at
-several speeds, a creep at constant slow speed, pushes held against both stops (target 5-15 mm or 1-2.5° beyond
-the stop), holds and releases (hand force exactly 0) at several positions and a throw towards closed let go near
-closed. :func:`simulate_foreign` samples it at 200 Hz with noise and a 10 ms force-to-position delay (the position
-sample at time t is the true position at t - delay) and returns :class:`rik.sysid.trials.Trial` objects.
+A simulated hand (PID on a target with a clamped integral, force-limited like a person) runs an excitation
+written here: strokes at several speeds, a creep at constant slow speed, pushes held against both stops (target
+5-15 mm or 0.8-2.5° beyond the stop), holds and releases (hand force exactly 0) at several positions and a throw
+towards closed let go near closed. :func:`simulate_foreign` samples it at 200 Hz with noise and a 10 ms
+force-to-position delay (the position sample at time t is the true position at t - delay) and returns
+:class:`rik.sysid.trials.Trial` objects; :class:`ForeignTruth` ``.to_json()`` is the truth record.
+
+The hand's kp is set from the largest force it must hold (friction plus the effect anywhere in the range), so a
+front near a strong magnet is held firmly and a push held 15 mm beyond a stop can reach 40-60 N there.
 """
 
 from __future__ import annotations
