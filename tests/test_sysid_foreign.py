@@ -184,3 +184,19 @@ def test_cli_simulate_foreign_refuses_what_it_cannot_draw(rik, tmp_path) -> None
     result = rik("sysid", "simulate", "--generator", "foreign", "--effect", "tilt", "--mass", "3", "--out",
                  str(tmp_path / "d"))
     assert result.code == 2 and "--second and --mass work with --generator rik only" in result.err
+
+
+def test_the_foreign_laws_import_nothing_of_riks_effect_laws() -> None:
+    import ast
+    import inspect
+
+    import rik.sysid.foreign as foreign
+
+    imported = set()
+    for node in ast.walk(ast.parse(inspect.getsource(foreign))):
+        if isinstance(node, ast.Import):
+            imported.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            imported.add(node.module or "")
+    forbidden = ("rik.sim", "rik.sysid.effects", "rik.combinator", "rik.sysid.generate", "rik.sysid.fit", "rik.joints")
+    assert not [m for m in imported if m.startswith(forbidden)], imported
