@@ -99,6 +99,46 @@ def test_fit_reads_a_lerobot_dataset(rik, tmp_path: Path) -> None:
     assert err == f"rik: error: {tmp_path / 'ds'}: a LeRobot dataset needs --position and --force naming its features"
 
 
+def test_fit_reads_a_plain_csv_with_named_columns(rik, tmp_path: Path) -> None:
+    """A CSV with plain ``trial,t,q,f`` headers (no units) fits once the columns' units are given as options."""
+    from test_sysid_data import write_csv
+
+    truth = random_truth("tilt", JointType.slide, np.random.default_rng(1))
+    trials = simulate_trials(truth, n_trials=3, seed=1, duration_s=10.0)
+    data = tmp_path / "data.csv"
+    write_csv(data, {"trial": [tr.name for tr in trials for _ in range(tr.samples)],
+                     "t": np.concatenate([tr.t for tr in trials]), "q": np.concatenate([tr.q for tr in trials]),
+                     "f": np.concatenate([tr.f for tr in trials])})
+    res = rik("sysid", "fit", str(data), "--time", "t", "--time-unit", "s", "--position", "q", "--position-unit", "m",
+              "--force", "f", "--force-unit", "N", "--joint", "slide", "--report", str(tmp_path / "r"))
+    assert res.code == 0, res.err
+    assert "The simulation misses gravity along the joint" in res.out
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["trials"]["names"] == ["trial_1", "trial_2", "trial_3"]
+    assert summary["resistance"]["effects"][0]["force"] == pytest.approx(truth.effect.force, rel=0.15)
+
+
+def test_named_columns_bad_input_is_one_line(rik, tmp_path: Path) -> None:
+    log = tmp_path / "log.csv"
+    log.write_text("timestamp_ms,enc_pos,ft_fx\n" + "".join(f"{5 * i},{i % 7},{i % 3}\n" for i in range(60)))
+    assert _bad(rik, "sysid", "fit", str(log), "--time", "timestamp", "--position", "enc_pos", "--force", "ft_fx") == (
+        f"rik: error: {log}, column 'timestamp': no such column (--time); did you mean 'timestamp_ms'? "
+        "(columns: 'timestamp_ms', 'enc_pos', 'ft_fx')")
+    assert _bad(rik, "sysid", "fit", str(log), "--time", "timestamp_ms", "--time-unit", "ms", "--position", "enc_pos",
+                "--force", "ft_fx", "--force-unit", "N") == (
+        f"rik: error: {log}, column 'enc_pos': no unit in the header; pass --position-unit: a slide's position is in "
+        "m, mm or cm")
+    assert _bad(rik, "sysid", "fit", str(log), "--time", "timestamp_ms", "--time-unit", "ms", "--position", "enc_pos",
+                "--position-unit", "mm", "--force", "ft_fx", "--force-unit", "N·m") == (
+        f"rik: error: {log}, column 'ft_fx': --force-unit: 'N·m' is a torque unit but the joint is a slide; a "
+        "slide's force is in N or kN")
+    plain = tmp_path / "plain.csv"
+    plain.write_text("t,q,f\n0,0,1\n")
+    assert _bad(rik, "sysid", "fit", str(plain)) == (
+        f"rik: error: {plain}, column 't': no unit; write the header as 't [unit]' (e.g. 't [s]') or pass --time-unit: "
+        "time is in s or ms")
+
+
 def _bad(rik, *args: str) -> str:
     res = rik(*args)
     assert res.code == 2 and "Traceback" not in res.err and res.err.count("\n") == 1, res.err

@@ -15,7 +15,7 @@ import pytest
 
 from rik.errors import RikError
 from rik.sysid.preprocess import observed_limits, preprocess, resample, uniform_grid
-from rik.sysid.trials import Trial, TrialError, load_lerobot_trials, load_trials
+from rik.sysid.trials import ColumnMap, Trial, TrialError, load_lerobot_trials, load_trials
 
 # ------------------------------------------------------------------------------------------- synthetic truth
 
@@ -165,6 +165,88 @@ def test_csv_and_parquet_give_identical_trials(tmp_path) -> None:
         assert a.meta.model_dump(exclude={"source"}) == b.meta.model_dump(exclude={"source"})
 
 
+LOGGER = ColumnMap(time="timestamp_ms", time_unit="ms", position="enc_pos", position_unit="mm", force="ft_fx",
+                   force_unit="N", velocity="enc_vel", velocity_unit="mm/s", trial="run")
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_named_columns_with_declared_units(tmp_path, suffix: str) -> None:
+    """A logger's own headers (no units; a counter 't' and a 'trial' column that must not be taken) read through a
+    ColumnMap, into SI units."""
+    base = clean(120)
+    cols = {"t": np.arange(120.0), "trial": ["x"] * 120, "run": ["a"] * 60 + ["b"] * 60,
+            "timestamp_ms": 1e3 * base["time [s]"], "enc_pos": 1e3 * base["position [m]"], "ft_fx": base["force [N]"],
+            "enc_vel": np.full(120, 25.0)}
+    path = tmp_path / f"log{suffix}"
+    (write_csv if suffix == ".csv" else write_parquet)(path, cols)
+    first, second = load_trials(path, "slide", columns=LOGGER)
+    assert (first.name, second.name, first.samples) == ("a", "b", 60)
+    np.testing.assert_allclose(np.r_[first.t, second.t], base["time [s]"], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(np.r_[first.q, second.q], base["position [m]"], rtol=1e-12)
+    np.testing.assert_allclose(np.r_[first.f, second.f], base["force [N]"], rtol=1e-12)
+    np.testing.assert_allclose(first.qd, 0.025, rtol=1e-12)
+    units, columns = first.meta.units, first.meta.columns
+    assert (units.time, units.position, units.force, units.velocity) == ("ms", "mm", "N", "mm/s")
+    assert (columns.time, columns.position, columns.force, columns.velocity) == ("timestamp_ms", "enc_pos", "ft_fx",
+                                                                                "enc_vel")
+
+
+def test_plain_headers_with_declared_units_and_names_matching_headers_with_units(tmp_path) -> None:
+    base = clean()
+    write_csv(tmp_path / "plain.csv", {"t": base["time [s]"], "q": 1e2 * base["position [m]"], "f": base["force [N]"]})
+    (trial,) = load_trials(tmp_path / "plain.csv", "slide", columns=ColumnMap(time_unit="s", position_unit="cm",
+                                                                              force_unit="N"))
+    np.testing.assert_allclose(trial.q, base["position [m]"], rtol=1e-12)
+    assert trial.meta.units.position == "cm" and trial.meta.columns.time == "t"
+    # a name matches a header's name without its unit, case-insensitively; a unit option agreeing with the header's
+    # (in any spelling) is fine, and brackets holding no unit of the quantity are just text
+    cols = {"Time [ms]": 1e3 * base["time [s]"], "Angle [enc]": np.degrees(base["position [m]"]),
+            "torque [Nm]": base["force [N]"]}
+    write_csv(tmp_path / "door.csv", cols)
+    (door,) = load_trials(tmp_path / "door.csv", "hinge", columns=ColumnMap(time="time", position="angle",
+                                                                            position_unit="deg", force_unit="N·m"))
+    np.testing.assert_allclose(door.t, base["time [s]"], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(door.q, base["position [m]"], rtol=1e-12)
+    assert (door.meta.units.time, door.meta.units.position, door.meta.units.force) == ("ms", "deg", "N·m")
+
+
+@pytest.mark.parametrize("headers, columns, expected", [
+    (["timestamp_ms", "enc_pos_mm", "ft_fx"], {"time_unit": "ms", "position": "enc_pos", "force_unit": "N"},
+     "column 'enc_pos': no such column (--position); did you mean 'enc_pos_mm'? (columns: 'timestamp_ms', 'enc_pos_mm', 'ft_fx')"),
+    (["time [s]", "q [m]", "ft_fx"], {"force": "load"},
+     "column 'load': no such column (--force) (columns: 'time [s]', 'q [m]', 'ft_fx')"),
+    (["time [s]", "q [m]", "f [N]"], {"trial": "run"},
+     "column 'run': no such column (--trial) (columns: 'time [s]', 'q [m]', 'f [N]')"),
+    (["time [s]", "enc_pos", "f [N]"], {"position": "enc_pos"},
+     "column 'enc_pos': no unit in the header; pass --position-unit: a slide's position is in m, mm or cm"),
+    (["t", "q", "f"], {"position_unit": "m", "force_unit": "N"},
+     "column 't': no unit; write the header as 't [unit]' (e.g. 't [s]') or pass --time-unit: time is in s or ms"),
+    (["t", "q", "f"], {"time_unit": "s", "position_unit": "deg", "force_unit": "N"},
+     "column 'q': --position-unit: 'deg' is an angle unit but the joint is a slide; a slide's position is in m, mm or cm"),
+    (["t", "q", "f"], {"time_unit": "s", "position_unit": "m", "force_unit": "lbf"},
+     "column 'f': --force-unit: unknown unit 'lbf'; a slide's force is in N or kN"),
+    (["time [s]", "position [mm]", "force [N]"], {"position_unit": "m"},
+     "column 'position [mm]': the header says 'mm' but --position-unit says 'm'; drop the option or make them agree"),
+    (["time [s]", "Time [ms]", "q [m]", "f [N]"], {"time": "time"},
+     "column 'time': --time matches 'time [s]' and 'Time [ms]'; name one exactly"),
+    (["time [s]", "q [m]", "f [N]"], {"velocity_unit": "m/s"},
+     "--velocity-unit is given but the file has no velocity column; name it with --velocity"),
+])
+def test_bad_column_names_and_units(tmp_path, headers: list[str], columns: dict, expected: str) -> None:
+    path = tmp_path / "c.csv"
+    write_csv(path, {h: np.linspace(0, 1, 60) for h in headers})
+    with pytest.raises(TrialError) as info:
+        load_trials(path, "slide", columns=ColumnMap(**columns))
+    sep = ": " if expected.startswith("--") else ", "
+    assert str(info.value) == f"{path}{sep}{expected}"
+
+
+def test_one_column_named_for_two_quantities() -> None:
+    with pytest.raises(RikError) as info:
+        ColumnMap(position="x", force="x")
+    assert str(info.value) == "--position and --force both name column 'x'; each quantity needs its own column"
+
+
 def lerobot_dataset(root, episodes: dict[int, dict[str, np.ndarray]], fps: int = 50) -> None:
     """A LeRobot v3.0 dataset as lerobot writes it (meta/info.json plus a data Parquet file), without video."""
     (root / "meta").mkdir(parents=True)
@@ -200,9 +282,9 @@ def test_lerobot_episodes_become_trials(tmp_path) -> None:
     episodes = {0: {"q": 0.1 * np.sin(t), "qd": 0.1 * np.cos(t), "f": 5 * np.cos(t)},
                 3: {"q": 20 * np.sin(t), "qd": 20 * np.cos(t), "f": -4 * np.cos(t)}}
     lerobot_dataset(tmp_path / "ds", episodes)
-    trials = load_lerobot_trials(tmp_path / "ds", "slide", position="observation.state[front_qpos]",
-                                 position_unit="m", force="action[0]", force_unit="N",
-                                 velocity="observation.state[2]", velocity_unit="m/s")
+    trials = load_lerobot_trials(tmp_path / "ds", "slide", ColumnMap(
+        position="observation.state[front_qpos]", position_unit="m", force="action[0]", force_unit="N",
+        velocity="observation.state[2]", velocity_unit="m/s"))
     assert [t.name for t in trials] == ["episode_0", "episode_3"]
     for trial, ep in zip(trials, (0, 3), strict=True):
         np.testing.assert_array_equal(trial.q, episodes[ep]["q"].astype(np.float32))
@@ -210,10 +292,22 @@ def test_lerobot_episodes_become_trials(tmp_path) -> None:
         np.testing.assert_array_equal(trial.qd, episodes[ep]["qd"].astype(np.float32))
         np.testing.assert_allclose(trial.t, t, atol=1e-6)
         assert trial.meta.columns.position == "observation.state[front_qpos]" and trial.meta.units.time == "s"
-    (only,) = load_lerobot_trials(tmp_path / "ds", "hinge", position="observation.state[1]", position_unit="deg",
-                                  force="action[push]", force_unit="N·mm", episodes=[3])
+    (only,) = load_lerobot_trials(tmp_path / "ds", "hinge", ColumnMap(position="observation.state[1]",
+                                  position_unit="deg", force="action[push]", force_unit="N·mm"), episodes=[3])
     np.testing.assert_allclose(only.q, np.radians(episodes[3]["q"].astype(np.float32).astype(np.float64)), rtol=1e-12)
     np.testing.assert_allclose(only.f, 1e-3 * episodes[3]["f"].astype(np.float32).astype(np.float64), rtol=1e-12)
+
+
+def test_lerobot_time_feature_and_unit(tmp_path) -> None:
+    t = np.arange(60) / 50
+    lerobot_dataset(tmp_path / "ds", {0: {"q": np.sin(t), "qd": np.cos(t), "f": np.cos(t)}})
+    refs = {"position": "observation.state[1]", "position_unit": "m", "force": "action[0]", "force_unit": "N"}
+    (ms,) = load_lerobot_trials(tmp_path / "ds", "slide", ColumnMap(**refs, time_unit="ms"))
+    np.testing.assert_allclose(ms.t, t / 1e3, atol=1e-9)
+    assert (ms.meta.units.time, ms.meta.columns.time) == ("ms", "timestamp")
+    (frames,) = load_lerobot_trials(tmp_path / "ds", "slide", ColumnMap(**refs, time="frame_index", time_unit="s"))
+    np.testing.assert_array_equal(frames.t, np.arange(60))
+    assert frames.meta.columns.time == "frame_index"
 
 
 @pytest.mark.parametrize("kwargs, expected", [
@@ -226,14 +320,22 @@ def test_lerobot_episodes_become_trials(tmp_path) -> None:
     ({"force": "action[gripper]"},
      "{info}, column 'action[gripper]': 'action' has no value named 'gripper' (names: push, grip)"),
     ({"position_unit": "deg"},
-     "{root}, column 'observation.state[1]': 'deg' is an angle unit but the joint is a slide; a slide's position is in m, mm or cm"),
+     "{root}, column 'observation.state[1]': --position-unit: 'deg' is an angle unit but the joint is a slide; a slide's position is in m, mm or cm"),
+    ({"force_unit": None},
+     "{root}, column 'action[0]': no unit (LeRobot records none); pass --force-unit: a slide's force is in N or kN"),
+    ({"time": "timestamp"},
+     "{root}, column 'timestamp': no unit (LeRobot records none); pass --time-unit: time is in s or ms"),
+    ({"force": None}, "{root}: a LeRobot dataset needs --position and --force naming its features"),
+    ({"trial": "run"},
+     "{root}, column 'run': a LeRobot dataset's trials are its episodes (episode_index); --trial is for CSV and Parquet files"),
+    ({"velocity_unit": "m/s"}, "{root}: --velocity-unit is given but no --velocity feature"),
 ])
 def test_lerobot_bad_references(tmp_path, kwargs: dict, expected: str) -> None:
     t = np.arange(60) / 50
     lerobot_dataset(tmp_path / "ds", {0: {"q": np.sin(t), "qd": np.cos(t), "f": np.cos(t)}})
     args = {"position": "observation.state[1]", "position_unit": "m", "force": "action[0]", "force_unit": "N"}
     with pytest.raises(TrialError) as info:
-        load_lerobot_trials(tmp_path / "ds", "slide", **(args | kwargs))
+        load_lerobot_trials(tmp_path / "ds", "slide", ColumnMap(**(args | kwargs)))
     assert str(info.value) == expected.format(info=tmp_path / "ds" / "meta" / "info.json", root=tmp_path / "ds")
 
 
@@ -244,8 +346,8 @@ def test_lerobot_bad_data_names_the_episode(tmp_path) -> None:
     lerobot_dataset(tmp_path / "ds", {0: {"q": np.sin(t), "qd": q, "f": np.cos(t)},
                                       1: {"q": q, "qd": q, "f": np.cos(t)}})
     with pytest.raises(TrialError) as info:
-        load_lerobot_trials(tmp_path / "ds", "slide", position="observation.state[1]", position_unit="m",
-                            force="action[0]", force_unit="N")
+        load_lerobot_trials(tmp_path / "ds", "slide", ColumnMap(position="observation.state[1]", position_unit="m",
+                                                               force="action[0]", force_unit="N"))
     file = tmp_path / "ds" / "data" / "chunk-000" / "file-000.parquet"
     assert str(info.value) == (f"{file}, trial 'episode_1', column 'observation.state[1]': row 67 is NaN; "
                                "every value must be a finite number")
@@ -342,8 +444,8 @@ def test_constant_torque_threshold_in_declared_unit(tmp_path) -> None:
     ("slide", "torque [N·m]", "'N·m' is a torque unit but the joint is a slide; a slide's force is in N or kN"),
     ("hinge", "force [N]", "'N' is a force unit but the joint is a hinge; a hinge's torque is in N·m, Nm, N*m, N·mm, Nmm or N*mm"),
     ("slide", "velocity [deg/s]", "'deg/s' is an angular velocity unit but the joint is a slide; a slide's velocity is in m/s, mm/s or cm/s"),
-    ("slide", "position", "no unit; write the header as 'position [unit]' (e.g. 'position [m]'): a slide's position is in m, mm or cm"),
-    ("slide", "time []", "no unit; write the header as 'time [unit]' (e.g. 'time [s]'): time is in s or ms"),
+    ("slide", "position", "no unit; write the header as 'position [unit]' (e.g. 'position [m]') or pass --position-unit: a slide's position is in m, mm or cm"),
+    ("slide", "time []", "no unit; write the header as 'time [unit]' (e.g. 'time [s]') or pass --time-unit: time is in s or ms"),
     ("slide", "position [inch]", "unknown unit 'inch'; a slide's position is in m, mm or cm"),
     ("hinge", "time [h]", "unknown unit 'h'; time is in s or ms"),
 ])
@@ -358,11 +460,11 @@ def test_bad_units(tmp_path, joint: str, header: str, problem: str) -> None:
 
 @pytest.mark.parametrize("joint, headers, expected", [
     ("slide", ["time [s]", "force [N]"],
-     "column 'position': missing; the file needs a position column named position or q with its unit, e.g. 'position [m]' (columns: 'time [s]', 'force [N]')"),
+     "column 'position': missing; the file needs a position column named position or q with its unit, e.g. 'position [m]', or name it with --position (columns: 'time [s]', 'force [N]')"),
     ("hinge", ["t [s]", "q [rad]", "load [N·m]"],
-     "column 'torque': missing; the file needs a torque column named torque or f with its unit, e.g. 'torque [N·m]' (columns: 't [s]', 'q [rad]', 'load [N·m]')"),
+     "column 'torque': missing; the file needs a torque column named torque or f with its unit, e.g. 'torque [N·m]', or name it with --force (columns: 't [s]', 'q [rad]', 'load [N·m]')"),
     ("slide", ["time [s]", "t [ms]", "q [m]", "f [N]"],
-     "column 't [ms]': a second time column (besides 'time [s]'); keep one"),
+     "column 't [ms]': a second time column (besides 'time [s]'); keep one or name one with --time"),
 ])
 def test_missing_or_doubled_columns(tmp_path, joint: str, headers: list[str], expected: str) -> None:
     write_csv(tmp_path / "c.csv", {h: np.linspace(0, 1, 60) for h in headers})

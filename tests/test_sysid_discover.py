@@ -95,9 +95,11 @@ def _check_parameters(truth: GroundTruth, d) -> None:
         q = np.linspace(0.0, upper, 21)
         assert _law_error(truth, d, q, np.zeros_like(q)) < 0.2
         assert _close(f.stiffness, e.stiffness, 0.25), (f, e)
-    elif kind == "stiction":  # the excess friction over the speeds the fit sees (the floor up to 3x it)
+    elif kind == "stiction":  # the breakaway, measured from rest, and the excess friction over the speeds the fit
+        # sees (the floor up to 3x it), where the truth's Stribeck exponent of 1.5 differs from the library's 2
+        assert _close(f.breakaway, e.breakaway, 0.25), (f, e)
         v = np.linspace(d.fit_velocity, 3 * d.fit_velocity, 9)
-        assert _law_error(truth, d, np.full_like(v, upper / 2), v) < 0.5
+        assert _law_error(truth, d, np.full_like(v, upper / 2), v) < 0.6
 
 
 CASES = [(k, JointType.slide, s) for k in EFFECT_KINDS for s in SEEDS] + \

@@ -238,7 +238,9 @@ def test_simulation_applies_the_truth_law_and_it_is_identifiable(joint: JointTyp
     q, v, f = sim.q[:-1], sim.v[:-1], sim.f[:-1]
     a = np.diff(sim.v) / dt
     applied, extra = effect_laws(truth, q, v, f)
-    slide_ = (np.abs(v) > 0.02 * MOVE_SCALE[joint]) & (np.sign(v) == np.sign(sim.v[1:]))
+    # MuJoCo's friction constraint, though nearly hard, is regularised while a front decelerates to a stop: the
+    # law holds exactly from about 25 mm/s (0.06 rad/s) up
+    slide_ = (np.abs(v) > 0.03 * MOVE_SCALE[joint]) & (np.sign(v) == np.sign(sim.v[1:]))
     inside = (q > 0.01 * MOVE_SCALE[joint]) & (q < truth.range[1] - 0.01 * MOVE_SCALE[joint])
     keep = slide_ & inside
     # implicitfast treats the joint damping implicitly: (m + dt b) a = ...

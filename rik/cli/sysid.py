@@ -5,12 +5,11 @@ from __future__ import annotations
 
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from rik.cli.common import CatalogOption, console, overlays
-from rik.errors import RikError
 
 app = typer.Typer(help="Model discovery: what the simulation gets wrong about a measured joint, the cause, the "
                        "extended joint model and the gain on held-out data.", no_args_is_help=True)
@@ -30,6 +29,17 @@ JointOption = Annotated[JointOpt, typer.Option("--joint", help="Joint type: slid
                                                                "(door or flap, rad and N·m).")]
 
 
+def _column(role: str, header: str, feature: str) -> Any:
+    return typer.Option(f"--{role}", help=f"The {role} column when not found by its usual name: a header such as "
+                                          f"'{header}', or a LeRobot feature such as '{feature}'.",
+                        show_default=False)
+
+
+def _unit(role: str, units: str) -> Any:
+    return typer.Option(f"--{role}-unit", help=f"Unit of the {role} column ({units}), when its header has none "
+                                               "(LeRobot: always).", show_default=False)
+
+
 @app.command()
 def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .parquet) or one LeRobot dataset "
                                                         "folder (with --position and --force).", show_default=False)],
@@ -43,31 +53,81 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
                                                      "shortest whose velocity noise is low enough).")] = None,
         delay: Annotated[float | None, typer.Option("--delay", help="Force-to-position delay, s (default: "
                                                     "estimated).")] = None,
-        position: Annotated[str | None, typer.Option(help="LeRobot: the position feature, e.g. "
-                                                     "'observation.state[2]'.")] = None,
-        position_unit: Annotated[str, typer.Option(help="LeRobot: its unit.")] = "m",
-        force: Annotated[str | None, typer.Option(help="LeRobot: the force or torque feature.")] = None,
-        force_unit: Annotated[str, typer.Option(help="LeRobot: its unit.")] = "N") -> None:
+        time: Annotated[str | None, _column("time", "timestamp_ms", "timestamp")] = None,
+        time_unit: Annotated[str | None, _unit("time", "s or ms")] = None,
+        position: Annotated[str | None, _column("position", "enc_pos", "observation.state[2]")] = None,
+        position_unit: Annotated[str | None, _unit("position", "m, mm, cm; hinge: rad, deg")] = None,
+        force: Annotated[str | None, _column("force", "ft_fx", "action[0]")] = None,
+        force_unit: Annotated[str | None, _unit("force", "N, kN; hinge: N·m, N·mm")] = None,
+        velocity: Annotated[str | None, _column("velocity", "enc_vel", "observation.state[3]")] = None,
+        velocity_unit: Annotated[str | None, _unit("velocity", "m/s, mm/s, cm/s; hinge: rad/s, deg/s")] = None,
+        trial: Annotated[str | None, typer.Option("--trial", help="The column that tells trials apart in a file "
+                                                  "(default: 'trial', if any).", show_default=False)] = None,
+        quasi_static: Annotated[bool, typer.Option("--quasi-static", help="The data is a force-against-position "
+                                                   "profile with no time axis (default when it has no time "
+                                                   "column); position unit 'bin' reads 1° angle bins, a force in "
+                                                   "N on a hinge is a force at the handle.")] = False,
+        group: Annotated[str | None, typer.Option("--group", help="Profile: the column naming each mechanism; one "
+                                                  "report per group.", show_default=False)] = None,
+        drop_nan: Annotated[bool, typer.Option("--drop-nan", help="Profile: leave out rows with an empty or NaN "
+                                               "cell (counted) instead of stopping.")] = False) -> None:
     """Fit the baseline joint model, find the unmodelled effect, extend the model and measure the gain; write a
     report (report.md with plots, summary.json) that names the cause."""
     from rik.sysid.discover import discover
+    from rik.sysid.profile import has_time_column
     from rik.sysid.report import write_report
-    from rik.sysid.trials import load_lerobot_trials, load_trials
+    from rik.sysid.trials import ColumnMap, load_lerobot_trials, load_trials
 
     con = console()
-    if len(data) == 1 and data[0].is_dir():
-        if position is None or force is None:
-            raise RikError(f"{data[0]}: a LeRobot dataset needs --position and --force naming its features")
-        trials = load_lerobot_trials(data[0], joint.value, position=position, position_unit=position_unit,
-                                     force=force, force_unit=force_unit)
+    folder = len(data) == 1 and data[0].is_dir()
+    if quasi_static or (not folder and time is None and not has_time_column(data)):
+        if not quasi_static:
+            con.print("no time column: reading the data as a quasi-static force profile (force against position; "
+                      "pass --time COLUMN if it has one)")
+        fit_profiles(data, joint, report, heldout, position=position, position_unit=position_unit, force=force,
+                     force_unit=force_unit, trial=trial, group=group, drop_nan=drop_nan)
+        return
+    columns = ColumnMap(time=time, position=position, force=force, velocity=velocity, trial=trial,
+                        time_unit=time_unit, position_unit=position_unit, force_unit=force_unit,
+                        velocity_unit=velocity_unit)
+    if folder:
+        trials = load_lerobot_trials(data[0], joint.value, columns)
     else:
-        trials = load_trials(data, joint.value)
+        trials = load_trials(data, joint.value, columns=columns)
     with con.status(f"fitting {len(trials)} trials"):
         found = discover(trials, heldout=heldout, window_s=window, delay_s=delay)
         out = write_report(found, report)
     con.print(found.sentence())
     for text in found.selection.separation:
         con.print(f"  cannot tell apart from this data: {text}")
+    con.print(f"report: {out / 'report.md'}  (summary: {out / 'summary.json'})")
+
+
+def fit_profiles(data: list[Path], joint: JointOpt, report: Path, heldout: list[int] | None, *,
+                 position: str | None, position_unit: str | None, force: str | None, force_unit: str | None,
+                 trial: str | None, group: str | None, drop_nan: bool) -> None:
+    """``rik sysid fit --quasi-static``: fit force-against-position profiles (rik.sysid.profile_fit) and write one
+    report per group."""
+    from rik.sysid.profile import read_profiles
+    from rik.sysid.profile_fit import NOT_IDENTIFIED, fit_profile
+    from rik.sysid.profile_report import verdict, write_profile_report
+
+    con = console()
+    profiles = read_profiles(data, joint.value, position=position, position_unit=position_unit, force=force,
+                             force_unit=force_unit, trial=trial, group=group, drop_nan=drop_nan)
+    if profiles.dropped:
+        con.print(f"left out {profiles.dropped} rows with an empty or NaN cell (first: "
+                  f"{profiles.dropped_rows[0]})")
+    if profiles.bins:
+        con.print("positions are angle bins, read as 1 bin = 1°")
+    with con.status(f"fitting {len(profiles.groups)} quasi-static profile group(s)"):
+        fits = [fit_profile(g, profiles.joint, profiles.force_unit, heldout) for g in profiles.groups]
+        out = write_profile_report(profiles, fits, report)
+    for f in fits:
+        con.print(verdict(f))
+    if profiles.handle_force:
+        con.print("forces are at the handle, in N (no lever arm given)")
+    con.print("not identifiable from a quasi-static profile: " + "; ".join(t.split(":")[0] for t in NOT_IDENTIFIED))
     con.print(f"report: {out / 'report.md'}  (summary: {out / 'summary.json'})")
 
 

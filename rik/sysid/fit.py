@@ -23,6 +23,7 @@ import numpy as np
 
 from rik.errors import RikError
 from rik.schemas.joints import JointType
+from rik.sysid.breakaway import STEP, creeping, find_breakaways
 from rik.sysid.effects import FAMILIES, Baseline, Effect, Family, Motion, baseline_features
 from rik.sysid.preprocess import Prepared, touching
 
@@ -54,14 +55,26 @@ class Rows:
     trial: np.ndarray
     """Index of each row's trial in :attr:`names`."""
     names: tuple[str, ...]
+    weight: np.ndarray | None = None
+    """Least-squares weight of each row (None: all 1): a breakaway row stands for one smoothing window."""
+    breakaway: np.ndarray | None = None
+    """Which rows are breakaways from rest (:mod:`rik.sysid.breakaway`), not moving samples (None: none)."""
 
     def __len__(self) -> int:
         return len(self.q)
 
+    @property
+    def weights(self) -> np.ndarray:
+        return np.ones(len(self.q)) if self.weight is None else self.weight
+
+    @property
+    def breakaways(self) -> np.ndarray:
+        return np.zeros(len(self.q), bool) if self.breakaway is None else self.breakaway
+
     def take(self, mask: np.ndarray) -> Rows:
         """The rows where ``mask`` holds."""
         return Rows(self.joint, self.t[mask], self.q[mask], self.qd[mask], self.qdd[mask], self.f[mask],
-                    self.trial[mask], self.names)
+                    self.trial[mask], self.names, self.weights[mask], self.breakaways[mask])
 
     @property
     def motion(self) -> Motion:
@@ -103,9 +116,10 @@ def fit_velocity(prepared: Sequence[Prepared]) -> float:
 
 
 def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, margin: float | None = None,
-             limits: tuple[float, float] | None = None) -> Rows:
-    """The fit rows of every trial (see the module docstring). ``velocity`` default :func:`fit_velocity`;
-    ``limits`` default: the lowest and highest smoothed position over all trials."""
+             limits: tuple[float, float] | None = None, breakaways: bool = True) -> Rows:
+    """The fit rows of every trial (see the module docstring): the moving samples, then (``breakaways``) each
+    trial's breakaways from rest, weighted as one smoothing window each. ``velocity`` default
+    :func:`fit_velocity`; ``limits`` default: the lowest and highest smoothed position over all trials."""
     joint = prepared[0].trial.joint
     velocity = fit_velocity(prepared) if velocity is None else velocity
     margin = CONTACT_MARGIN[joint] if margin is None else margin
@@ -113,10 +127,25 @@ def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, mar
         limits = (min(float(p.q.min()) for p in prepared), max(float(p.q.max()) for p in prepared))
     parts = []
     for i, p in enumerate(prepared):
-        keep = (np.abs(p.qd) >= velocity) & ~touching(p.q, limits, margin, p.settings.window_samples // 2)
-        parts.append((p.t[keep], p.q[keep], p.qd[keep], p.qdd[keep], p.f_smooth[keep], np.full(keep.sum(), i)))
-    t, q, qd, qdd, f, trial = (np.concatenate(c) for c in zip(*parts, strict=True))
-    return Rows(joint, t, q, qd, qdd, f, trial.astype(int), tuple(p.trial.name for p in prepared))
+        window = p.settings.window_samples
+        away = ~touching(p.q, limits, margin, window // 2)
+        keep = (np.abs(p.qd) >= velocity) & away
+        slow, speed = creeping(p, velocity) if breakaways else (np.zeros(len(p.q), bool), p.qd)
+        keep |= slow & away
+        qd = np.where(slow, speed, p.qd)
+        n = int(keep.sum())
+        parts.append((p.t[keep], p.q[keep], qd[keep], p.qdd[keep], p.f_smooth[keep], np.full(n, i),
+                      np.ones(n), np.zeros(n, bool)))
+        if breakaways:
+            events = find_breakaways(p, limits)
+            m = len(events)
+            parts.append((np.array([e.t for e in events]), np.array([e.q for e in events]),
+                          np.array([e.direction * STEP for e in events]), np.array([e.qdd for e in events]),
+                          np.array([e.force for e in events]), np.full(m, i), np.full(m, float(window)),
+                          np.ones(m, bool)))
+    t, q, qd, qdd, f, trial, weight, event = (np.concatenate(c) for c in zip(*parts, strict=True))
+    return Rows(joint, t, q, qd, qdd, f, trial.astype(int), tuple(p.trial.name for p in prepared), weight,
+                event.astype(bool))
 
 
 def split_rows(rows: Rows, prepared: Sequence[Prepared], heldout: Sequence[int] | None = None) -> Split:
@@ -164,7 +193,9 @@ class Fit:
     """Why a fitted effect is unphysical, or None."""
     parameters: int
     rss: float
-    n: int
+    """Weighted residual sum of squares on the training rows."""
+    n: float
+    """Total weight of the training rows (their count, a breakaway counting as a smoothing window)."""
     rmse_train: float
     rmse_heldout: float
     residual_train: np.ndarray = field(repr=False)
@@ -214,11 +245,14 @@ def design(rows: Rows, terms: Sequence[Term] = ()) -> np.ndarray:
     return np.hstack([base, *(family.features(rows.motion, hyper, rows.joint) for family, hyper in terms)])
 
 
-def _solve(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
-    scale = np.maximum(np.abs(x).max(axis=0), 1e-12)
-    theta, *_ = np.linalg.lstsq(x / scale, y, rcond=None)
+def _solve(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, float]:
+    """Weighted least squares (weights ``w`` per row): the coefficients and the weighted residual sum of squares."""
+    root = np.sqrt(w)
+    xw, yw = x * root[:, None], y * root
+    scale = np.maximum(np.abs(xw).max(axis=0), 1e-12)
+    theta, *_ = np.linalg.lstsq(xw / scale, yw, rcond=None)
     theta = theta / scale
-    r = y - x @ theta
+    r = yw - xw @ theta
     return theta, float(r @ r)
 
 
@@ -230,7 +264,7 @@ def best_hyper(rows: Rows, family: Family, fixed: Sequence[Term] = ()) -> float:
     base = design(rows, fixed)
 
     def rss_at(h: float) -> float:
-        return _solve(np.hstack([base, family.features(rows.motion, h, rows.joint)]), rows.f)[1]
+        return _solve(np.hstack([base, family.features(rows.motion, h, rows.joint)]), rows.f, rows.weights)[1]
 
     if family.grid is None:
         raise ValueError(f"effect family {family.kind} has no hyperparameter to search")
@@ -284,17 +318,19 @@ def fit_model(split: Split, family: Family | None, base: Fit | None = None) -> F
         hyper = best_hyper(rows, family, terms) if family.grid is not None else None
         terms = (*terms, (family, hyper))
     x = design(rows, terms)
-    theta, rss = _solve(x, rows.f)
+    theta, rss = _solve(x, rows.f, rows.weights)
     baseline, effects, problem = _reading(theta, terms, rows.joint, _damping_se(x, rss, split.window_samples))
     residual_train = rows.f - x @ theta
     residual_heldout = split.heldout.f - design(split.heldout, terms) @ theta
     params = x.shape[1] + sum(h is not None for _, h in terms)
-    return Fit(terms, theta, baseline, effects, problem, params, rss, len(rows), _rms(residual_train),
-               _rms(residual_heldout), residual_train, residual_heldout)
+    n = float(rows.weights.sum())
+    return Fit(terms, theta, baseline, effects, problem, params, rss, n, _rms(residual_train, rows.weights),
+               _rms(residual_heldout, split.heldout.weights), residual_train, residual_heldout)
 
 
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x * x))) if len(x) else math.nan
+def _rms(x: np.ndarray, w: np.ndarray) -> float:
+    """Weighted root mean square."""
+    return float(np.sqrt(np.sum(w * x * x) / np.sum(w))) if len(x) else math.nan
 
 
 def fit_all(split: Split, families: Sequence[Family] = FAMILIES) -> tuple[Fit, list[Fit]]:

@@ -131,16 +131,27 @@ class _Excite:
     """Peak speed of the push towards closed that is let go."""
     near_closed: tuple[float, float]
     """Distance from closed at which that push is let go."""
-    overshoot: float
-    """How far below closed the target goes when the front is pushed shut."""
+    push: tuple[float, float]
+    """How far beyond a stop the target goes when the front is pushed against it and held there (the hand
+    presses with about kp times this)."""
+    creep: tuple[float, float]
+    """Speed of the creep from rest at closed (a slow constant-speed pull with a stiff hand, as a robot or a
+    force gauge would make)."""
+    creep_length: tuple[float, float]
+    """Length of that creep."""
 
 
 EXCITE = {
     JointType.slide: _Excite(speed=(0.05, 0.5), block_speed=(0.1, 0.5), slow=(0.01, 0.02), throw=(0.12, 0.3),
-                             near_closed=(0.015, 0.03), overshoot=0.003),
+                             near_closed=(0.015, 0.03), push=(0.01, 0.025), creep=(0.003, 0.006),
+                             creep_length=(0.008, 0.015)),
     JointType.hinge: _Excite(speed=(0.2, 2.0), block_speed=(0.4, 2.0), slow=(0.025, 0.05), throw=(0.5, 1.2),
-                             near_closed=(0.05, 0.15), overshoot=math.radians(1.0)),
+                             near_closed=(0.05, 0.15), push=(math.radians(3.0), math.radians(8.0)),
+                             creep=(0.015, 0.025), creep_length=(0.035, 0.06)),
 }
+CREEP_STIFFNESS = 10.0
+"""The hand's stiffness during a creep, as a multiple of its usual kp (its damping scales with the square root):
+the force builds at about 10·kp·speed until the front breaks away."""
 MOVE_TIME = (0.25, 2.0)
 """Shortest and longest minimum-jerk stroke, s (the peak speed is raised where a stroke would take longer)."""
 BLOCK_MOVE_TIME = 1.2
@@ -692,7 +703,7 @@ def ground_truth_force(truth: GroundTruth, q: np.ndarray, v: np.ndarray, load: n
 
 # ----------------------------------------------------------------------------------------- excitation
 
-SegmentKind = Literal["move", "slow", "hold", "release", "throw"]
+SegmentKind = Literal["move", "slow", "creep", "hold", "release", "throw"]
 
 
 @dataclass(frozen=True)
@@ -702,6 +713,9 @@ class Segment:
     - ``move``: minimum-jerk stroke from the current target (or, after a release, the position) to ``goal`` at
       peak speed ``speed``, lasting 1.875 |Δ| / speed clipped to ``duration`` (its longest) and 0.25 s;
     - ``slow``: constant-speed stroke at ``speed`` to ``goal`` with 0.2 s smooth ramps;
+    - ``creep``: a ``slow`` stroke from the position (not the target: a hand pressing the front on a stop lets
+      off first) with a :data:`CREEP_STIFFNESS` times stiffer hand: the force builds slowly from rest until the
+      front breaks away, then it follows at constant speed;
     - ``hold``: target fixed for ``duration``;
     - ``release``: hand force exactly 0 for ``duration``;
     - ``throw``: a closing minimum-jerk stroke at peak ``speed`` whose midpoint is ``goal`` (so its end is past
@@ -727,8 +741,8 @@ class ExcitationPlan:
             if seg.kind == "move":
                 total += _move_time(abs(seg.goal - at), seg.speed, seg.duration)
                 at = seg.goal
-            elif seg.kind == "slow":
-                total += abs(seg.goal - at) / seg.speed + SLOW_RAMP
+            elif seg.kind in ("slow", "creep"):
+                total += abs(seg.goal - (0.0 if seg.kind == "creep" and at < 0 else at)) / seg.speed + SLOW_RAMP
                 at = seg.goal
             elif seg.kind == "throw":
                 total += _move_time(2 * abs(seg.goal - at), seg.speed, math.inf) / 2 + 0.2  # + the lag
@@ -745,8 +759,9 @@ def _move_time(distance: float, speed: float, longest: float) -> float:
 def excitation_plan(joint: JointType | str, upper: float, rng: np.random.Generator, *, duration_s: float = 12.0,
                     start: float | None = None) -> ExcitationPlan:
     """A random excitation for a joint with range (0, ``upper``) (m or rad) filling ``duration_s`` s: in random
-    order a stroke into the closed end and a hold there, a push towards closed let go near closed, a hold and
-    release from rest at mid-range, a hold then a slow stroke, a stroke near the far stop and a hold there; then
+    order a push held against the closed stop then a creep open from rest there, a push towards closed let go
+    near closed, a hold and release from rest at mid-range, a hold then a slow stroke, a push held against the far
+    stop; then
     strokes of random speed (and short holds) to the end. The required blocks are redrawn (up to 50 times) until
     they fit ``duration_s`` - 0.5 s nominally: always at 12 s, about 97 % at 10 s; shorter trials lose the last
     blocks. ``start`` (default: closed or a random position) is where the front rests at t = 0."""
@@ -768,15 +783,17 @@ def excitation_plan(joint: JointType | str, upper: float, rng: np.random.Generat
         slow_length = slow_speed * _uniform(rng, (1.2, 2.0))
         slow_to = slow_from + (slow_length if rng.random() < 0.5 else -slow_length)
         blocks = [
-            [Segment("move", -x.overshoot, _log_uniform(rng, x.block_speed), BLOCK_MOVE_TIME),
-             Segment("hold", duration=_uniform(rng, (0.5, 0.8)))],
+            [Segment("move", -_uniform(rng, x.push), _log_uniform(rng, x.block_speed), BLOCK_MOVE_TIME),
+             Segment("hold", duration=_uniform(rng, (0.5, 1.0))),
+             Segment("creep", _uniform(rng, x.creep_length), _uniform(rng, x.creep))],
             [move(0.2, 0.45), Segment("throw", _uniform(rng, x.near_closed), _uniform(rng, x.throw)),
              Segment("release", duration=_uniform(rng, (0.5, 0.8)))],
             [move(0.3, 0.7), Segment("hold", duration=_uniform(rng, (0.6, 0.9))),
              Segment("release", duration=_uniform(rng, (0.5, 0.8)))],
             [Segment("move", slow_from, _log_uniform(rng, x.block_speed), BLOCK_MOVE_TIME),
              Segment("hold", duration=0.3), Segment("slow", slow_to, slow_speed)],
-            [move(0.95, 0.98), Segment("hold", duration=_uniform(rng, (0.5, 0.8)))],
+            [Segment("move", u + _uniform(rng, x.push), _log_uniform(rng, x.block_speed), BLOCK_MOVE_TIME),
+             Segment("hold", duration=_uniform(rng, (0.5, 0.8)))],
         ]
         order = rng.permutation(len(blocks))
         plan = ExcitationPlan(begin, tuple(seg for i in order for seg in blocks[i]))
@@ -814,7 +831,7 @@ def _profile(seg: Segment, at: float, dt: float) -> tuple[np.ndarray, np.ndarray
         end = seg.goal + (seg.goal - at)
         total = max(int(round(_move_time(abs(end - at), seg.speed, math.inf) / dt)), 2)
         return _min_jerk(at, end, total, total, dt)
-    if seg.kind == "slow":
+    if seg.kind in ("slow", "creep"):
         distance = abs(seg.goal - at)
         n = max(int(round((distance / seg.speed + SLOW_RAMP) / dt)), 2)
         t = (np.arange(n) + 0.5) * dt
@@ -921,12 +938,13 @@ def simulate(truth: GroundTruth, plan: ExcitationPlan, *, duration_s: float = 12
             released[k:k + n] = True
             after_release = True
         else:
-            if after_release:
+            if after_release or seg.kind == "creep":
                 target = float(qpos[0])
                 after_release = False
             profile = _profile(seg, target, timestep)
             target = float(profile[0][-1])
-            tq, tv, gp, gd = profile[0].tolist(), profile[1].tolist(), kp, kd
+            stiff = CREEP_STIFFNESS if seg.kind == "creep" else 1.0
+            tq, tv, gp, gd = profile[0].tolist(), profile[1].tolist(), kp * stiff, kd * math.sqrt(stiff)
             n = len(tq)
         n = min(n, steps - k)
         segments.append((seg.kind, k * timestep, (k + n) * timestep))

@@ -210,16 +210,16 @@ def masks(q: np.ndarray, qd: np.ndarray, f: np.ndarray, *, moving_velocity: floa
 
 
 def touching(q: np.ndarray, limits: tuple[float, float], margin: float, widen: int) -> np.ndarray:
-    """Samples within ``margin`` of a range end (m or rad), and those within ``widen`` samples of an arrival
-    there: an end stop's impact force is in no model, and smoothing smears it over the window around the
-    arrival (leaving the stop is gradual: the contact force falls to zero before the front moves off, so the
-    samples after a departure stay). Pass the smoothed position and limits from it: the raw position's extremes
-    lie several noise deviations beyond the stop."""
+    """Samples within ``margin`` of a range end (m or rad), and those within ``widen`` samples of an arrival there
+    or a departure from there: an end stop's force is in no model, and smoothing smears it over the window on both
+    sides (an impact on arrival; on departure, the force of a hand that pressed the front on the stop and lets
+    off while the stop still holds it, which reaches the samples after the front has left). Pass the smoothed
+    position and limits from it: the raw position's extremes lie several noise deviations beyond the stop."""
     near = (q <= limits[0] + margin) | (q >= limits[1] - margin)
     if not near.any() or widen <= 0:
         return near
-    arrivals = near & ~np.concatenate([[False], near[:-1]])
-    return near | (np.convolve(arrivals.astype(float), np.ones(2 * widen + 1), mode="same") > 0)
+    edges = near != np.concatenate([near[:1], near[:-1]])
+    return near | (np.convolve(edges.astype(float), np.ones(2 * widen + 1), mode="same") > 0)
 
 
 def observed_limits(trials: Sequence[Trial]) -> tuple[float, float]:

@@ -112,13 +112,15 @@ Residuals = tuple[Rows, np.ndarray, np.ndarray | None, np.ndarray]
 
 
 def all_residuals(d: Discovery) -> Residuals:
-    """All fit rows (training then held-out), the baseline's and the chosen model's residuals, held-out flags."""
+    """The moving fit rows (training then held-out; breakaways have their own plot), the baseline's and the
+    chosen model's residuals, held-out flags."""
     sel = d.selection
     parts = (d.split.train, d.split.heldout)
     t, q, qd, qdd, f, trial = (np.concatenate([getattr(p, k) for p in parts]) for k in ("t", "q", "qd", "qdd", "f",
                                                                                          "trial"))
-    rows = Rows(d.joint, t, q, qd, qdd, f, trial, d.rows.names)
-    held = np.concatenate([np.zeros(len(parts[0]), bool), np.ones(len(parts[1]), bool)])
+    moving = ~np.concatenate([p.breakaways for p in parts])
+    rows = Rows(d.joint, t, q, qd, qdd, f, trial, d.rows.names).take(moving)
+    held = np.concatenate([np.zeros(len(parts[0]), bool), np.ones(len(parts[1]), bool)])[moving]
     chosen = sel.final if sel.found else None
     return rows, _residuals(sel.baseline, rows), _residuals(chosen, rows) if chosen else None, held
 

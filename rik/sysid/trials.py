@@ -1,7 +1,7 @@
 """Measured trials in: CSV or Parquet files, or a LeRobot dataset, read into SI numpy arrays and checked.
 
-Files (:func:`load_trials`)
----------------------------
+Files (:func:`load_trials`; LeRobot datasets: :func:`load_lerobot_trials`)
+--------------------------------------------------------------------------
 ``.csv`` (comma-separated, UTF-8, first line the header) or ``.parquet``/``.pq``. One row per sample; a file may
 hold several trials told apart by a ``trial`` column (its rows need not be contiguous; trials keep the order of
 their first row), and several files may be read at once. A column header is a name, then the unit in square
@@ -21,6 +21,13 @@ trial      ``trial``                none (optional; any values)             none
 Position is the joint coordinate (0 closed, positive opening, as in :class:`rik.schemas.joints.JointSpec`); force
 is the applied force (slide) or torque (hinge) along it. Other columns are ignored. A trial without a ``trial``
 column is named after its file's stem.
+
+Other headers (a logger's ``timestamp_ms``, ``enc_pos``, ``ft_fx``; plain ``t,q,f``) are read through a
+:class:`ColumnMap` (the ``rik sysid fit`` options ``--time``, ``--position``, ``--force``, ``--velocity``,
+``--trial`` and ``--time-unit``, ``--position-unit``, ``--force-unit``, ``--velocity-unit``): it names the column
+of a quantity (its header then may say anything) and declares the unit of a column whose header has none, from
+the table above. A unit is needed for every column read; a header's own valid unit must agree with a declared one.
+A named column not in a file is refused with the file's columns listed (and the closest, if one is close).
 
 Messages name rows as the 0-based index among the file's data rows (what pandas or pyarrow show); CSV rows add
 their line number in the file (the header is line 1).
@@ -140,6 +147,58 @@ class Trial:
         return self.meta.samples
 
 
+@dataclass(frozen=True)
+class ColumnMap:
+    """Which column holds which quantity, and in which unit: how to read data whose headers do not follow the
+    ``name [unit]`` convention (a logger's ``timestamp_ms``, ``enc_pos``, ``ft_fx``), and a LeRobot dataset's
+    features. The default (all None) reads headers with units as described in the module docstring.
+
+    ``time``, ``position``, ``force``, ``velocity`` name a column (files: a header, matched exactly, else
+    case-insensitively on its name without the ``[unit]``; LeRobot: a feature reference such as
+    ``observation.state[2]``); a quantity left None is found by its usual names (:data:`COLUMN_NAMES`). A named
+    column's header may carry any text. ``trial`` names the column that tells trials apart in a file (default: a
+    ``trial`` column, if any; a LeRobot dataset's trials are its episodes).
+
+    ``time_unit``, ``position_unit``, ``force_unit``, ``velocity_unit`` declare the unit of that quantity's
+    column, named or found, from the unit tables of the module docstring (``force_unit`` is a torque unit for a
+    hinge). A header without a unit needs one; a header whose brackets hold a valid unit must agree with it.
+    Messages name the ``rik sysid fit`` options (``--position``, ``--position-unit``), which map one to one onto
+    these fields."""
+
+    time: str | None = None
+    position: str | None = None
+    force: str | None = None
+    velocity: str | None = None
+    trial: str | None = None
+    time_unit: str | None = None
+    """``s`` or ``ms``."""
+    position_unit: str | None = None
+    """m, mm, cm (slide) or rad, deg (hinge)."""
+    force_unit: str | None = None
+    """N, kN (slide) or N·m, N·mm and their spellings (hinge)."""
+    velocity_unit: str | None = None
+    """The position unit per second: ``mm/s``, ``deg/s``."""
+
+    def __post_init__(self) -> None:
+        named: dict[str, str] = {}
+        for role in (*ROLES, "trial"):
+            column = getattr(self, role)
+            if column is None:
+                continue
+            if column in named:
+                raise RikError(f"--{named[column]} and --{role} both name column '{column}'; each quantity "
+                               "needs its own column")
+            named[column] = role
+
+    def column(self, role: str) -> str | None:
+        """The column named for quantity ``role`` (``time``, ``position``, ``force``, ``velocity``), or None."""
+        return cast("str | None", getattr(self, role))
+
+    def unit(self, role: str) -> str | None:
+        """The unit declared for quantity ``role``, or None."""
+        return cast("str | None", getattr(self, f"{role}_unit"))
+
+
 # ---------------------------------------------------------------------------------------------------- units
 
 def _choices(units: Iterable[str]) -> str:
@@ -159,14 +218,20 @@ def _accepted(role: str, joint: JointType) -> str:
     return f"a {joint.value}'s {word} is in {_choices(_table(role)[joint])}"
 
 
+def unit_option(role: str) -> str:
+    """The ``rik sysid fit`` option that declares the unit of quantity ``role`` (``--position-unit``): what
+    messages tell the user to add (the :class:`ColumnMap` field is ``position_unit``)."""
+    return f"--{role}-unit"
+
+
 def unit_scale(role: str, unit: str | None, joint: JointType, header: str) -> float:
     """Factor from ``unit`` to SI for quantity ``role`` of a ``joint``; raises ValueError with the problem (the
     caller adds file and column) for a missing, unknown or mismatched unit."""
     if not unit:
         example = next(iter(TIME_UNITS if role == "time" else _table(role)[joint]))
         name = header.strip() or role
-        raise ValueError(f"no unit; write the header as '{name} [unit]' (e.g. '{name} [{example}]'): "
-                         f"{_accepted(role, joint)}")
+        raise ValueError(f"no unit; write the header as '{name} [unit]' (e.g. '{name} [{example}]') or pass "
+                         f"{unit_option(role)}: {_accepted(role, joint)}")
     if role == "time":
         if unit in TIME_UNITS:
             return TIME_UNITS[unit]
@@ -320,38 +385,89 @@ def _parse_header(header: str) -> tuple[str, str | None]:
     return match["name"].lower(), (unit.strip() if unit is not None else None)
 
 
-def _find_columns(raw: _Raw, joint: JointType) -> tuple[dict[str, str], dict[str, str], dict[str, float], str | None]:
-    """Headers, declared units and SI factors of each quantity, and the trial column's header (or None)."""
-    found: dict[str, str] = {}
-    trial: str | None = None
+def _match_header(raw: _Raw, wanted: str, role: str) -> str:
+    """The header of ``raw`` named by the user for ``role``: equal to ``wanted``, else the one whose name
+    (without ``[unit]``) or whole text equals it case-insensitively."""
+    if wanted in raw.headers:
+        return wanted
+    key = wanted.strip().lower()
+    hits = [h for h in raw.headers if h.strip().lower() == key or _parse_header(h)[0] == key]
+    if len(hits) == 1:
+        return hits[0]
+    if len(hits) > 1:
+        listed = " and ".join(f"'{h}'" for h in hits)
+        raise TrialError(raw.file, None, wanted, f"--{role} matches {listed}; name one exactly")
+    close = difflib.get_close_matches(wanted, raw.headers, n=2, cutoff=0.6)
+    hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+    columns = ", ".join(f"'{h}'" for h in raw.headers)
+    raise TrialError(raw.file, None, wanted, f"no such column (--{role}){hint} (columns: {columns})")
+
+
+def _column_unit(raw: _Raw, role: str, header: str, joint: JointType, columns: ColumnMap) -> tuple[str, float]:
+    """(unit, SI factor) of the column ``header`` holding ``role``: the declared unit option, else the header's."""
+    name, declared = _parse_header(header)
+    option = columns.unit(role)
+    if not option:
+        if declared is None and columns.column(role) is not None:
+            raise TrialError(raw.file, None, header, f"no unit in the header; pass {unit_option(role)}: "
+                                                     f"{_accepted(role, joint)}")
+        try:
+            return declared or "", unit_scale(role, declared, joint, name)
+        except ValueError as exc:
+            raise TrialError(raw.file, None, header, str(exc)) from None
+    try:
+        scale = unit_scale(role, option, joint, name)
+    except ValueError as exc:
+        raise TrialError(raw.file, None, header, f"{unit_option(role)}: {exc}") from None
+    if declared:
+        try:
+            if unit_scale(role, declared, joint, name) == scale:
+                return option, scale
+        except ValueError:
+            return option, scale  # the brackets hold no unit of this quantity: the option declares it
+        raise TrialError(raw.file, None, header, f"the header says '{declared}' but {unit_option(role)} says "
+                                                 f"'{option}'; drop the option or make them agree")
+    return option, scale
+
+
+def _find_columns(raw: _Raw, joint: JointType, columns: ColumnMap
+                  ) -> tuple[dict[str, str], dict[str, str], dict[str, float], str | None]:
+    """Headers, declared units and SI factors of each quantity, and the trial column's header (or None): the
+    columns ``columns`` names, the others found by their usual names."""
+    found = {role: _match_header(raw, columns.column(role) or "", role) for role in ROLES
+             if columns.column(role) is not None}
+    trial = None if columns.trial is None else _match_header(raw, columns.trial, "trial")
+    taken = set(found.values()) | {trial}
     for header in raw.headers:
+        if header in taken:
+            continue
         name, _ = _parse_header(header)
         if name == TRIAL_COLUMN:
-            trial = header
+            if columns.trial is None:
+                trial = header
             continue
         for role, aliases in COLUMN_NAMES.items():
-            if name in aliases:
+            if name in aliases and columns.column(role) is None:
                 if role in found:
                     raise TrialError(raw.file, None, header, f"a second {role} column (besides "
-                                                             f"'{found[role]}'); keep one")
+                                                             f"'{found[role]}'); keep one or name one with --{role}")
                 found[role] = header
     for role in ("time", "position", "force"):
         if role not in found:
             names = " or ".join(n for n in COLUMN_NAMES[role] if not (role == "force" and n == _other_word(joint)))
-            columns = ", ".join(f"'{h}'" for h in raw.headers)
+            listed = ", ".join(f"'{h}'" for h in raw.headers)
             word = "torque" if role == "force" and joint is JointType.hinge else role
             unit = next(iter(TIME_UNITS if role == "time" else _table(role)[joint]))
             raise TrialError(raw.file, None, word, f"missing; the file needs a {word} column named {names} with "
-                                                   f"its unit, e.g. '{word} [{unit}]' (columns: {columns})")
+                                                   f"its unit, e.g. '{word} [{unit}]', or name it with --{role} "
+                                                   f"(columns: {listed})")
+    if columns.velocity_unit is not None and "velocity" not in found:
+        raise TrialError(raw.file, None, None, f"{unit_option('velocity')} is given but the file has no velocity "
+                                               "column; name it with --velocity")
     units: dict[str, str] = {}
     scales: dict[str, float] = {}
     for role, header in found.items():
-        name, declared = _parse_header(header)
-        try:
-            scales[role] = unit_scale(role, declared, joint, name)
-        except ValueError as exc:
-            raise TrialError(raw.file, None, header, str(exc)) from None
-        units[role] = declared or ""
+        units[role], scales[role] = _column_unit(raw, role, header, joint, columns)
     return found, units, scales, trial
 
 
@@ -472,8 +588,8 @@ def _rows_where(where: Callable[[int], str], rows: np.ndarray) -> Callable[[int]
     return lambda i: where(int(rows[i]))
 
 
-def _file_trials(raw: _Raw, joint: JointType, limits: _Thresholds) -> list[Trial]:
-    columns, units, scales, trial_header = _find_columns(raw, joint)
+def _file_trials(raw: _Raw, joint: JointType, limits: _Thresholds, column_map: ColumnMap) -> list[Trial]:
+    columns, units, scales, trial_header = _find_columns(raw, joint, column_map)
     data = {role: raw.numbers(header) for role, header in columns.items()}
     if raw.rows == 0:
         raise TrialError(raw.file, None, None, "no data rows below the header")
@@ -499,10 +615,11 @@ def _file_trials(raw: _Raw, joint: JointType, limits: _Thresholds) -> list[Trial
 
 
 def load_trials(paths: str | Path | Sequence[str | Path], joint: Literal["slide", "hinge"] | JointType, *,
-                min_samples: int = MIN_SAMPLES, min_motion: float | None = None,
+                columns: ColumnMap | None = None, min_samples: int = MIN_SAMPLES, min_motion: float | None = None,
                 min_force_range: float | None = None) -> list[Trial]:
     """Every trial in the CSV or Parquet ``paths`` (see the module docstring for the format), in SI units.
 
+    ``columns`` names columns and declares units the headers do not (:class:`ColumnMap`; the same for every file).
     ``min_motion`` (m or rad) and ``min_force_range`` (N or N·m) default to :data:`MIN_MOTION` and
     :data:`MIN_FORCE_RANGE` of the joint type. Raises :class:`TrialError` (a :class:`RikError`) naming the file,
     trial and column of the first problem."""
@@ -513,7 +630,7 @@ def load_trials(paths: str | Path | Sequence[str | Path], joint: Literal["slide"
         raise RikError("no trial files given; pass one or more .csv or .parquet files")
     trials: list[Trial] = []
     for path in files:
-        trials += _file_trials(_read(Path(path)), kind, limits)
+        trials += _file_trials(_read(Path(path)), kind, limits, columns or ColumnMap())
     return trials
 
 
@@ -603,7 +720,7 @@ def _ref_values(table: pa.Table, ref: _FeatureRef, file: str) -> tuple[np.ndarra
 
 
 def _lerobot_file(path: Path, refs: dict[str, _FeatureRef], fps: float) -> tuple[dict[str, Any], np.ndarray]:
-    """The referenced columns of one data file (plus time) and its episode index per row."""
+    """The referenced columns of one data file (plus time, unless referenced) and its episode index per row."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -616,6 +733,8 @@ def _lerobot_file(path: Path, refs: dict[str, _FeatureRef], fps: float) -> tuple
         raise TrialError(file, None, "episode_index", "missing; a LeRobot data file has one per row")
     episodes = table.column("episode_index").to_numpy(zero_copy_only=False).astype(np.int64)
     columns = {role: _ref_values(table, ref, file) for role, ref in refs.items()}
+    if "time" in refs:
+        return columns, episodes
     if "timestamp" in table.column_names:
         columns["time"] = _ref_values(table, _FeatureRef("timestamp", "timestamp", 0, 1), file)
     elif "frame_index" in table.column_names:
@@ -626,61 +745,70 @@ def _lerobot_file(path: Path, refs: dict[str, _FeatureRef], fps: float) -> tuple
     return columns, episodes
 
 
-def load_lerobot_trials(root: str | Path, joint: Literal["slide", "hinge"] | JointType, *, position: str,
-                        position_unit: str, force: str, force_unit: str, velocity: str | None = None,
-                        velocity_unit: str | None = None, episodes: Iterable[int] | None = None,
-                        min_samples: int = MIN_SAMPLES, min_motion: float | None = None,
-                        min_force_range: float | None = None) -> list[Trial]:
+def load_lerobot_trials(root: str | Path, joint: Literal["slide", "hinge"] | JointType, columns: ColumnMap, *,
+                        episodes: Iterable[int] | None = None, min_samples: int = MIN_SAMPLES,
+                        min_motion: float | None = None, min_force_range: float | None = None) -> list[Trial]:
     """One trial per episode of the LeRobot v3.0 dataset in folder ``root`` (the folder holding ``meta/`` and
     ``data/``), read with pyarrow from ``data/**/*.parquet`` (lerobot itself is not imported).
 
-    ``position``, ``force`` and ``velocity`` name a number in the dataset: a scalar feature (``key``), or one
-    value of a vector feature by index (``observation.state[3]``) or by its name in the feature's ``names``
-    (``observation.state[front_qpos]``). LeRobot records no units, so ``position_unit``, ``force_unit`` and
-    ``velocity_unit`` declare them (the units of the file table in the module docstring). Time is the
-    ``timestamp`` column, s (else ``frame_index / fps``). Trials are named ``episode_<index>``, in index order;
-    ``episodes`` keeps only those indices. Checks and thresholds are those of :func:`load_trials`."""
+    ``columns`` (:class:`ColumnMap`) must name ``position`` and ``force``, and may name ``velocity`` and
+    ``time``: each a number in the dataset: a scalar feature (``key``), or one value of a vector feature by index
+    (``observation.state[3]``) or by its name in the feature's ``names`` (``observation.state[front_qpos]``).
+    LeRobot records no units, so each named quantity needs its unit declared (the units of the file table in the
+    module docstring). Time is the ``timestamp`` column, s (else ``frame_index / fps``), unless ``time`` names
+    another feature; ``time_unit`` alone declares the ``timestamp`` column's unit. Trials are named
+    ``episode_<index>``, in index order (``trial`` is refused: the episodes are the trials); ``episodes`` keeps
+    only those indices. Checks and thresholds are those of :func:`load_trials`."""
     kind = joint_type(joint)
     limits = _thresholds(kind, min_samples, min_motion, min_force_range)
     root = Path(root)
+    if columns.position is None or columns.force is None:
+        raise TrialError(root, None, None, "a LeRobot dataset needs --position and --force naming its features")
+    if columns.trial is not None:
+        raise TrialError(root, None, columns.trial, "a LeRobot dataset's trials are its episodes (episode_index); "
+                                                    "--trial is for CSV and Parquet files")
+    if columns.velocity_unit is not None and columns.velocity is None:
+        raise TrialError(root, None, None, f"{unit_option('velocity')} is given but no --velocity feature")
     info_file, info = _read_info(root)
-    declared: dict[str, tuple[str, str | None]] = {"position": (position, position_unit),
-                                                   "force": (force, force_unit)}
-    if velocity is not None:
-        declared["velocity"] = (velocity, velocity_unit)
+    time = columns.time if columns.time is not None else ("timestamp" if columns.time_unit else None)
+    declared: dict[str, tuple[str, str | None]] = {
+        role: (text, columns.unit(role)) for role, text in
+        (("time", time), ("position", columns.position), ("force", columns.force), ("velocity", columns.velocity))
+        if text is not None}
     refs = {role: _feature_ref(text, info["features"], info_file) for role, (text, _) in declared.items()}
     scales = {"time": 1.0}
     for role, (text, unit) in declared.items():
         if not unit:
-            raise TrialError(root, None, text, f"no unit; pass {role}_unit: {_accepted(role, kind)}")
+            raise TrialError(root, None, text, f"no unit (LeRobot records none); pass {unit_option(role)}: "
+                                               f"{_accepted(role, kind)}")
         try:
             scales[role] = unit_scale(role, unit, kind, role)
         except ValueError as exc:
-            raise TrialError(root, None, text, str(exc)) from None
+            raise TrialError(root, None, text, f"{unit_option(role)}: {exc}") from None
     files = sorted((root / "data").glob("**/*.parquet"))
     if not files:
         raise TrialError(root, None, None, "no data/**/*.parquet files; not a LeRobot v3.0 dataset")
     wanted = None if episodes is None else {int(e) for e in episodes}
     found: dict[int, tuple[str, dict[str, Any], np.ndarray]] = {}
     for path in files:
-        columns, index = _lerobot_file(path, refs, float(info["fps"]))
+        values, index = _lerobot_file(path, refs, float(info["fps"]))
         for ep in np.unique(index):
             if wanted is not None and int(ep) not in wanted:
                 continue
             if int(ep) in found:
                 raise TrialError(path, f"episode_{ep}", "episode_index", f"the episode is also in "
                                                                          f"{found[int(ep)][0]}; one file per episode")
-            found[int(ep)] = (str(path), columns, np.flatnonzero(index == ep))
+            found[int(ep)] = (str(path), values, np.flatnonzero(index == ep))
     if wanted is not None and (missing := sorted(wanted - set(found))):
         raise TrialError(root, None, "episode_index", f"no episode {missing[0]} in the dataset")
     units = {"time": "s", **{role: unit or "" for role, (_, unit) in declared.items()}}  # each checked above
     names = {"time": "timestamp", **{role: ref.text for role, ref in refs.items()}}
     trials = []
     for ep in sorted(found):
-        file, columns, rows = found[ep]
+        file, values, rows = found[ep]
         src = _Source(file, f"episode_{ep}", kind, names, units, scales,
-                      {role: columns[role][0][rows] for role in columns},
-                      {role: columns[role][1][rows] for role in columns},
+                      {role: values[role][0][rows] for role in values},
+                      {role: values[role][1][rows] for role in values},
                       _rows_where(lambda row: f"row {row}", rows))
         trials.append(_build(src, limits))
     return trials
