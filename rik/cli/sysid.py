@@ -158,6 +158,7 @@ def simulate(effect: Annotated[str, typer.Option("--effect", help="Hidden effect
 
     kind = None if effect == "none" else effect
     if generator is GeneratorOpt.foreign:
+        from rik.errors import RikError
         from rik.sysid.foreign import FOREIGN_KINDS, foreign_truth, simulate_foreign, write_foreign
 
         if effect not in FOREIGN_KINDS:
