@@ -20,6 +20,11 @@ class JointOpt(StrEnum):
     hinge = "hinge"
 
 
+class GeneratorOpt(StrEnum):
+    rik = "rik"
+    foreign = "foreign"
+
+
 JointOption = Annotated[JointOpt, typer.Option("--joint", help="Joint type: slide (drawer, m and N) or hinge "
                                                                "(door or flap, rad and N·m).")]
 
@@ -140,7 +145,11 @@ def simulate(effect: Annotated[str, typer.Option("--effect", help="Hidden effect
              seed: Annotated[int, typer.Option("--seed", help="Seed of the truth and the excitation.")] = 0,
              duration: Annotated[float, typer.Option("--duration", min=1.0, help="Seconds per trial.")] = 12.0,
              mass: Annotated[float | None, typer.Option("--mass", min=0.0, help="Moving mass, kg (slide) or "
-                                                        "inertia, kg·m² (hinge); default drawn.")] = None) -> None:
+                                                        "inertia, kg·m² (hinge); default drawn.")] = None,
+             generator: Annotated[GeneratorOpt, typer.Option("--generator", help="rik (MuJoCo, shapes near the "
+                                                             "library's) or foreign (own integrator, LuGre "
+                                                             "friction, compliant stops, other shapes; no --second "
+                                                             "or --mass).")] = GeneratorOpt.rik) -> None:
     """Generate demonstration data: a joint with one hidden effect (realistic parameters from --seed) driven by a
     simulated hand through strokes, holds and releases, measured with noise and delay (MuJoCo at 0.5 ms)."""
     import numpy as np
@@ -148,10 +157,25 @@ def simulate(effect: Annotated[str, typer.Option("--effect", help="Hidden effect
     from rik.sysid.generate import random_truth, simulate_trials, write_trials
 
     kind = None if effect == "none" else effect
-    truth = random_truth(kind, joint.value, np.random.default_rng(seed), mass=mass, second=second)
-    with console().status(f"simulating {trials} trials"):
-        made = simulate_trials(truth, n_trials=trials, seed=seed, duration_s=duration)
-        paths = write_trials(made, out, truth)
+    if generator is GeneratorOpt.foreign:
+        from rik.errors import RikError
+        from rik.sysid.foreign import FOREIGN_KINDS, foreign_truth, simulate_foreign, write_foreign
+
+        if effect not in FOREIGN_KINDS:
+            raise RikError(f"--effect '{effect}' is not an effect of the foreign generator; use one of "
+                           f"{', '.join(FOREIGN_KINDS)}")
+        if second is not None or mass is not None:
+            raise RikError("--second and --mass work with --generator rik only; the foreign generator draws one "
+                           "effect and its own mass")
+        foreign = foreign_truth(kind, joint.value, np.random.default_rng(seed))
+        with console().status(f"simulating {trials} trials"):
+            paths = write_foreign(simulate_foreign(foreign, n_trials=trials, seed=seed, duration_s=duration), out,
+                                  foreign)
+    else:
+        truth = random_truth(kind, joint.value, np.random.default_rng(seed), mass=mass, second=second)
+        with console().status(f"simulating {trials} trials"):
+            made = simulate_trials(truth, n_trials=trials, seed=seed, duration_s=duration)
+            paths = write_trials(made, out, truth)
     con = console()
     hidden = effect + (f" and {second}" if second else "")
     con.print(f"{len(paths)} trials of a {joint.value} joint with {hidden} hidden → {out}/ (truth in "
