@@ -23,7 +23,9 @@ the breakaway force.
    released front that drifts is moved by the joint's own forces, which the moving samples already show).
 
 Each kept event becomes a row of the equation-error fit (:func:`rik.sysid.fit.all_rows`), at its position, with
-the velocity an infinitesimal step in its direction: every law is evaluated at rest, so a model's static
+the velocity an infinitesimal step in its direction and the filtered acceleration there (the force a hand puts
+past the threshold while the position catches up accelerates the front: with the acceleration left out, doors
+with nothing hidden came out with twice their friction): every law is evaluated at rest, so a model's static
 resistance is compared with the measured breakaway.
 """
 
@@ -65,14 +67,14 @@ class Breakaway:
     """Time of the peak force, s."""
     q: float
     """Position at the peak force, m or rad."""
-    qdd: float
-    """Acceleration there, m/s² or rad/s² (small: the front has barely moved)."""
     direction: int
     """+1 opening, -1 closing."""
     force: float
     """The applied force at breakaway, signed, N or N·m."""
     index: int
     """Sample index of the peak force in the trial."""
+    qdd: float
+    """Acceleration there, m/s² or rad/s² (the force past the threshold starts to accelerate the front)."""
     from_stop: bool
     """Whether the front rested on a range end."""
 
@@ -163,7 +165,7 @@ def find_breakaways(p: Prepared, limits: tuple[float, float]) -> list[Breakaway]
             continue
         if events and events[-1].index == peak:  # the same start seen from two rests (a push, then let off)
             continue
-        events.append(Breakaway(float(p.t[peak]), float(q[peak]), float(qdd[peak]), direction, force, peak,
+        events.append(Breakaway(float(p.t[peak]), float(q[peak]), direction, force, peak, float(qdd[peak]),
                                 on_stop))
     return events
 
@@ -175,10 +177,11 @@ CREEP_SIGMAS = 6.0
 
 
 def creeping(p: Prepared, velocity: float) -> tuple[np.ndarray, np.ndarray]:
-    """Samples moving slower than ``velocity`` (the fit's floor, m/s or rad/s) whose motion a long difference still
-    resolves: (mask, speed). The speed is ``(q[i + L] − q[i − L]) / (2·L·dt)`` over :data:`CREEP_SPAN_S`, kept where
-    it exceeds :data:`CREEP_SIGMAS` of its noise and the front moves the same way over both halves of the span (a
-    creep at constant slow speed, not the turn of a stroke or a stop)."""
+    """Samples moving slower than ``velocity`` (the fit's floor, m/s or rad/s; by the filtered velocity and by the
+    long difference) whose motion the long difference still resolves: (mask, speed). The speed is
+    ``(q[i + L] − q[i − L]) / (2·L·dt)`` over :data:`CREEP_SPAN_S`, kept where it exceeds :data:`CREEP_SIGMAS` of
+    its noise and the front moves the same way over both halves of the span (a creep at constant slow speed, not
+    the turn of a stroke or a stop)."""
     q = p.q
     n = len(q)
     span = max(int(round(CREEP_SPAN_S * p.settings.rate_hz)), 1)
@@ -192,5 +195,6 @@ def creeping(p: Prepared, velocity: float) -> tuple[np.ndarray, np.ndarray]:
     speed[i] = (ahead + behind) / (2 * span * p.dt)
     noise = math.sqrt(2.0) * band / (2 * span * p.dt)
     same = (np.sign(ahead) == np.sign(behind)) & (np.minimum(np.abs(ahead), np.abs(behind)) > 2.0 * band)
-    mask[i] = same & (np.abs(speed[i]) > CREEP_SIGMAS * noise) & (np.abs(p.qd[i]) < velocity)
+    slow = (np.abs(speed[i]) < velocity) & (np.abs(p.qd[i]) < velocity)
+    mask[i] = same & slow & (np.abs(speed[i]) > CREEP_SIGMAS * noise)
     return mask, speed

@@ -1,14 +1,25 @@
 """Equation-error fits of the baseline joint model and of each effect of the library, scored on held-out data.
 
-The rows a fit uses are the *moving* samples of the preprocessed trials (|v| above :func:`fit_velocity`: at least
-:data:`FIT_VELOCITY`, raised to :data:`NOISE_SIGMAS` times the velocity noise) away from the range's ends: samples
-within :data:`CONTACT_MARGIN` of a limit, and those within half a smoothing window of an arrival there, are left
-out, because the end stop's contact force is in no model and smoothing smears an impact over the window
-(:func:`rik.sysid.preprocess.touching`). Forces are the smoothed ones (``f_smooth``), filtered like the
-derivatives.
+The rows a fit uses, per preprocessed trial:
 
-Errors are the root mean square of ``F_measured − F_model`` (N or N·m), on the training rows and on the held-out
-rows; BIC is ``n·ln(RSS/n) + p·ln(n)`` on the training rows. A family's hyperparameter is searched on its grid,
+- **moving** samples (|v| above :func:`fit_velocity`: at least :data:`FIT_VELOCITY`, raised to :data:`NOISE_SIGMAS`
+  times the velocity noise) whose whole smoothing window moves one way that fast (:func:`steady`: the smoothed
+  force around a reversal, a start or a stop carries the filtered step of the friction, which regressors at the
+  smoothed velocity do not);
+- **breakaways** from rest (:func:`rik.sysid.breakaway.find_breakaways`): the force at which a resting front
+  started to move, at an infinitesimal velocity in its direction and the acceleration there, weighted as one smoothing
+  window of samples (the moving samples are correlated over a window); they carry the static resistance, which
+  the moving samples do not see below the noise floor;
+- **creeping** samples, slower than that floor but resolved by a long difference
+  (:func:`rik.sysid.breakaway.creeping`), at that difference's speed and zero acceleration;
+
+all away from the range's ends: samples within :data:`CONTACT_MARGIN` of a limit, and those within half a
+smoothing window of an arrival there or a departure from there, are left out, because the end stop's contact
+force is in no model and smoothing smears it over the window (:func:`rik.sysid.preprocess.touching`). Forces are
+the smoothed ones (``f_smooth``), filtered like the derivatives.
+
+Errors are the weighted root mean square of ``F_measured − F_model`` (N or N·m), on the training rows and on the
+held-out rows; BIC is ``n·ln(RSS/n) + p·ln(n)`` on the training rows. A family's hyperparameter is searched on its grid,
 then refined by a bounded 1-D search between the best grid point's neighbours (variable projection: for each
 value the coefficients are a linear least-squares solution).
 """
@@ -115,6 +126,19 @@ def fit_velocity(prepared: Sequence[Prepared]) -> float:
     return max(FIT_VELOCITY[joint], NOISE_SIGMAS * noise)
 
 
+def steady(qd: np.ndarray, velocity: float, half: int) -> np.ndarray:
+    """Samples whose whole smoothing window (``half`` samples each side) moves one way at least ``velocity`` fast
+    (m/s or rad/s): the smoothed force there carries no filtered friction step of a reversal, start or stop, which
+    regressors evaluated at the smoothed velocity would not."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    direction = np.sign(qd) * (np.abs(qd) >= velocity)
+    if half <= 0:
+        return direction != 0
+    windows = sliding_window_view(np.concatenate([np.zeros(half), direction, np.zeros(half)]), 2 * half + 1)
+    return (windows.min(axis=1) == windows.max(axis=1)) & (direction != 0)
+
+
 def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, margin: float | None = None,
              limits: tuple[float, float] | None = None, breakaways: bool = True) -> Rows:
     """The fit rows of every trial (see the module docstring): the moving samples, then (``breakaways``) each
@@ -128,13 +152,15 @@ def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, mar
     parts = []
     for i, p in enumerate(prepared):
         window = p.settings.window_samples
-        away = ~touching(p.q, limits, margin, window // 2)
+        away = ~touching(p.q, limits, margin, window // 2, p.f_smooth)
         keep = (np.abs(p.qd) >= velocity) & away
+        keep &= steady(p.qd, velocity, window // 2)
         slow, speed = creeping(p, velocity) if breakaways else (np.zeros(len(p.q), bool), p.qd)
         keep |= slow & away
         qd = np.where(slow, speed, p.qd)
+        qdd = np.where(slow, 0.0, p.qdd)  # a creep is at constant speed; its filtered acceleration is noise
         n = int(keep.sum())
-        parts.append((p.t[keep], p.q[keep], qd[keep], p.qdd[keep], p.f_smooth[keep], np.full(n, i),
+        parts.append((p.t[keep], p.q[keep], qd[keep], qdd[keep], p.f_smooth[keep], np.full(n, i),
                       np.ones(n), np.zeros(n, bool)))
         if breakaways:
             events = find_breakaways(p, limits)
