@@ -115,24 +115,6 @@ def _case(kind: str, joint: JointType, seed: int):
     return pytest.param(kind, joint, seed, marks=marks, id=f"{joint.value}-{kind}-{seed}")
 
 
-def _truth_resim_rmse(truth: GroundTruth, d) -> float:
-    """Held-out position RMSE of the true joint re-simulated like the fitted ones (m or rad): what stick-or-slip
-    decisions alone cost."""
-    from rik.sysid.discover import resistance_of
-    from rik.sysid.effects import Baseline
-    from rik.sysid.resim import joint_spec_model, resimulate
-
-    model = joint_spec_model(truth.joint, truth.mass, resistance_of(
-        Baseline(truth.mass, truth.damping, truth.frictionloss), (truth.effect,), "truth"),
-        (min(d.limits[0], 0.0), max(d.limits[1], 0.0)))
-    errors = []
-    for r in d.resimulated:
-        p = next(p for p in d.prepared if p.trial.name == r.trial)
-        keep = np.isin(p.t, r.t)
-        errors.append(resimulate(model, r.t, r.q, p.qd[keep], p.f[keep], window_s=d.resim_window_s) - r.q)
-    return float(np.sqrt(np.mean(np.concatenate(errors) ** 2)))
-
-
 @pytest.mark.parametrize(("kind", "joint", "seed"), [_case(*c) for c in CASES])
 def test_hidden_effect_is_named_fitted_and_gains(kind: str, joint: JointType, seed: int) -> None:
     truth, d = _discover(kind, joint, seed)
@@ -143,11 +125,9 @@ def test_hidden_effect_is_named_fitted_and_gains(kind: str, joint: JointType, se
     fb, fe = d.force_rmse
     pb, pe = d.position_rmse
     assert fe < 0.9 * fb
-    if kind == "stiction":  # measured, not asserted (docs/sysid.md): with creeps and pushes in the excitation the
-        # fitted stiction re-simulates the held-out trials worse than the baseline in two seeds of three, where the
-        # true joint does better; whether a re-simulated front sticks or slips flips on small differences
-        assert pe > 0 and _truth_resim_rmse(truth, d) > 0
-    else:
+    if kind != "stiction":  # stiction's is measured, not asserted (docs/sysid.md): with creeps and pushes in the
+        # excitation the fitted stiction re-simulates the held-out trials worse than the baseline in two seeds of
+        # three (the true joint does better); whether a re-simulated front sticks or slips flips on small differences
         assert pe < pb, (pb, pe)  # the extended joint re-simulates the held-out trials closer
     assert d.sentence().startswith("The simulation misses")
     if kind == "stiction":
