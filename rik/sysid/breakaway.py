@@ -180,8 +180,9 @@ def creeping(p: Prepared, velocity: float) -> tuple[np.ndarray, np.ndarray]:
     """Samples moving slower than ``velocity`` (the fit's floor, m/s or rad/s; by the filtered velocity and by the
     long difference) whose motion the long difference still resolves: (mask, speed). The speed is
     ``(q[i + L] − q[i − L]) / (2·L·dt)`` over :data:`CREEP_SPAN_S`, kept where it exceeds :data:`CREEP_SIGMAS` of
-    its noise and the front moves the same way over both halves of the span (a creep at constant slow speed, not
-    the turn of a stroke or a stop)."""
+    its noise and the front moves the same way, by similar distances (within a factor of 2), over both halves of the
+    span (a creep at constant slow speed, not the turn of a stroke, a start or a stop). The caller leaves out
+    creeps next to a stop (a front let go on a compliant stop creeps off it unforced)."""
     q = p.q
     n = len(q)
     span = max(int(round(CREEP_SPAN_S * p.settings.rate_hz)), 1)
@@ -194,7 +195,8 @@ def creeping(p: Prepared, velocity: float) -> tuple[np.ndarray, np.ndarray]:
     ahead, behind = q[i + span] - q[i], q[i] - q[i - span]
     speed[i] = (ahead + behind) / (2 * span * p.dt)
     noise = math.sqrt(2.0) * band / (2 * span * p.dt)
-    same = (np.sign(ahead) == np.sign(behind)) & (np.minimum(np.abs(ahead), np.abs(behind)) > 2.0 * band)
+    low, high = np.minimum(np.abs(ahead), np.abs(behind)), np.maximum(np.abs(ahead), np.abs(behind))
+    same = (np.sign(ahead) == np.sign(behind)) & (low > 2.0 * band) & (low >= 0.5 * high)  # steady, not a start
     slow = (np.abs(speed[i]) < velocity) & (np.abs(p.qd[i]) < velocity)
     mask[i] = same & slow & (np.abs(speed[i]) > CREEP_SIGMAS * noise)
     return mask, speed

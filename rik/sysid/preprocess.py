@@ -212,13 +212,13 @@ def masks(q: np.ndarray, qd: np.ndarray, f: np.ndarray, *, moving_velocity: floa
 def touching(q: np.ndarray, limits: tuple[float, float], margin: float, widen: int,
              f: np.ndarray | None = None) -> np.ndarray:
     """Samples within ``margin`` of a range end (m or rad), and those within ``widen`` samples of an arrival there
-    or of a departure from there right after the hand pushed the front onto the stop: an end stop's force is in no
-    model, and smoothing smears it over the window on both sides (an impact on arrival; on such a departure, the
-    push the stop held, which reaches the samples after the front has left). A departure pulled from rest keeps its
-    samples: the contact force is gone before the front moves off, and the samples just off the stop are where a
-    catch acts. ``f`` (N or N·m, smoothed) tells the two apart; without it every departure is widened. Pass the
-    smoothed position and limits from it: the raw position's extremes lie several noise deviations beyond the
-    stop."""
+    or of a departure from there right after the hand pushed the front onto the stop or within a window of the
+    arrival (a bounce): an end stop's force is in no model, and smoothing smears it over the window on both sides
+    (an impact's acceleration; on such a departure, the push the stop held, which reaches the samples after the
+    front has left). A departure pulled from rest keeps its samples: the contact force is gone before the front
+    moves off, and the samples just off the stop are where a catch acts. ``f`` (N or N·m, smoothed) tells the two
+    apart; without it every departure is widened. Pass the smoothed position and limits from it: the raw
+    position's extremes lie several noise deviations beyond the stop."""
     lower = q <= limits[0] + margin
     upper = q >= limits[1] - margin
     near = lower | upper
@@ -228,8 +228,11 @@ def touching(q: np.ndarray, limits: tuple[float, float], margin: float, widen: i
     edges = near & ~before  # arrivals
     for side, into in ((lower, -1.0), (upper, 1.0)):
         left = np.nonzero(np.concatenate([[False], side[:-1] & ~side[1:]]))[0]  # first sample off the stop
+        arrived = np.nonzero(side & ~np.concatenate([[False], side[:-1]]))[0]
         for k in left:
-            if f is None or np.any(into * f[max(k - widen, 0):k] > 0):
+            since = arrived[arrived < k]
+            bounce = len(since) == 0 or k - since[-1] <= 2 * widen  # the impact is still in the window
+            if f is None or bounce or np.any(into * f[max(k - widen, 0):k] > 0):
                 edges[k] = True
     return near | (np.convolve(edges.astype(float), np.ones(2 * widen + 1), mode="same") > 0)
 
