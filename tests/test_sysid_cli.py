@@ -16,7 +16,7 @@ from rik.sysid.generate import GroundTruth, random_truth, simulate_trials, write
 from rik.sysid.preset import apply_report
 from rik.sysid.report import write_report
 
-PLOTS = {"residual_time.png", "residual_position.png", "residual_velocity.png", "resimulated.png"}
+PLOTS = {"residual_time.png", "residual_position.png", "residual_velocity.png", "breakaway.png", "resimulated.png"}
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,8 @@ Plots (PNG, matplotlib Agg):
   over the scattered samples), where zone effects (soft-close, self-close, magnet) show;
 - ``residual_velocity.png``: the baseline residual against velocity, where friction laws (stiction, quadratic
   damping, direction-dependent friction) show;
+- ``breakaway.png``: the force at each breakaway from rest against where it happened (:mod:`rik.sysid.breakaway`),
+  with the static resistance the baseline and the extended model predict there;
 - ``resimulated.png``: measured position of each held-out trial and its MuJoCo re-simulation with the baseline
   and with the extended joint.
 
@@ -92,6 +94,9 @@ def summary(d: Discovery) -> dict[str, object]:
         "errors": {"force_rmse": {"baseline": fb, "extended": fe},
                    "position_rmse": {"baseline": pb, "extended": pe}},
         "thresholds": {"min_gain": MIN_GAIN, "min_bic_drop": MIN_BIC_DROP},
+        "breakaways": [{"trial": d.rows.names[int(r.trial[i])], "t": float(r.t[i]), "position": float(r.q[i]),
+                        "direction": int(np.sign(r.qd[i])), "force": float(r.f[i])}
+                       for r in (breakaway_rows(d),) for i in range(len(r))],
         "candidates": [_candidate(s) for s in sel.scores],
         "pairs": [_candidate(s) for s in sel.pairs],
     }
@@ -223,8 +228,46 @@ def plot_resimulated(d: Discovery, res: Residuals, path: Path) -> Path:
     return save_figure(fig, path)
 
 
+def breakaway_rows(d: Discovery) -> Rows:
+    """The breakaway rows of the fit (training then held-out)."""
+    parts = [r.take(r.breakaways) for r in (d.split.train, d.split.heldout)]
+    t, q, qd, qdd, f, trial = (np.concatenate([getattr(p, k) for p in parts]) for k in ("t", "q", "qd", "qdd", "f",
+                                                                                         "trial"))
+    return Rows(d.joint, t, q, qd, qdd, f, trial, d.rows.names)
+
+
+def plot_breakaway(d: Discovery, res: Residuals, path: Path) -> Path:
+    """Each breakaway from rest: the measured force against where it happened, opening and closing apart, with
+    the static resistance the baseline and the chosen model predict there."""
+    rows = breakaway_rows(d)
+    plt = pyplot()
+    label, scale = _UNITS[d.joint]["plot_pos"]
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    sel = d.selection
+    for sign, marker, name in ((1, "^", "opening"), (-1, "v", "closing")):
+        m = np.sign(rows.qd) == sign
+        if not m.any():
+            continue
+        x = rows.q[m] * scale
+        ax.plot(x, rows.f[m], marker, color="black", ms=6, label=f"measured breakaway, {name}")
+        ax.plot(x, sel.baseline.predict(rows.take(m)), marker, mfc="none", color="tab:red", ms=8,
+                label="baseline" if sign > 0 else None)
+        if sel.found:
+            ax.plot(x, sel.final.predict(rows.take(m)), marker, mfc="none", color="tab:blue", ms=11,
+                    label="extended" if sign > 0 else None)
+    ax.axhline(0, color="grey", lw=0.6)
+    ax.set_xlabel(f"position [{label}]")
+    ax.set_ylabel(f"force at breakaway [{_UNITS[d.joint]['force']}]")
+    ax.set_title(f"{len(rows)} starts of motion from rest", fontsize=8, loc="left")
+    if len(rows):
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
 PLOTS = {"residual_time.png": plot_residual_time, "residual_position.png": plot_residual_position,
-         "residual_velocity.png": plot_residual_velocity, "resimulated.png": plot_resimulated}
+         "residual_velocity.png": plot_residual_velocity, "breakaway.png": plot_breakaway,
+         "resimulated.png": plot_resimulated}
 
 
 # --------------------------------------------------------------------------------------------------- markdown
@@ -262,6 +305,10 @@ def markdown(d: Discovery, data: dict[str, Any]) -> str:
               "![residual against time](residual_time.png)", "",
               "![residual against position](residual_position.png)", "",
               "![residual against velocity](residual_velocity.png)", "",
+              f"Breakaways from rest ({int(d.rows.breakaways.sum())} found: the force at which a resting front "
+              f"started to move, which holds the static resistance the moving samples do not show; they enter the fit "
+              f"as samples at rest):", "",
+              "![breakaway force against position](breakaway.png)", "",
               "![re-simulated held-out trials](resimulated.png)", "",
               "## Candidates", "",
               f"Each is the baseline plus one effect, fitted on the training data. It passes with a held-out gain of "
