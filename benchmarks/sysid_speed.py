@@ -12,7 +12,7 @@ one warm-up, in one process:
 - discover without and with re-simulation (MuJoCo multiple shooting of the held-out trial with the baseline and
   the extended joint), the difference being the re-simulation (small: below the timing noise when nothing is
   found, since then only the baseline is re-simulated);
-- report: the four plots, report.md and summary.json;
+- report: the five plots, report.md and summary.json;
 
 and the total of what ``rik sysid fit`` runs, with its ratio to the 10 s target.
 

@@ -105,9 +105,8 @@ def _check_parameters(truth: GroundTruth, d) -> None:
 CASES = [(k, JointType.slide, s) for k in EFFECT_KINDS for s in SEEDS] + \
         [(k, JointType.hinge, s) for k in HINGE_KINDS for s in SEEDS[:2]]
 MISSED = {
-    ("magnetic_catch", JointType.slide, 2): "measured miss (docs/sysid.md): the catch comes with a spurious weak closer "
-                                            "spring (2 N/m) as a second effect",
-    ("quadratic_damping", JointType.hinge, 1): "measured miss: the coefficient comes out 37 % high (35 % allowed)",
+    ("direction_friction", JointType.hinge, 0): "measured miss (docs/sysid.md): held-out gain 2 % (10 % needed)",
+    ("quadratic_damping", JointType.hinge, 0): "measured miss: not chosen (the door's acceleration noise dominates)",
     ("load_friction", JointType.hinge, 1): "measured miss: the door's friction growing with the angle is not chosen",
 }
 """Cases the pipeline is known to get wrong: strict xfails, so a fix shows up as a failure to update them."""

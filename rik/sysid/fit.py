@@ -3,9 +3,8 @@
 The rows a fit uses, per preprocessed trial:
 
 - **moving** samples (|v| above :func:`fit_velocity`: at least :data:`FIT_VELOCITY`, raised to :data:`NOISE_SIGMAS`
-  times the velocity noise) whose whole smoothing window moves one way that fast (:func:`steady`: the smoothed
-  force around a reversal, a start or a stop carries the filtered step of the friction, which regressors at the
-  smoothed velocity do not);
+  times the velocity noise) whose smoothing window holds no reversal (:func:`steady`: the smoothed force around a
+  reversal carries the filtered step of the friction, which regressors at the smoothed velocity do not);
 - **breakaways** from rest (:func:`rik.sysid.breakaway.find_breakaways`): the force at which a resting front
   started to move, at an infinitesimal velocity in its direction and the acceleration there, weighted as one smoothing
   window of samples (the moving samples are correlated over a window); they carry the static resistance, which
@@ -129,16 +128,19 @@ def fit_velocity(prepared: Sequence[Prepared]) -> float:
 
 
 def steady(qd: np.ndarray, velocity: float, half: int) -> np.ndarray:
-    """Samples whose whole smoothing window (``half`` samples each side) moves one way at least ``velocity`` fast
-    (m/s or rad/s): the smoothed force there carries no filtered friction step of a reversal, start or stop, which
-    regressors evaluated at the smoothed velocity would not."""
+    """Samples moving at least ``velocity`` fast (m/s or rad/s) whose smoothing window (``half`` samples each side)
+    holds no reversal: the smoothed force around a reversal carries the filtered step of the friction from one
+    direction to the other (twice the friction), which regressors evaluated at the smoothed velocity do not.
+    Windows that reach into a rest are kept: leaving them out too cut the samples a drawer's catch shows in (a
+    front pulled briskly off the closed stop) and lost every catch of the foreign generator, for a smaller gain on
+    doors (docs/sysid.md)."""
     from numpy.lib.stride_tricks import sliding_window_view
 
     direction = np.sign(qd) * (np.abs(qd) >= velocity)
     if half <= 0:
         return direction != 0
     windows = sliding_window_view(np.concatenate([np.zeros(half), direction, np.zeros(half)]), 2 * half + 1)
-    return (windows.min(axis=1) == windows.max(axis=1)) & (direction != 0)
+    return ~((windows.min(axis=1) < 0) & (windows.max(axis=1) > 0)) & (direction != 0)
 
 
 def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, margin: float | None = None,
