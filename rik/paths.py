@@ -51,6 +51,38 @@ def atomic_path(path: Path) -> Iterator[Path]:
         raise
 
 
+def replace_directory(stage: Path, final: Path) -> None:
+    """Move the finished directory ``stage`` onto ``final``, replacing what is there: the old one is renamed
+    aside first and removed after, so ``final`` is at every moment the old directory or the new one, whole."""
+    import shutil
+
+    if final.exists():
+        old = final.with_name(f".{final.name}.old")
+        shutil.rmtree(old, ignore_errors=True)
+        os.replace(final, old)
+        os.replace(stage, final)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(stage, final)
+
+
+@contextmanager
+def staged_directory(final: Path) -> Iterator[Path]:
+    """A fresh hidden sibling of ``final`` to write a whole directory into; moved onto ``final`` when the block
+    ends without an error (:func:`replace_directory`), removed when it raises: ``final`` is never half-written."""
+    import shutil
+
+    stage = final.with_name(f".{final.name}.partial")
+    shutil.rmtree(stage, ignore_errors=True)
+    stage.mkdir(parents=True)
+    try:
+        yield stage
+        replace_directory(stage, final)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+
+
 def json_sha256(data: Any, exclude: tuple[str, ...] = ()) -> str:
     """sha256 of the canonical JSON of ``data`` (sorted keys, no spaces), leaving out the top-level keys
     ``exclude`` (the checksum field of a file that seals itself, such as ``meta_sha256``)."""

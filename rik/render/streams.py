@@ -12,7 +12,6 @@ index), and a stream of an episode recorded again (another states sha256) is ren
 from __future__ import annotations
 
 import json
-import os
 import shutil
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass
@@ -22,7 +21,7 @@ from typing import Any, Literal
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import inside, write_atomic, write_png
+from rik.paths import inside, replace_directory, write_atomic, write_png
 
 DEFAULT_RENDERS = Path("renders")
 MANIFEST = "stream.json"
@@ -117,14 +116,7 @@ class StreamWriter:
                     "frames": self.frames, "states_sha256": self.sha, **info}
         (self.staging / ".states_sha256").unlink(missing_ok=True)
         write_atomic(self.staging / MANIFEST, json.dumps(manifest, indent=2) + "\n")
-        if self.final.exists():
-            old = self.final.with_name(f".{self.final.name}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            os.replace(self.final, old)
-            os.replace(self.staging, self.final)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(self.staging, self.final)
+        replace_directory(self.staging, self.final)
         return self.final
 
 

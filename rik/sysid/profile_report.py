@@ -11,14 +11,13 @@ from __future__ import annotations
 import json
 import math
 import re
-import shutil
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from rik.paths import pyplot, save_figure, write_atomic
+from rik.paths import pyplot, save_figure, staged_directory, write_atomic
 from rik.schemas.joints import JointType
 from rik.sysid.profile import ProfileData
 from rik.sysid.profile_fit import (
@@ -209,10 +208,7 @@ def _write_group(fit: ProfileFit, data: ProfileData, directory: Path) -> dict[st
 def write_profile_report(data: ProfileData, fits: Sequence[ProfileFit], directory: Path) -> Path:
     """Write the report(s) of ``fits`` into ``directory`` (replaced whole if it exists); returns it."""
     directory = Path(directory)
-    stage = directory.with_name(f".{directory.name}.partial")
-    shutil.rmtree(stage, ignore_errors=True)
-    stage.mkdir(parents=True)
-    try:
+    with staged_directory(directory) as stage:
         if len(fits) == 1:
             _write_group(fits[0], data, stage)
         else:
@@ -229,15 +225,4 @@ def write_profile_report(data: ProfileData, fits: Sequence[ProfileFit], director
                              f"[{g['directory']}]({g['directory']}/{REPORT}) |")
             write_atomic(stage / SUMMARY, json.dumps(index, indent=2) + "\n")
             write_atomic(stage / REPORT, "\n".join(lines) + "\n")
-        if directory.exists():
-            old = directory.with_name(f".{directory.name}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            directory.rename(old)
-            stage.rename(directory)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            stage.rename(directory)
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise
     return directory

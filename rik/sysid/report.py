@@ -19,13 +19,12 @@ The report directory is written whole or not at all: into a hidden sibling first
 from __future__ import annotations
 
 import json
-import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
-from rik.paths import pyplot, save_figure, write_atomic
+from rik.paths import pyplot, save_figure, staged_directory, write_atomic
 from rik.schemas.joints import JointType, Spring
 from rik.sysid.discover import Discovery, describe
 from rik.sysid.fit import Fit, Rows
@@ -340,25 +339,11 @@ def markdown(d: Discovery, data: dict[str, Any]) -> str:
 def write_report(d: Discovery, directory: Path) -> Path:
     """Write ``report.md``, ``summary.json`` and the plots into ``directory`` (replaced whole if it exists)."""
     directory = Path(directory)
-    stage = directory.with_name(f".{directory.name}.partial")
-    shutil.rmtree(stage, ignore_errors=True)
-    stage.mkdir(parents=True)
-    try:
+    with staged_directory(directory) as stage:
         data = summary(d)
         res = all_residuals(d)
         for name, plot in PLOTS.items():
             plot(d, res, stage / name)
         write_atomic(stage / SUMMARY, json.dumps(data, indent=2) + "\n")
         write_atomic(stage / REPORT, markdown(d, data))
-        if directory.exists():
-            old = directory.with_name(f".{directory.name}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            directory.rename(old)
-            stage.rename(directory)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            stage.rename(directory)
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise
     return directory
