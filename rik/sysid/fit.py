@@ -3,8 +3,9 @@
 The rows a fit uses, per preprocessed trial:
 
 - **moving** samples (|v| above :func:`fit_velocity`: at least :data:`FIT_VELOCITY`, raised to :data:`NOISE_SIGMAS`
-  times the velocity noise) whose smoothing window holds no reversal (:func:`steady`: the smoothed force around a
-  reversal carries the filtered step of the friction, which regressors at the smoothed velocity do not);
+  times the velocity noise) whose smoothing window holds no reversal and no rest away from a stop
+  (:func:`steady`: the smoothed force there carries a friction step, or static friction's hold, which
+  regressors at the smoothed velocity do not);
 - **breakaways** from rest (:func:`rik.sysid.breakaway.find_breakaways`): the force at which a resting front
   started to move, at an infinitesimal velocity in its direction and the acceleration there, weighted as one smoothing
   window of samples (the moving samples are correlated over a window); they carry the static resistance, which
@@ -127,20 +128,25 @@ def fit_velocity(prepared: Sequence[Prepared]) -> float:
     return max(FIT_VELOCITY[joint], NOISE_SIGMAS * noise)
 
 
-def steady(qd: np.ndarray, velocity: float, half: int) -> np.ndarray:
+def steady(qd: np.ndarray, velocity: float, half: int, on_stop: np.ndarray | None = None) -> np.ndarray:
     """Samples moving at least ``velocity`` fast (m/s or rad/s) whose smoothing window (``half`` samples each side)
-    holds no reversal: the smoothed force around a reversal carries the filtered step of the friction from one
-    direction to the other (twice the friction), which regressors evaluated at the smoothed velocity do not.
-    Windows that reach into a rest are kept: leaving them out too cut the samples a drawer's catch shows in (a
-    front pulled briskly off the closed stop) and lost every catch of the foreign generator, for a smaller gain on
-    doors (docs/sysid.md)."""
+    holds no reversal and no rest away from a stop (``on_stop``: the samples on a range end; None: none): the
+    smoothed force around a reversal carries the filtered step of the friction from one direction to the other,
+    and around a start from rest the hand's force while static friction still held the front, neither of which
+    regressors evaluated at the smoothed velocity have (fitted, starts gave "negative stiction" held-out gains of
+    10-30 % on foreign drawers). Starts off a stop stay: a drawer's catch shows only there, in a front pulled
+    briskly off the closed stop (left out, every catch of the foreign generator was lost; docs/sysid.md)."""
     from numpy.lib.stride_tricks import sliding_window_view
 
-    direction = np.sign(qd) * (np.abs(qd) >= velocity)
+    moving = np.abs(qd) >= velocity
+    direction = np.sign(qd) * moving
     if half <= 0:
-        return direction != 0
-    windows = sliding_window_view(np.concatenate([np.zeros(half), direction, np.zeros(half)]), 2 * half + 1)
-    return ~((windows.min(axis=1) < 0) & (windows.max(axis=1) > 0)) & (direction != 0)
+        return moving
+    resting = ~moving if on_stop is None else ~moving & ~on_stop
+    pad = np.zeros(half)
+    windows = sliding_window_view(np.concatenate([pad, direction, pad]), 2 * half + 1)
+    rests = sliding_window_view(np.concatenate([pad, resting.astype(float), pad]), 2 * half + 1)
+    return moving & ~((windows.min(axis=1) < 0) & (windows.max(axis=1) > 0)) & (rests.max(axis=1) == 0)
 
 
 def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, margin: float | None = None,
@@ -158,7 +164,7 @@ def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, mar
         window = p.settings.window_samples
         away = ~touching(p.q, limits, margin, window // 2, p.f_smooth)
         keep = (np.abs(p.qd) >= velocity) & away
-        keep &= steady(p.qd, velocity, window // 2)
+        keep &= steady(p.qd, velocity, window // 2, touching(p.q, limits, margin, 0))
         if breakaways:  # creeps, away from the stops by a long difference's span
             slow, speed = creeping(p, velocity)
             span = int(round(CREEP_SPAN_S * p.settings.rate_hz))
