@@ -12,6 +12,10 @@ import numpy as np
 import pytest
 
 from rik.errors import RikError
+from rik.joints.kinds import FRICTION_KINDS, is_native
+from rik.joints.laws import effect_force, extra_friction
+from rik.joints.mjcf import DIRECTION_FRICTION_SPEED
+from rik.joints.runtime import RuntimeEffects
 from rik.registry import load_catalog
 from rik.schemas.joints import (
     DirectionFriction,
@@ -24,14 +28,6 @@ from rik.schemas.joints import (
     SoftClose,
     Stiction,
     Tilt,
-)
-from rik.sim.effects import (
-    DIRECTION_FRICTION_SPEED,
-    FRICTION_KINDS,
-    RuntimeEffects,
-    effect_force,
-    extra_friction,
-    is_native,
 )
 from rik.sysid.resim import joint_spec_model, position_rmse, resimulate
 

@@ -201,7 +201,7 @@ def test_applied_preset_builds_a_variant_that_matches_held_out_data_better(tmp_p
                            tmp_path / "variants")
     assert fitted.status == "built", fitted.reason
 
-    from rik.sim.effects import RuntimeEffects, front_effects
+    from rik.joints.runtime import RuntimeEffects, front_effects
 
     errors = {}
     for preset in ("normal", "measured-drawer"):

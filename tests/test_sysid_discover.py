@@ -16,8 +16,8 @@ import math
 import numpy as np
 import pytest
 
+from rik.joints.laws import effect_force
 from rik.schemas.joints import JointType, Spring, Stiction
-from rik.sim.effects import effect_force
 from rik.sysid.discover import discover
 from rik.sysid.effects import INDISTINGUISHABLE
 from rik.sysid.generate import EFFECT_KINDS, GroundTruth, ground_truth_force, random_truth, simulate_trials

@@ -37,6 +37,8 @@ MESH_STORE = ".meshes"
 STAGING = ".staging"
 MANIFEST = "manifest.json"
 COMBINATOR_DIR = Path(__file__).parent
+JOINTS_DIR = COMBINATOR_DIR.parent / "joints"
+"""rik.joints: the joint model's MJCF mapping and laws, part of what decides a variant's files."""
 
 
 class VariantRejected(RikError):
@@ -93,7 +95,7 @@ def _versions() -> dict[str, str]:
 def _code_digest() -> str:
     from rik.assets.cache import source_digest
 
-    return source_digest(sorted(COMBINATOR_DIR.glob("*.py")))
+    return source_digest(sorted(COMBINATOR_DIR.glob("*.py")) + sorted(JOINTS_DIR.glob("*.py")))
 
 
 def spec_identity(catalog: Catalog, key: VariantKey) -> dict[str, object]:

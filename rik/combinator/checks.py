@@ -18,9 +18,9 @@ if TYPE_CHECKING:
     import numpy as np
 
     from rik.combinator.mjcf import FrontLayout, VariantModel
+    from rik.joints.runtime import RuntimeEffects
     from rik.registry.catalog import Catalog
     from rik.schemas import BaseUnit, Front
-    from rik.sim.effects import RuntimeEffects
 
 MIN_GRASP_DEPTH = 0.010
 """m: how far a handle must stand off the face (or, for an inset grip, reach into the front) for a fingertip or
@@ -86,7 +86,7 @@ class ModelContext:
     def effects(self) -> dict[int, RuntimeEffects]:
         """Appliers of the fronts' runtime joint effects (the effects MuJoCo lacks), by dof address."""
         if self.runtime_effects is None:
-            from rik.sim.effects import front_effects
+            from rik.joints.runtime import front_effects
 
             self.runtime_effects = {e.dof: e for e in front_effects(self.model, self.variant.info()["fronts"])}
         return self.runtime_effects

@@ -3,17 +3,17 @@
 Layout of a model (MuJoCo Menagerie's conventions):
 
 - default classes ``visual`` (group 2, no contacts) and ``collision`` (group 3), and one joint class per joint
-  type holding the preset's resistance (:mod:`rik.combinator.joints`);
+  type holding the preset's resistance (:mod:`rik.joints.mjcf`);
 - a static body ``base_unit`` at the unit's install height with the carcass; one body per front, named by the
   front's id, sitting at the base unit's origin and moving on a joint of the same name;
 - in each front a body ``<front>/handle`` at the handle's mount frame, with the visual mesh, the CoACD hulls and
   the sites ``<front>/handle`` (mount frame) and ``<front>/grasp`` (centre of the handle's bounding box: the
   middle of a loop); each front also carries ``<front>/mount`` (its allowed mount rectangle, a box site);
 - a passive actuator ``<front>/effect/<kind>`` per native joint effect of the preset (self-closing zone springs,
-  a slide's tilt, direction-dependent friction; :mod:`rik.combinator.joints`);
+  a slide's tilt, direction-dependent friction; :mod:`rik.joints.mjcf`);
 - a text element ``rik.variant`` with the variant's ids and fronts as JSON, so tools can read a model alone; a
   front whose preset has effects MuJoCo lacks lists them as ``runtime_effects`` (``effect.model_dump()``), which
-  rik's simulator applies each step (:class:`rik.sim.effects.RuntimeEffects`).
+  rik's simulator applies each step (:class:`rik.joints.runtime.RuntimeEffects`).
 
 Boards are box geoms (exact). Handle meshes are written as STL files under ``meshes/`` and referenced by
 relative paths. Masses and inertias are explicit: boards from their volume and a density per finish kind,
@@ -29,8 +29,8 @@ from typing import TYPE_CHECKING, Any
 
 from rik.assets.base_units import Panel
 from rik.combinator.ids import VariantKey
-from rik.combinator.joints import add_effect_actuators, add_front_joint, add_joint_classes, joint_model
 from rik.combinator.placement import HandlePlacement, front_motion, place_handle
+from rik.joints.mjcf import add_effect_actuators, add_front_joint, add_joint_classes, joint_model
 from rik.registry.geometry import vec3
 
 if TYPE_CHECKING:

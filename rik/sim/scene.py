@@ -16,7 +16,7 @@ Solver settings (what keeps a pinch on hundreds of convex parts stable):
 
 The gripper's servos are addressed by name (their control addresses), since a variant's own passive actuators
 (native joint effects) come first in the model. Joint effects MuJoCo lacks (the variant's ``runtime_effects``)
-are applied around every physics step, on every front that has them (:class:`rik.sim.effects.RuntimeEffects`);
+are applied around every physics step, on every front that has them (:class:`rik.joints.runtime.RuntimeEffects`);
 they leave no trace in the state, so replays stay exact.
 """
 
@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.errors import RikError
-from rik.sim.effects import RuntimeEffects
+from rik.joints.runtime import RuntimeEffects
 from rik.sim.gripper import BASE_JOINTS, GRIPPER_PREFIX, HAND_E, GripperSpec, jaw_target
 
 if TYPE_CHECKING:
@@ -275,7 +275,7 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     """Compile the scene of the variant built in ``variant_dir`` (its ``model.xml``), operating ``front``."""
     import mujoco
 
-    from rik.sim.effects import front_effects
+    from rik.joints.runtime import front_effects
     from rik.sim.gripper import add_gripper
 
     file = Path(variant_dir) / "model.xml"

@@ -30,10 +30,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rik.schemas import joints as j
-from rik.schemas.joints import JointType, Spring
+from rik.schemas.joints import JointEffect, JointType, Spring
 
-Effect = (j.Stiction | j.SoftClose | j.SelfClose | j.MagneticCatch | j.Tilt | j.DirectionFriction | j.QuadraticDamping
-          | j.LoadFriction | Spring)
+Effect = JointEffect | Spring
+"""An effect of the library (:data:`rik.joints.kinds.KINDS`) or the closer spring."""
 
 
 @dataclass(frozen=True)
@@ -132,12 +132,12 @@ UnitEffects = Callable[[float | None, JointType], tuple[j.JointEffect, ...]]
 
 
 def _law_features(unit: UnitEffects) -> Callable[[Motion, float | None, JointType], np.ndarray]:
-    """Regressors from the library's one force law (:func:`rik.sim.effects.effect_force`, what rik's simulator
+    """Regressors from the library's one force law (:func:`rik.joints.laws.effect_force`, what rik's simulator
     applies): the resistance of each unit effect, i.e. minus its force, so a fitted effect is exactly the law the
     extended joint is simulated with."""
 
     def features(m: Motion, h: float | None, joint: JointType) -> np.ndarray:
-        from rik.sim.effects import effect_force
+        from rik.joints.laws import effect_force
 
         return -np.column_stack([effect_force(e, m.q, m.qd, joint) for e in unit(h, joint)])
 

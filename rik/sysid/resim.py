@@ -1,8 +1,8 @@
 """Re-simulating measured trials with a joint model: the check that a fitted model reproduces the motion.
 
 :func:`joint_spec_model` builds a one-joint MuJoCo model whose joint takes its class from the same mapping that
-variants use (:mod:`rik.combinator.joints`: native effects in the MJCF, the others through a
-:class:`~rik.sim.effects.RuntimeEffects`), so what is simulated here is exactly what a variant's front gets.
+variants use (:mod:`rik.joints.mjcf`: native effects in the MJCF, the others through a
+:class:`~rik.joints.runtime.RuntimeEffects`), so what is simulated here is exactly what a variant's front gets.
 :func:`resimulate` drives it with the measured force by multiple shooting: it restarts from the measured state
 every ``window_s`` seconds, so a model's error shows as drift within a window, not as an accumulated phase error
 over a whole trial.
@@ -24,8 +24,8 @@ if TYPE_CHECKING:
 
     import mujoco
 
+    from rik.joints.runtime import RuntimeEffects
     from rik.schemas.joints import JointResistance, JointType
-    from rik.sim.effects import RuntimeEffects
 
 TIMESTEP = 0.002
 """s: the variants' timestep (:data:`rik.combinator.mjcf.TIMESTEP`)."""
@@ -43,9 +43,9 @@ def joint_spec_model(joint_type: JointType | str, inertia: float, resistance: Jo
     effect is the library's gravity along the joint); ``implicitfast`` at ``timestep`` s (default 2 ms)."""
     import mujoco
 
-    from rik.combinator.joints import add_effect_actuators, add_front_joint, add_joint_classes, joint_model
+    from rik.joints.mjcf import add_effect_actuators, add_front_joint, add_joint_classes, joint_model
+    from rik.joints.runtime import RuntimeEffects
     from rik.schemas.joints import JointSpec, JointType, ResistancePreset
-    from rik.sim.effects import RuntimeEffects
 
     try:
         jtype = JointType(getattr(joint_type, "value", joint_type))

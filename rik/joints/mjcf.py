@@ -4,14 +4,15 @@ Every variant's resistance lives in a joint default class per preset and joint t
 ``normal_hinge``: Menagerie's convention), and each front's joint takes its class and adds only its own axis,
 anchor and range. Everything that decides how a joint feels is set here and nowhere else, so extensions of the
 joint model (springs acting in a zone, one-way damping, stiction: the calibration work of ``rik sysid``) change
-this module only: effects MuJoCo has natively become attributes of the class or passive actuators on each front's
-joint; effects it lacks become entries of :attr:`JointModel.runtime_effects`, which rik's simulator applies each
-step.
+this package only (:mod:`rik.joints`): effects MuJoCo has natively become attributes of the class or passive
+actuators on each front's joint; effects it lacks become entries of :attr:`JointModel.runtime_effects`, which
+rik's simulator applies each step (:mod:`rik.joints.runtime`).
 
 MuJoCo 4 spells damping and stiffness as polynomials (three coefficients: linear, quadratic, cubic); rik's
 presets set the linear term, and the library's ``quadratic_damping`` the quadratic one.
 
-Where each effect of :data:`rik.schemas.joints.JointEffect` goes (:func:`rik.sim.effects.is_native`):
+Where each effect of :data:`rik.schemas.joints.JointEffect` goes (the table :data:`rik.joints.kinds.KINDS`;
+:func:`rik.joints.kinds.is_native`):
 
 - ``quadratic_damping``: the class's ``damping[1]``;
 - ``self_close``: a passive actuator on the front's joint, ``general`` with gain 0, ``biastype="affine"``,
@@ -21,7 +22,7 @@ Where each effect of :data:`rik.schemas.joints.JointEffect` goes (:func:`rik.sim
   ``forcerange="0 Δ"`` (closing) or ``"-Δ 0"`` (opening), K = Δ / :data:`DIRECTION_FRICTION_SPEED`:
   Coulomb friction on top of ``frictionloss`` in one direction, regularised below that speed;
 - the others: :attr:`JointModel.runtime_effects`, applied around each step by
-  :class:`rik.sim.effects.RuntimeEffects` (``stiction`` and ``load_friction`` through the joint's
+  :class:`rik.joints.runtime.RuntimeEffects` (``stiction`` and ``load_friction`` through the joint's
   ``frictionloss``, ``soft_close`` through its damping, ``magnetic_catch`` and a hinge's ``tilt`` through
   ``qfrc_applied``).
 
@@ -34,8 +35,11 @@ level unless the bristle damping is tuned to the moving mass (checked on a 2 kg 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
+
+from rik.joints.kinds import KINDS, native_kind
 
 if TYPE_CHECKING:
     import mujoco
@@ -49,13 +53,6 @@ DIRECTION_FRICTION_SPEED = {"slide": 1e-3, "hinge": 2.5e-3}
 velocity bias of gain ``extra / speed``) and at run time alike: the law is regularised below it. 2.5 mrad/s is
 1 mm/s at a handle 0.4 m from the hinge. (Here, with everything that shapes the MJCF, so that variants' spec
 hashes follow it.)"""
-
-
-def native_kind(kind: str, joint_type: JointType | str) -> bool:
-    """True when MuJoCo expresses effects of ``kind`` on a joint of ``joint_type`` in the MJCF itself."""
-    if kind == "tilt":
-        return getattr(joint_type, "value", joint_type) == "slide"
-    return kind in ("quadratic_damping", "self_close", "direction_friction")
 
 
 @dataclass(frozen=True)
@@ -84,7 +81,7 @@ def joint_model(resistance: JointResistance, joint_type: JointType) -> JointMode
     actuators: list[dict[str, Any]] = []
     runtime: list[dict[str, Any]] = []
     for effect in resistance.effects:
-        if effect.kind == "quadratic_damping":
+        if native_kind(effect.kind, joint_type) and KINDS[effect.kind].mjcf == "damping_quadratic":
             quadratic += effect.coefficient
         elif native_kind(effect.kind, joint_type):
             actuators.append(effect.model_dump(mode="json"))
@@ -135,6 +132,31 @@ def effect_actuator_name(joint_name: str, kind: str) -> str:
     return f"{joint_name}/effect/{kind}"
 
 
+Bias = tuple[list[float], tuple[float, float] | None]
+"""An actuator's ``biasprm[:3]`` and its force range (None: not force-limited)."""
+
+
+def _self_close_bias(effect: dict[str, Any], joint_type: str) -> Bias:
+    k, zone = float(effect["stiffness"]), float(effect["zone"])
+    return [-k * zone, k, 0.0], (-k * zone, 0.0)
+
+
+def _tilt_bias(effect: dict[str, Any], joint_type: str) -> Bias:
+    return [float(effect["force"]), 0.0, 0.0], None
+
+
+def _direction_friction_bias(effect: dict[str, Any], joint_type: str) -> Bias:
+    extra = float(effect["extra"])
+    gain = extra / DIRECTION_FRICTION_SPEED[joint_type]
+    return [0.0, 0.0, -gain], ((0.0, extra) if effect["direction"] == "closing" else (-extra, 0.0))
+
+
+ACTUATOR_BIAS: dict[str, Callable[[dict[str, Any], str], Bias]] = {
+    "self_close": _self_close_bias, "tilt": _tilt_bias, "direction_friction": _direction_friction_bias}
+"""kind → (effect dump, joint type) → the passive actuator of a native effect, for the kinds the table
+(:data:`rik.joints.kinds.KINDS`) writes as ``actuator``."""
+
+
 def add_effect_actuators(spec: mujoco.MjSpec, joint_name: str, model: JointModel) -> list[mujoco.MjsActuator]:
     """Add the passive actuators of ``model``'s native effects (:attr:`JointModel.actuator_effects`) to the joint
     ``joint_name``; returns them (none for effects of zero magnitude)."""
@@ -143,18 +165,9 @@ def add_effect_actuators(spec: mujoco.MjSpec, joint_name: str, model: JointModel
     added = []
     for effect in model.actuator_effects:
         kind = effect["kind"]
-        if kind == "self_close":
-            k, zone = float(effect["stiffness"]), float(effect["zone"])
-            bias, limits = [-k * zone, k, 0.0], (-k * zone, 0.0)
-        elif kind == "tilt":
-            bias, limits = [float(effect["force"]), 0.0, 0.0], None
-        elif kind == "direction_friction":
-            extra = float(effect["extra"])
-            gain = extra / DIRECTION_FRICTION_SPEED[model.type]
-            bias = [0.0, 0.0, -gain]
-            limits = (0.0, extra) if effect["direction"] == "closing" else (-extra, 0.0)
-        else:  # pragma: no cover - joint_model sends only these here
+        if kind not in ACTUATOR_BIAS:  # pragma: no cover - joint_model sends only these here
             raise ValueError(f"effect '{kind}' has no passive actuator")
+        bias, limits = ACTUATOR_BIAS[kind](effect, model.type)
         if not any(bias) or (limits is not None and limits[0] == limits[1]):
             continue  # zero magnitude: no force (and MuJoCo refuses an empty force range)
         act = spec.add_actuator(name=effect_actuator_name(joint_name, kind), target=joint_name,
