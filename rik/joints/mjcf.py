@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from rik.joints.kinds import KINDS, native_kind
 
@@ -45,6 +45,7 @@ if TYPE_CHECKING:
     import mujoco
 
     from rik.schemas import JointResistance, JointSpec, JointType, ResistancePreset
+    from rik.schemas.joints import QuadraticDamping
 
 LIMIT_MARGIN = 0.0
 """Joint-limit margin (m or rad): limits engage at the range's ends."""
@@ -82,7 +83,7 @@ def joint_model(resistance: JointResistance, joint_type: JointType) -> JointMode
     runtime: list[dict[str, Any]] = []
     for effect in resistance.effects:
         if native_kind(effect.kind, joint_type) and KINDS[effect.kind].mjcf == "damping_quadratic":
-            quadratic += effect.coefficient
+            quadratic += cast("QuadraticDamping", effect).coefficient
         elif native_kind(effect.kind, joint_type):
             actuators.append(effect.model_dump(mode="json"))
         else:
