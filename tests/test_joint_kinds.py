@@ -3,13 +3,17 @@ matches it, and every kind has a law, a way into MuJoCo and a sysid family."""
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
+
+import pytest
 from pydantic import TypeAdapter
 
 from rik.joints.kinds import EFFECT_KINDS, FRICTION_KINDS, KINDS, native_kind
 from rik.joints.laws import FORCE_LAWS, FRICTION_LAWS
 from rik.joints.mjcf import ACTUATOR_BIAS
 from rik.joints.runtime import CHANNELS
-from rik.schemas.joints import JointEffect
+from rik.schemas.joints import JointEffect, JointType
 from rik.sysid import generate
 from rik.sysid.effects import FAMILIES
 
@@ -41,5 +45,21 @@ def test_every_kind_reaches_mujoco() -> None:
 def test_sysid_lists_derive_from_the_table() -> None:
     assert [f.kind for f in FAMILIES if f.kind != "spring"] == list(KINDS)
     assert generate.EFFECT_KINDS == (*KINDS, "spring")
-    assert set(generate.EFFECT_RANGES[generate.JointType.slide]) == set(generate.EFFECT_KINDS)
-    assert set(generate.EFFECT_RANGES[generate.JointType.hinge]) == set(generate.EFFECT_KINDS)
+    for joint in JointType:
+        assert set(generate.EFFECT_RANGES[joint]) == set(generate.EFFECT_KINDS) == set(generate.JOINT_KINDS[joint])
+
+
+def test_variants_spec_hashes_follow_the_joint_package(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """rik.joints decides how a variant's joints are written, so its code is part of every spec hash: a copy of
+    the package with one file changed gives another code digest."""
+    from rik.combinator import build
+
+    before = build._code_digest.__wrapped__()
+    for name in ("COMBINATOR_DIR", "JOINTS_DIR"):  # copies side by side, as in rik/ (the digest sorts by path)
+        copy = tmp_path / getattr(build, name).name
+        shutil.copytree(getattr(build, name), copy, ignore=shutil.ignore_patterns("__pycache__"))
+        monkeypatch.setattr(build, name, copy)
+    assert build._code_digest.__wrapped__() == before
+    mjcf = tmp_path / "joints" / "mjcf.py"
+    mjcf.write_text(mjcf.read_text(encoding="utf-8") + "\n# changed\n", encoding="utf-8")
+    assert build._code_digest.__wrapped__() != before

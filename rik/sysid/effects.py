@@ -29,6 +29,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from rik.joints.laws import effect_force
 from rik.schemas import joints as j
 from rik.schemas.joints import JointEffect, JointType, Spring
 
@@ -137,8 +138,6 @@ def _law_features(unit: UnitEffects) -> Callable[[Motion, float | None, JointTyp
     extended joint is simulated with."""
 
     def features(m: Motion, h: float | None, joint: JointType) -> np.ndarray:
-        from rik.joints.laws import effect_force
-
         return -np.column_stack([effect_force(e, m.q, m.qd, joint) for e in unit(h, joint)])
 
     return features
