@@ -10,7 +10,7 @@ import pytest
 from pydantic import TypeAdapter
 
 from rik.joints.kinds import EFFECT_KINDS, FRICTION_KINDS, KINDS, native_kind
-from rik.joints.laws import FORCE_LAWS, FRICTION_LAWS
+from rik.joints.laws import DAMPING_LAWS, FORCE_LAWS, FRICTION_LAWS
 from rik.joints.mjcf import ACTUATOR_BIAS
 from rik.joints.runtime import CHANNELS
 from rik.schemas.joints import JointEffect, JointType
@@ -28,6 +28,7 @@ def test_the_table_holds_the_schemas_kinds() -> None:
 def test_every_kind_has_one_law() -> None:
     assert set(FRICTION_LAWS) == FRICTION_KINDS == {k for k, how in KINDS.items() if how.runtime == "frictionloss"}
     assert set(FORCE_LAWS) == set(KINDS) - FRICTION_KINDS
+    assert set(DAMPING_LAWS) == {k for k, how in KINDS.items() if how.runtime == "damping"}
 
 
 def test_every_kind_reaches_mujoco() -> None:

@@ -7,7 +7,8 @@ effects (:data:`rik.joints.kinds.FRICTION_KINDS`) are friction magnitudes on top
 :func:`extra_friction` gives that magnitude (≥ 0), and :func:`effect_force` gives ``-extra * sign(v)``.
 
 :data:`FRICTION_LAWS` and :data:`FORCE_LAWS` hold one law per kind of :data:`rik.joints.kinds.KINDS` (the friction
-kinds in the first, the others in the second).
+kinds in the first, the others in the second); :data:`DAMPING_LAWS` gives the kinds that the simulator applies as
+damping (:attr:`rik.joints.kinds.EffectKind.runtime`) their damping, from which their force law is made.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ if TYPE_CHECKING:
     Values = float | np.floating | NDArray[np.floating]
     """A joint position, velocity or force: one value, or an array of them (the laws broadcast)."""
 
-__all__ = ["FORCE_LAWS", "FRICTION_LAWS", "effect_force", "extra_friction"]
+__all__ = ["DAMPING_LAWS", "FORCE_LAWS", "FRICTION_LAWS", "effect_force", "extra_friction"]
 
 # The laws take floats or arrays alike (only ufuncs and arithmetic: fast on floats). ``Any``: each gets its kind.
 
@@ -52,8 +53,17 @@ FRICTION_LAWS: dict[str, Callable[[Any, Values, Values, float], Values]] = {
 """kind → (effect, q, v, regularisation) → the extra friction magnitude (≥ 0), for the friction kinds."""
 
 
+def _soft_close_damping(e: Any, q: Values, v: Values) -> Values:
+    return e.damping * ((q < e.zone) & ((v < 0) | (not e.closing_only)))
+
+
+DAMPING_LAWS: dict[str, Callable[[Any, Values, Values], Values]] = {"soft_close": _soft_close_damping}
+"""kind → (effect, q, v) → the viscous damping it adds there (N·s/m or N·m·s/rad), for the kinds that are
+damping acting only in part of the state space (their force law is ``-damping * v``)."""
+
+
 def _soft_close(e: Any, q: Values, v: Values, joint_type: str) -> Values:
-    return -e.damping * v * ((q < e.zone) & ((v < 0) | (not e.closing_only)))
+    return -_soft_close_damping(e, q, v) * v
 
 
 def _self_close(e: Any, q: Values, v: Values, joint_type: str) -> Values:

@@ -22,9 +22,9 @@ from typing import TYPE_CHECKING, cast
 
 from rik.errors import RikError
 from rik.joints.kinds import KINDS, Channel, as_effect
-from rik.joints.laws import extra, force
+from rik.joints.laws import DAMPING_LAWS, extra, force
 from rik.joints.mjcf import DIRECTION_FRICTION_SPEED
-from rik.schemas.joints import JointEffect, SoftClose
+from rik.schemas.joints import JointEffect
 
 if TYPE_CHECKING:
     import mujoco
@@ -66,7 +66,7 @@ class RuntimeEffects:
         self.base_damping = float(model.dof_damping[self.dof] if base_damping is None else base_damping)
         by = {c: tuple(e for e in self.effects if KINDS[e.kind].runtime == c) for c in CHANNELS}
         self._friction = by["frictionloss"]
-        self._dampers = cast("tuple[SoftClose, ...]", by["damping"])
+        self._dampers = by["damping"]
         self._forces = by["qfrc_applied"]
         self._speed = DIRECTION_FRICTION_SPEED[self.joint_type]
         self._pending: tuple[mujoco.MjData, float, float] | None = None
@@ -93,12 +93,11 @@ class RuntimeEffects:
         return total
 
     def damping(self, q: float, v: float) -> float:
-        """The joint's viscous damping at (q, v) with the soft-close dampers that act there: N·s/m or N·m·s/rad."""
-        extra = 0.0
+        """The joint's viscous damping at (q, v) with the dampers (soft-close) that act there: N·s/m or N·m·s/rad."""
+        added = 0.0
         for e in self._dampers:
-            if q < e.zone and (v < 0 or not e.closing_only):
-                extra += e.damping
-        return self.base_damping + extra
+            added += float(DAMPING_LAWS[e.kind](e, q, v))
+        return self.base_damping + added
 
     def _views(self, data: mujoco.MjData) -> tuple[NDArray[np.float64], ...]:
         if data is not self._data:  # attribute access builds a new array wrapper each time: keep them
