@@ -16,6 +16,7 @@ from rik.joints.runtime import CHANNELS
 from rik.schemas.joints import JointEffect, JointType
 from rik.sysid import generate
 from rik.sysid.effects import FAMILIES
+from rik.sysid.foreign import FOREIGN_KINDS
 
 
 def test_the_table_holds_the_schemas_kinds() -> None:
@@ -46,6 +47,7 @@ def test_every_kind_reaches_mujoco() -> None:
 def test_sysid_lists_derive_from_the_table() -> None:
     assert [f.kind for f in FAMILIES if f.kind != "spring"] == list(KINDS)
     assert generate.EFFECT_KINDS == (*KINDS, "spring")
+    assert set(FOREIGN_KINDS) - {"none"} <= set(generate.EFFECT_KINDS)  # its laws are its own; its kinds are rik's
     for joint in JointType:
         assert set(generate.EFFECT_RANGES[joint]) == set(generate.EFFECT_KINDS) == set(generate.JOINT_KINDS[joint])
 

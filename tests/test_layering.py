@@ -14,9 +14,11 @@ PACKAGE = Path(rik.__file__).parent
 FORBIDDEN = {
     "rik.joints": ("rik.sim", "rik.combinator", "rik.sysid"),
     "rik.combinator": ("rik.sim",),
+    "rik.sysid.foreign": ("rik.joints", "rik.sim", "rik.combinator", "rik.sysid.effects", "rik.sysid.generate"),
 }
-"""Package → packages it must not import (joint effects sit below the combinator, the simulator and sysid; the
-combinator below the simulator)."""
+"""Package or module → packages and modules it must not import (joint effects sit below the combinator, the
+simulator and sysid; the combinator below the simulator; the foreign generator writes its laws independently of
+rik's)."""
 
 
 def _module(path: Path) -> str:

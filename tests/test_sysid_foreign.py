@@ -135,7 +135,7 @@ def test_trials_are_deterministic_by_seed_and_pass_preprocessing() -> None:
 
 def test_the_magnet_is_not_the_library_law() -> None:
     """The best fit of rik's library magnet (any pull, any decay) misses the foreign magnet by > 3 % RMS."""
-    from rik.sim.effects import effect_force as library_force
+    from rik.joints.laws import effect_force as library_force
 
     truth = _truth("magnetic_catch")
     decay = truth.params["decay"]

@@ -1,5 +1,5 @@
 """A foreign generator of "measured" drawer and door trials: a second source of test data for ``rik sysid``, with
-force laws written independently of rik's effect library (nothing here imports :mod:`rik.sim.effects`,
+force laws written independently of rik's effect library (nothing here imports :mod:`rik.joints`,
 :mod:`rik.sysid.effects`, :mod:`rik.combinator` or the laws of :mod:`rik.sysid.generate`).
 
 A :class:`ForeignTruth` is a 1-DOF joint (slide: m, N, kg; hinge: rad, N·m, kg·m²) integrated here in plain
