@@ -262,7 +262,7 @@ def test_step_loop_laws_match_the_vectorised_laws(joint: JointType) -> None:
     ff = rng.uniform(-5.0, 5.0, 500) * (1.0 if joint is SLIDE else 0.1)
     for kind in EFFECT_KINDS:
         truth = random_truth(kind, joint, np.random.default_rng(7))
-        applied, friction = gen._scalar_laws(truth)
+        applied, friction = gen.laws._scalar_laws(truth)
         va, vf = effect_laws(truth, qq, vv, ff)
         got_a = np.zeros(500) if applied is None else np.array([applied(*x) for x in zip(qq, vv, strict=True)])
         got_f = np.zeros(500) if friction is None else np.array([friction(*x) for x in zip(qq, vv, ff, strict=True)])
@@ -486,7 +486,7 @@ def test_two_effect_laws_are_the_sums_of_the_single_laws(joint: JointType) -> No
         assert np.array_equal(ground_truth_force(truth, q, v, load),
                               ground_truth_force(first, q, v, load) + ground_truth_force(other, q, v, load))
         # the step loop's closures sum the same
-        step_a, step_f = gen._scalar_laws(truth)
+        step_a, step_f = gen.laws._scalar_laws(truth)
         got_a = np.zeros(400) if step_a is None else np.array([step_a(*x) for x in zip(q, v, strict=True)])
         got_f = np.zeros(400) if step_f is None else np.array([step_f(*x) for x in zip(q, v, load, strict=True)])
         assert np.allclose(got_a, applied, rtol=1e-9, atol=1e-12), (kind, second)
