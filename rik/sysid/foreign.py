@@ -58,7 +58,7 @@ from rik.errors import RikError
 from rik.paths import write_atomic
 from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
-from rik.sysid.trials import Trial
+from rik.sysid.trials import Trial, si_columns, write_csv_trials
 
 FOREIGN_KINDS = ("none", "stiction", "magnetic_catch", "self_close", "soft_close", "quadratic_damping",
                  "load_friction", "tilt")
@@ -627,11 +627,8 @@ def run(truth: ForeignTruth, segments: Sequence[Segment], *, start: float = 0.0,
 # ------------------------------------------------------------------------------------------- measuring
 
 def trial_units(joint: JointType) -> tuple[TrialUnits, TrialColumns]:
-    """The SI units and CSV headers of a foreign trial of ``joint``."""
-    position, force = ("m", "N") if joint is JointType.slide else ("rad", "N·m")
-    word = "force" if joint is JointType.slide else "torque"
-    return (TrialUnits(time="s", position=position, force=force),
-            TrialColumns(time="time [s]", position=f"position [{position}]", force=f"{word} [{force}]"))
+    """The SI units and CSV headers of a foreign trial of ``joint`` (rik's: :func:`rik.sysid.trials.si_columns`)."""
+    return si_columns(joint)
 
 
 def measure(sim: Run, rng: np.random.Generator, *, name: str, duration_s: float, rate_hz: float = 200.0,
@@ -678,15 +675,7 @@ def simulate_foreign(truth: ForeignTruth, n_trials: int = 3, seed: int = 0, dura
 def write_foreign(trials: Sequence[Trial], directory: str | Path, truth: ForeignTruth) -> list[Path]:
     """Write each trial to ``directory/<name>.csv`` (the rik generator's headers) and the truth to
     ``directory/truth.json``, atomically; returns the CSV paths."""
+    paths = write_csv_trials(trials, directory, truth.joint)
     directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    _, columns = trial_units(truth.joint)
-    header = f"{columns.time},{columns.position},{columns.force}\n"
-    paths = []
-    for trial in trials:
-        rows = zip(trial.t.tolist(), trial.q.tolist(), trial.f.tolist(), strict=True)
-        path = directory / f"{trial.name}.csv"
-        write_atomic(path, header + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows))
-        paths.append(path)
     write_atomic(directory / TRUTH_FILE, json.dumps(truth.to_json(), indent=2) + "\n")
     return paths

@@ -812,3 +812,43 @@ def load_lerobot_trials(root: str | Path, joint: Literal["slide", "hinge"] | Joi
                       _rows_where(lambda row: f"row {row}", rows))
         trials.append(_build(src, limits))
     return trials
+
+
+# ----------------------------------------------------------------------------------------------------- writing
+
+def si_columns(joint: JointType) -> tuple[TrialUnits, TrialColumns]:
+    """The SI units and CSV headers of a trial of ``joint`` as rik writes it: ``time [s]``, ``position [m|rad]``,
+    ``force [N]`` or ``torque [N·m]``."""
+    position, force = ("m", "N") if joint is JointType.slide else ("rad", "N·m")
+    word = "force" if joint is JointType.slide else "torque"
+    return (TrialUnits(time="s", position=position, force=force),
+            TrialColumns(time="time [s]", position=f"position [{position}]", force=f"{word} [{force}]"))
+
+
+def write_csv_trials(trials: Sequence[Trial], directory: str | Path, joint: JointType) -> list[Path]:
+    """Write each trial of ``joint`` to ``directory/<name>.csv`` (:func:`si_columns`' headers, values printed to
+    round-trip exactly), each atomically; returns the paths (what :func:`load_trials` reads back). Refuses an empty
+    list, repeated names, a name that is no file name and a trial of another joint type, each in one line."""
+    from rik.paths import write_atomic
+
+    if not trials:
+        raise RikError("trials is empty; nothing to write")
+    names = [t.name for t in trials]
+    if len(set(names)) != len(names):
+        raise RikError(f"trials have repeated names ({', '.join(sorted({n for n in names if names.count(n) > 1}))})")
+    for trial in trials:
+        if trial.joint is not joint:
+            raise RikError(f"trials: '{trial.name}' is a {trial.joint.value} trial but the truth is a {joint.value}")
+        if "/" in trial.name or "\\" in trial.name or trial.name.startswith("."):
+            raise RikError(f"trials: name '{trial.name}' cannot be a file name")
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    _, columns = si_columns(joint)
+    header = f"{columns.time},{columns.position},{columns.force}\n"
+    paths = []
+    for trial in trials:
+        rows = zip(trial.t.tolist(), trial.q.tolist(), trial.f.tolist(), strict=True)
+        path = directory / f"{trial.name}.csv"
+        write_atomic(path, header + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows))
+        paths.append(path)
+    return paths

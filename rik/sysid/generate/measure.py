@@ -18,16 +18,12 @@ from rik.sysid.generate.constants import FORCE_NOISE, POSITION_NOISE, SOURCE, TR
 from rik.sysid.generate.excitation import excitation_plan
 from rik.sysid.generate.simulation import Simulation, simulate
 from rik.sysid.generate.truth import GroundTruth
-from rik.sysid.trials import Trial
+from rik.sysid.trials import Trial, si_columns, write_csv_trials
 
 
 def trial_units(joint: JointType) -> tuple[TrialUnits, TrialColumns]:
-    """The SI units and CSV headers of a simulated trial of ``joint``."""
-    joint = _joint(joint)
-    position, force = ("m", "N") if joint is JointType.slide else ("rad", "N·m")
-    word = "force" if joint is JointType.slide else "torque"
-    return (TrialUnits(time="s", position=position, force=force),
-            TrialColumns(time="time [s]", position=f"position [{position}]", force=f"{word} [{force}]"))
+    """The SI units and CSV headers of a simulated trial of ``joint`` (:func:`rik.sysid.trials.si_columns`)."""
+    return si_columns(_joint(joint))
 
 
 def measure(sim: Simulation, rng: np.random.Generator, *, name: str = "trial_1", duration_s: float | None = None,
@@ -105,29 +101,9 @@ def write_trials(trials: Sequence[Trial], directory: str | Path, truth: GroundTr
     """Write each trial to ``directory/<name>.csv`` (headers ``time [s]``, ``position [m|rad]``,
     ``force [N]`` or ``torque [N·m]``, values printed to round-trip exactly) and the truth to
     ``directory/truth.json``, each atomically; returns the CSV paths (for :func:`rik.sysid.trials.load_trials`)."""
-    if not trials:
-        raise RikError("trials is empty; nothing to write")
     if not isinstance(truth, GroundTruth):
         raise RikError(f"truth must be a GroundTruth, got {type(truth).__name__}")
-    names = [t.name for t in trials]
-    if len(set(names)) != len(names):
-        raise RikError(f"trials have repeated names ({', '.join(sorted({n for n in names if names.count(n) > 1}))})")
-    for trial in trials:
-        if trial.joint is not truth.joint:
-            raise RikError(f"trials: '{trial.name}' is a {trial.joint.value} trial but the truth is a "
-                           f"{truth.joint.value}")
-        if "/" in trial.name or "\\" in trial.name or trial.name.startswith("."):
-            raise RikError(f"trials: name '{trial.name}' cannot be a file name")
+    paths = write_csv_trials(trials, directory, truth.joint)
     directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    _, columns = trial_units(truth.joint)
-    header = f"{columns.time},{columns.position},{columns.force}\n"
-    paths = []
-    for trial in trials:
-        rows = zip(trial.t.tolist(), trial.q.tolist(), trial.f.tolist(), strict=True)
-        text = header + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows)
-        path = directory / f"{trial.name}.csv"
-        write_atomic(path, text)
-        paths.append(path)
     write_atomic(directory / TRUTH_FILE, json.dumps(truth.to_json(), indent=2) + "\n")
     return paths
