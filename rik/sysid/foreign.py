@@ -58,6 +58,9 @@ from rik.errors import RikError
 from rik.paths import write_atomic
 from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
+from rik.sysid.draws import joint_type as _joint
+from rik.sysid.draws import log_uniform as _log_uniform
+from rik.sysid.draws import uniform as _uniform
 from rik.sysid.trials import Trial, si_columns, write_csv_trials
 
 FOREIGN_KINDS = ("none", "stiction", "magnetic_catch", "self_close", "soft_close", "quadratic_damping",
@@ -198,21 +201,6 @@ class ForeignTruth:
                 "bristle_damping": self.bristle_damping, "range": list(self.range),
                 "stop_stiffness": self.stop_stiffness, "stop_damping": self.stop_damping,
                 "params": dict(self.params)}
-
-
-def _joint(joint: JointType | str) -> JointType:
-    try:
-        return JointType(joint)
-    except ValueError:
-        raise RikError(f"joint '{joint}' is not a joint type; use 'slide' or 'hinge'") from None
-
-
-def _uniform(rng: np.random.Generator, r: Range) -> float:
-    return float(rng.uniform(*r))
-
-
-def _log_uniform(rng: np.random.Generator, r: Range) -> float:
-    return float(math.exp(rng.uniform(math.log(r[0]), math.log(r[1]))))
 
 
 def foreign_truth(kind: str | None, joint: JointType | str, rng: np.random.Generator) -> ForeignTruth:

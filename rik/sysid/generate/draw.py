@@ -20,7 +20,9 @@ from rik.schemas.joints import (
     Stiction,
     Tilt,
 )
-from rik.sysid.generate.common import _joint, _log_uniform, _uniform
+from rik.sysid.draws import joint_type as _joint
+from rik.sysid.draws import log_uniform as _log_uniform
+from rik.sysid.draws import uniform as _uniform
 from rik.sysid.generate.constants import BASE_RANGES, EFFECT_KINDS, EFFECT_RANGES, GRAVITY, JOINT_KINDS
 from rik.sysid.generate.truth import Effect, GroundTruth
 

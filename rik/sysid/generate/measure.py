@@ -13,7 +13,8 @@ from rik.errors import RikError
 from rik.paths import write_atomic
 from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
-from rik.sysid.generate.common import _joint, _non_negative, _positive
+from rik.sysid.draws import joint_type as _joint
+from rik.sysid.generate.common import _non_negative, _positive
 from rik.sysid.generate.constants import FORCE_NOISE, POSITION_NOISE, SOURCE, TRUTH_FILE
 from rik.sysid.generate.excitation import excitation_plan
 from rik.sysid.generate.simulation import Simulation, simulate

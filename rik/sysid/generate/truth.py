@@ -11,7 +11,7 @@ from typing import Any
 from rik.errors import RikError
 from rik.joints.kinds import SCHEMAS
 from rik.schemas.joints import JointEffect, JointType, Spring, Tilt
-from rik.sysid.generate.common import _joint
+from rik.sysid.draws import joint_type as _joint
 from rik.sysid.generate.constants import TRUTH_FILE
 
 Effect = JointEffect | Spring
