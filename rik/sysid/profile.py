@@ -37,12 +37,12 @@ from rik.sysid.trials import (
     FORCE_UNITS,
     POSITION_UNITS,
     TRIAL_COLUMN,
+    RawTable,
     TrialError,
-    _match_header,
-    _parse_header,
-    _Raw,
-    _read,
     joint_type,
+    match_header,
+    parse_header,
+    read_table,
 )
 
 BIN_UNIT = "bin"
@@ -104,19 +104,19 @@ class ProfileData:
         return self.units.get("position") == BIN_UNIT
 
 
-def _columns_text(raw: _Raw) -> str:
+def _columns_text(raw: RawTable) -> str:
     return ", ".join(f"'{h}'" for h in raw.headers)
 
 
-def find_column(raw: _Raw, wanted: str | None, role: str, defaults: Sequence[str] = (),
+def find_column(raw: RawTable, wanted: str | None, role: str, defaults: Sequence[str] = (),
                 required: bool = True) -> str | None:
     """The header of ``role``: the one named ``wanted`` (as :mod:`rik.sysid.trials` matches a named column), else
     the first whose name is one of ``defaults``. A named column that is not there, or a required one with no
     default match, raises :class:`TrialError` listing the file's columns."""
     if wanted is not None:
-        return _match_header(raw, wanted, role)
+        return match_header(raw, wanted, role)
     for header in raw.headers:
-        if _parse_header(header)[0] in defaults:
+        if parse_header(header)[0] in defaults:
             return header
     if required:
         names = " or ".join(f"'{n}'" for n in defaults)
@@ -125,9 +125,9 @@ def find_column(raw: _Raw, wanted: str | None, role: str, defaults: Sequence[str
     return None
 
 
-def _unit(raw: _Raw, header: str, given: str | None, role: str, table: dict[str, float],
+def _unit(raw: RawTable, header: str, given: str | None, role: str, table: dict[str, float],
           other: dict[str, float], joint: JointType) -> tuple[str, float]:
-    unit = given if given is not None else _parse_header(header)[1]
+    unit = given if given is not None else parse_header(header)[1]
     choices = ", ".join(table)
     if not unit:
         raise TrialError(raw.file, None, header, f"no unit; pass --{role}-unit or write the header as "
@@ -161,8 +161,8 @@ def has_time_column(paths: Sequence[str | Path], time: str | None = None) -> boo
             header = next((row for row in csv.reader(handle) if any(c.strip() for c in row)), [])
         headers = [c.strip() for c in header]
     else:
-        headers = _read(path).headers
-    names = [h.strip().lower() for h in headers] + [_parse_header(h)[0] for h in headers]
+        headers = read_table(path).headers
+    names = [h.strip().lower() for h in headers] + [parse_header(h)[0] for h in headers]
     if time is not None:
         return time in headers or time.strip().lower() in names
     return any(n in COLUMN_NAMES["time"] for n in names)
@@ -187,7 +187,7 @@ def read_profiles(paths: str | Path | Sequence[str | Path], joint: str | JointTy
     units: dict[str, str] = {}
     force_si = ""
     for path in files:
-        raw = _read(Path(path))
+        raw = read_table(Path(path))
         if raw.rows == 0:
             raise TrialError(raw.file, None, None, "no data rows below the header")
         pos_h = find_column(raw, position, "position", COLUMN_NAMES["position"])

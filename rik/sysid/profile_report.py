@@ -30,7 +30,7 @@ from rik.sysid.profile_fit import (
     describe,
     predict,
 )
-from rik.sysid.report import REPORT, SUMMARY, _effect_dict
+from rik.sysid.report import REPORT, SUMMARY, effect_dict
 from rik.sysid.select import MIN_BIC_DROP, MIN_GAIN, OCCAM, TIE
 
 FORMAT = 1
@@ -95,7 +95,7 @@ def summary(fit: ProfileFit, data: ProfileData) -> dict[str, object]:
 
     def candidate(s: Any) -> dict[str, object]:
         return {"kinds": list(s.fit.kinds), "title": " + ".join(f.title for f, _ in s.fit.terms),
-                "effects": [_effect_dict(e) for e in s.fit.effects], "level": float(s.fit.theta[0]),
+                "effects": [effect_dict(e) for e in s.fit.effects], "level": float(s.fit.theta[0]),
                 "gain": s.gain, "bic_drop": s.bic_drop, "rmse_train": s.fit.rmse_train,
                 "rmse_heldout": s.fit.rmse_heldout, "parameters": s.fit.parameters, "verdict": _text(fit, s.verdict)}
 
@@ -105,7 +105,7 @@ def summary(fit: ProfileFit, data: ProfileData) -> dict[str, object]:
         "verdict": "effect" if sel.found else "none",
         "sentence": verdict(fit),
         "effects": list(sel.final.kinds),
-        "parameters": [_effect_dict(e) for e in fit.effects],
+        "parameters": [effect_dict(e) for e in fit.effects],
         "friction_level": fit.level,
         "gain": sel.gain,
         "alternatives": [list(s.fit.kinds) for s in (*sel.alternatives, *sel.pair_alternatives)],

@@ -56,7 +56,7 @@ def _residuals(fit: Fit, rows: Rows) -> np.ndarray:
     return rows.f - fit.predict(rows)
 
 
-def _effect_dict(effect: Effect | None) -> dict[str, Any] | None:
+def effect_dict(effect: Effect | None) -> dict[str, Any] | None:
     if effect is None:
         return None
     data = effect.model_dump(mode="json")
@@ -103,7 +103,7 @@ def summary(d: Discovery) -> dict[str, object]:
 
 def _candidate(s: Score) -> dict[str, object]:
     return {"kind": s.fit.kind, "kinds": list(s.fit.kinds), "title": " + ".join(f.title for f, _ in s.fit.terms),
-            "hyper": s.fit.hyper, "effects": [_effect_dict(e) for e in s.fit.effects], "gain": s.gain,
+            "hyper": s.fit.hyper, "effects": [effect_dict(e) for e in s.fit.effects], "gain": s.gain,
             "bic_drop": s.bic_drop,
             "rmse_train": s.fit.rmse_train, "rmse_heldout": s.fit.rmse_heldout, "parameters": s.fit.parameters,
             "verdict": s.verdict}

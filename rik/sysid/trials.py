@@ -265,7 +265,7 @@ class _Column:
 
 
 @dataclass
-class _Raw:
+class RawTable:
     """A file's table before any check: headers, a reader of numeric columns, and row labels for messages."""
 
     file: str
@@ -285,7 +285,7 @@ def _first_line(exc: BaseException) -> str:
     return text[0] if text else type(exc).__name__
 
 
-def _read_csv(path: Path) -> _Raw:
+def _read_csv(path: Path) -> RawTable:
     file = str(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
@@ -329,7 +329,7 @@ def _read_csv(path: Path) -> _Raw:
                                             f"'{text_values[row]}', not a number") from None
         return _Column(values.reshape(len(cells)), empty)
 
-    return _Raw(file, header, numbers, strings, line_array, len(cells))
+    return RawTable(file, header, numbers, strings, line_array, len(cells))
 
 
 def _is_float(text: str) -> bool:
@@ -340,7 +340,7 @@ def _is_float(text: str) -> bool:
     return True
 
 
-def _read_parquet(path: Path) -> _Raw:
+def _read_parquet(path: Path) -> RawTable:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -362,10 +362,10 @@ def _read_parquet(path: Path) -> _Raw:
     def labels(h: str) -> list[str]:
         return ["" if v is None else str(v) for v in table.column(h).to_pylist()]
 
-    return _Raw(file, list(table.column_names), numbers, labels, None, table.num_rows)
+    return RawTable(file, list(table.column_names), numbers, labels, None, table.num_rows)
 
 
-def _read(path: Path) -> _Raw:
+def read_table(path: Path) -> RawTable:
     kind = SUFFIXES.get(path.suffix.lower())
     if kind is None:
         raise TrialError(path, None, None, f"unknown file type '{path.suffix}'; use .csv, .parquet or .pq")
@@ -376,7 +376,7 @@ def _read(path: Path) -> _Raw:
 
 # ------------------------------------------------------------------------------------------ column matching
 
-def _parse_header(header: str) -> tuple[str, str | None]:
+def parse_header(header: str) -> tuple[str, str | None]:
     """(lower-case name, unit or None) of a header such as ``Position [mm]``."""
     match = _HEADER.match(header)
     if match is None:
@@ -385,13 +385,13 @@ def _parse_header(header: str) -> tuple[str, str | None]:
     return match["name"].lower(), (unit.strip() if unit is not None else None)
 
 
-def _match_header(raw: _Raw, wanted: str, role: str) -> str:
+def match_header(raw: RawTable, wanted: str, role: str) -> str:
     """The header of ``raw`` named by the user for ``role``: equal to ``wanted``, else the one whose name
     (without ``[unit]``) or whole text equals it case-insensitively."""
     if wanted in raw.headers:
         return wanted
     key = wanted.strip().lower()
-    hits = [h for h in raw.headers if h.strip().lower() == key or _parse_header(h)[0] == key]
+    hits = [h for h in raw.headers if h.strip().lower() == key or parse_header(h)[0] == key]
     if len(hits) == 1:
         return hits[0]
     if len(hits) > 1:
@@ -403,9 +403,9 @@ def _match_header(raw: _Raw, wanted: str, role: str) -> str:
     raise TrialError(raw.file, None, wanted, f"no such column (--{role}){hint} (columns: {columns})")
 
 
-def _column_unit(raw: _Raw, role: str, header: str, joint: JointType, columns: ColumnMap) -> tuple[str, float]:
+def _column_unit(raw: RawTable, role: str, header: str, joint: JointType, columns: ColumnMap) -> tuple[str, float]:
     """(unit, SI factor) of the column ``header`` holding ``role``: the declared unit option, else the header's."""
-    name, declared = _parse_header(header)
+    name, declared = parse_header(header)
     option = columns.unit(role)
     if not option:
         if declared is None and columns.column(role) is not None:
@@ -430,18 +430,18 @@ def _column_unit(raw: _Raw, role: str, header: str, joint: JointType, columns: C
     return option, scale
 
 
-def _find_columns(raw: _Raw, joint: JointType, columns: ColumnMap
+def _find_columns(raw: RawTable, joint: JointType, columns: ColumnMap
                   ) -> tuple[dict[str, str], dict[str, str], dict[str, float], str | None]:
     """Headers, declared units and SI factors of each quantity, and the trial column's header (or None): the
     columns ``columns`` names, the others found by their usual names."""
-    found = {role: _match_header(raw, columns.column(role) or "", role) for role in ROLES
+    found = {role: match_header(raw, columns.column(role) or "", role) for role in ROLES
              if columns.column(role) is not None}
-    trial = None if columns.trial is None else _match_header(raw, columns.trial, "trial")
+    trial = None if columns.trial is None else match_header(raw, columns.trial, "trial")
     taken = set(found.values()) | {trial}
     for header in raw.headers:
         if header in taken:
             continue
-        name, _ = _parse_header(header)
+        name, _ = parse_header(header)
         if name == TRIAL_COLUMN:
             if columns.trial is None:
                 trial = header
@@ -588,7 +588,7 @@ def _rows_where(where: Callable[[int], str], rows: np.ndarray) -> Callable[[int]
     return lambda i: where(int(rows[i]))
 
 
-def _file_trials(raw: _Raw, joint: JointType, limits: _Thresholds, column_map: ColumnMap) -> list[Trial]:
+def _file_trials(raw: RawTable, joint: JointType, limits: _Thresholds, column_map: ColumnMap) -> list[Trial]:
     columns, units, scales, trial_header = _find_columns(raw, joint, column_map)
     data = {role: raw.numbers(header) for role, header in columns.items()}
     if raw.rows == 0:
@@ -630,7 +630,7 @@ def load_trials(paths: str | Path | Sequence[str | Path], joint: Literal["slide"
         raise RikError("no trial files given; pass one or more .csv or .parquet files")
     trials: list[Trial] = []
     for path in files:
-        trials += _file_trials(_read(Path(path)), kind, limits, columns or ColumnMap())
+        trials += _file_trials(read_table(Path(path)), kind, limits, columns or ColumnMap())
     return trials
 
 
