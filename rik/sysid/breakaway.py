@@ -12,9 +12,9 @@ the breakaway force.
 1. **rest**: a run of at least :data:`REST_S` during which the position stays within :func:`rest_band` of the
    run's first sample;
 2. **departure**: the first sample after it more than ``2 × band`` from the rest position (or, resting on a
-   range end, beyond :data:`STOP_MARGIN` of it, so a stop's compliance springing back is not a start), followed
-   by at least :data:`CONFIRM` further travel in the same direction within :data:`CONFIRM_S`: a real start, not
-   presliding or noise;
+   range end, beyond :data:`~rik.sysid.preprocess.CONTACT_MARGIN` of it, so a stop's compliance springing back is
+   not a start), followed by at least :data:`CONFIRM` further travel in the same direction within
+   :data:`CONFIRM_S`: a real start, not presliding or noise;
 3. **breakaway force**: the largest smoothed force in the direction of motion between the last time it pushed
    the other way (a hand letting off a push on the stop) and the departure, within :data:`LOOKBACK_S`;
 4. **kept** only when the force rose slowly to that peak (it was within :data:`SLOW_RISE` of it
@@ -37,14 +37,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from rik.schemas.joints import JointType
-from rik.sysid.preprocess import Prepared
+from rik.sysid.preprocess import CONTACT_MARGIN, Prepared, smoothing_noise
 
 REST_S = 0.15
 """Shortest rest before a start counts, s."""
 REST_BAND = {JointType.slide: 1e-4, JointType.hinge: math.radians(0.05)}
 """Smallest half-width of the rest band, m or rad (raised to three times the smoothed position's noise)."""
-STOP_MARGIN = {JointType.slide: 1e-3, JointType.hinge: math.radians(0.5)}
-"""Distance from a range end within which a resting front is on the stop, m or rad."""
 CONFIRM = {JointType.slide: 1.5e-3, JointType.hinge: math.radians(0.4)}
 """Travel after the departure that confirms a start, m or rad."""
 CONFIRM_S = 0.6
@@ -81,24 +79,13 @@ class Breakaway:
 
 def rest_band(p: Prepared) -> float:
     """Half-width of the rest band, m or rad: :data:`REST_BAND`, or three times the noise left on the smoothed
-    position (what smoothing removed from the raw one, scaled by the filter's noise gain), if higher."""
-    from scipy.signal import savgol_coeffs
-
-    window, order = p.settings.window_samples, p.settings.polyorder
-    coeffs = savgol_coeffs(window, order)
-    keep = float(coeffs[window // 2])
-    sigma_raw = float(np.std(p.q_raw - p.q)) / math.sqrt(max(1.0 - keep, 1e-6))
-    return max(REST_BAND[p.trial.joint], 3.0 * sigma_raw * math.sqrt(keep))
+    position (:func:`rik.sysid.preprocess.smoothing_noise`), if higher."""
+    return max(REST_BAND[p.trial.joint], 3.0 * smoothing_noise(p.q_raw, p.q, p.settings)[1])
 
 
 def force_noise(p: Prepared) -> float:
     """Standard deviation of the noise on the smoothed force, N or N·m (from what smoothing removed)."""
-    from scipy.signal import savgol_coeffs
-
-    window, order = p.settings.window_samples, p.settings.polyorder
-    keep = float(savgol_coeffs(window, order)[window // 2])
-    sigma_raw = float(np.std(p.f - p.f_smooth)) / math.sqrt(max(1.0 - keep, 1e-6))
-    return sigma_raw * math.sqrt(keep)
+    return smoothing_noise(p.f, p.f_smooth, p.settings)[1]
 
 
 def _rests(q: np.ndarray, band: float, shortest: int) -> list[tuple[int, int]]:
@@ -124,7 +111,7 @@ def find_breakaways(p: Prepared, limits: tuple[float, float]) -> list[Breakaway]
     rate = p.settings.rate_hz
     band = rest_band(p)
     sigma_f = force_noise(p)
-    stop = STOP_MARGIN[joint]
+    stop = CONTACT_MARGIN[joint]
     confirm_n = int(round(CONFIRM_S * rate))
     lookback = int(round(LOOKBACK_S * rate))
     rise = max(int(round(RISE_S * rate)), 1)

@@ -38,7 +38,7 @@ from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.sysid.breakaway import CREEP_SPAN_S, STEP, creeping, find_breakaways
 from rik.sysid.effects import FAMILIES, Baseline, Effect, Family, Motion, baseline_features
-from rik.sysid.preprocess import Prepared, touching
+from rik.sysid.preprocess import CONTACT_MARGIN, Prepared, smoothing_noise, touching
 
 FIT_VELOCITY = {JointType.slide: 0.004, JointType.hinge: 0.01}
 """Lowest speed from which a sample enters the fit: m/s (4 mm/s) or rad/s (about 0.6°/s); raised to
@@ -46,8 +46,6 @@ FIT_VELOCITY = {JointType.slide: 0.004, JointType.hinge: 0.01}
 NOISE_SIGMAS = 4.0
 """A sample moves when its speed exceeds this many standard deviations of the velocity noise: a front at rest
 with noisy position readings must not count as moving (its friction direction would be a coin toss)."""
-CONTACT_MARGIN = {JointType.slide: 0.001, JointType.hinge: math.radians(0.5)}
-"""Distance to a range end within which a sample counts as touching the stop: m or rad."""
 HELDOUT_FRACTION = 0.3
 """Share of a single trial's duration held out (its end) when there is only one trial."""
 MIN_ROWS = 30
@@ -110,13 +108,12 @@ class Split:
 
 def velocity_noise(p: Prepared) -> float:
     """Standard deviation of the noise the position's noise puts on the Savitzky–Golay velocity, m/s or rad/s:
-    the position noise, estimated from what smoothing removed (corrected for the share the filter keeps), times
-    the norm of the derivative filter."""
+    the position noise, estimated from what smoothing removed (:func:`rik.sysid.preprocess.smoothing_noise`),
+    times the norm of the derivative filter."""
     from scipy.signal import savgol_coeffs
 
+    sigma_q, _ = smoothing_noise(p.q_raw, p.q, p.settings)
     window, order = p.settings.window_samples, p.settings.polyorder
-    smooth = savgol_coeffs(window, order)
-    sigma_q = float(np.std(p.q_raw - p.q)) / math.sqrt(max(1.0 - float(smooth[window // 2]), 1e-6))
     return sigma_q * float(np.linalg.norm(savgol_coeffs(window, order, deriv=1, delta=p.dt)))
 
 
@@ -188,6 +185,17 @@ def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, mar
                 event.astype(bool))
 
 
+def heldout_trials(n: int, heldout: Sequence[int] | None, what: str, where: str = "") -> tuple[int, ...]:
+    """The indices of the trials to hold out of ``n`` (``n`` ≥ 2): ``heldout`` (sorted, repeats dropped) or by
+    default the last quarter, at least one. A choice that is not some but not all of them is a one-line error
+    naming ``what`` ("the 4 trials"), prefixed by ``where`` when given."""
+    chosen = tuple(sorted(set(heldout))) if heldout is not None else tuple(range(n - max(1, n // 4), n))
+    if not chosen or any(not 0 <= i < n for i in chosen) or len(chosen) == n:
+        raise RikError(f"{where}held-out trials must be some but not all of {what} (0 to {n - 1}), "
+                       f"got {list(heldout or [])}")
+    return chosen
+
+
 def split_rows(rows: Rows, prepared: Sequence[Prepared], heldout: Sequence[int] | None = None) -> Split:
     """Training and held-out rows: the trials ``heldout`` (default: the last quarter of the trials, at least
     one) or, with a single trial, its last :data:`HELDOUT_FRACTION` of time."""
@@ -198,10 +206,7 @@ def split_rows(rows: Rows, prepared: Sequence[Prepared], heldout: Sequence[int] 
         late = rows.t >= start
         split = Split(rows.take(~late), rows.take(late), (0,), start, p.settings.window_samples)
     else:
-        chosen = tuple(sorted(set(heldout))) if heldout is not None else tuple(range(n - max(1, n // 4), n))
-        if not chosen or any(not 0 <= i < n for i in chosen) or len(chosen) == n:
-            raise RikError(f"held-out trials must be some but not all of the {n} trials (0 to {n - 1}), "
-                           f"got {list(heldout or [])}")
+        chosen = heldout_trials(n, heldout, f"the {n} trials")
         out = np.isin(rows.trial, chosen)
         split = Split(rows.take(~out), rows.take(out), chosen, None, prepared[0].settings.window_samples)
     for part, rows_ in (("training", split.train), ("held-out", split.heldout)):

@@ -60,6 +60,7 @@ from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
 from rik.sysid.draws import joint_type as _joint
 from rik.sysid.draws import log_uniform as _log_uniform
+from rik.sysid.draws import tilt_phase
 from rik.sysid.draws import uniform as _uniform
 from rik.sysid.trials import Trial, si_columns, write_csv_trials
 
@@ -257,10 +258,7 @@ def foreign_truth(kind: str | None, joint: JointType | str, rng: np.random.Gener
             peak = mass * GRAVITY * math.sin(math.radians(angle * (1.0 + ranges["sag"][0])))
         else:
             amplitude = _uniform(rng, ranges["amplitude"])
-            while True:
-                phase = float(rng.uniform(0.0, 2 * math.pi))
-                if min(abs(math.cos(phase)), abs(math.sin(phase))) >= 0.3:
-                    break
+            phase = tilt_phase(rng)
             params = {"amplitude": amplitude, "phase": phase}
             grid = np.linspace(0.0, upper, 181)
             peak = float(np.max(np.abs(amplitude * np.sin(grid + phase))))

@@ -53,6 +53,9 @@ MOVING_VELOCITY = {JointType.slide: 0.01, JointType.hinge: 0.02}
 """Speed from which a sample counts as moving: m/s (slide: 10 mm/s) or rad/s (hinge: about 1.1°/s)."""
 STICKING_FORCE = {JointType.slide: 0.5, JointType.hinge: 0.05}
 """|force| from which a sample that is not moving counts as sticking: N (slide) or N·m (hinge)."""
+CONTACT_MARGIN = {JointType.slide: 0.001, JointType.hinge: math.radians(0.5)}
+"""Distance to a range end within which a sample counts as touching the stop (the fit, :mod:`rik.sysid.fit`) or
+a resting front as resting on it (:mod:`rik.sysid.breakaway`): m or rad."""
 LIMIT_MARGIN = {JointType.slide: 0.005, JointType.hinge: math.radians(2.0)}
 """Distance to a limit within which a sample counts as near the limit: m (slide: 5 mm) or rad (hinge: 2°)."""
 DOWNSAMPLE_BELOW = 0.9
@@ -207,6 +210,18 @@ def masks(q: np.ndarray, qd: np.ndarray, f: np.ndarray, *, moving_velocity: floa
         "sticking": ~moving & (np.abs(f) >= sticking_force),
         "near_limit": (q <= lower + limit_margin) | (q >= upper - limit_margin),
     }
+
+
+def smoothing_noise(raw: np.ndarray, smoothed: np.ndarray, settings: PreprocessSettings) -> tuple[float, float]:
+    """(noise on ``raw``, noise left on ``smoothed``): standard deviations, in the signal's unit, estimated from
+    what the Savitzky–Golay filter of ``settings`` removed, corrected for the share of white noise it keeps (its
+    centre coefficient)."""
+    from scipy.signal import savgol_coeffs
+
+    window = settings.window_samples
+    keep = float(savgol_coeffs(window, settings.polyorder)[window // 2])
+    sigma = float(np.std(raw - smoothed)) / math.sqrt(max(1.0 - keep, 1e-6))
+    return sigma, sigma * math.sqrt(keep)
 
 
 def touching(q: np.ndarray, limits: tuple[float, float], margin: float, widen: int,

@@ -37,7 +37,7 @@ import numpy as np
 from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.sysid.effects import FAMILY, Baseline, Effect, Family, Motion
-from rik.sysid.fit import Fit, Term
+from rik.sysid.fit import Fit, Term, heldout_trials
 from rik.sysid.profile import ProfileGroup
 from rik.sysid.select import Selection, pair_allowed, select, select_pair
 
@@ -130,10 +130,7 @@ def split_profile(rows: ProfileRows, heldout: Sequence[int] | None = None, group
         out = np.arange(len(rows)) % SINGLE_TRIAL_EVERY == SINGLE_TRIAL_EVERY - 1
         chosen: tuple[int, ...] = (0,)
     else:
-        chosen = tuple(sorted(set(heldout))) if heldout is not None else tuple(range(n - max(1, n // 4), n))
-        if not chosen or any(not 0 <= i < n for i in chosen) or len(chosen) == n:
-            raise RikError(f"{group}: held-out trials must be some but not all of its {n} openings (0 to {n - 1}), "
-                           f"got {list(heldout or [])}")
+        chosen = heldout_trials(n, heldout, f"its {n} openings", f"{group}: ")
         out = np.isin(rows.trial, chosen)
     train, test = rows.take(~out), rows.take(out)
     for part, r in (("training", train), ("held-out", test)):

@@ -22,6 +22,7 @@ from rik.schemas.joints import (
 )
 from rik.sysid.draws import joint_type as _joint
 from rik.sysid.draws import log_uniform as _log_uniform
+from rik.sysid.draws import tilt_phase
 from rik.sysid.draws import uniform as _uniform
 from rik.sysid.generate.constants import BASE_RANGES, EFFECT_KINDS, EFFECT_RANGES, GRAVITY, JOINT_KINDS
 from rik.sysid.generate.truth import Effect, GroundTruth
@@ -118,10 +119,7 @@ def _draw_effect(kind: str | None, joint: JointType, rng: np.random.Generator, *
             friction = min(max(force / ratio, lo_f), hi_f)
         else:
             amplitude = _uniform(rng, ranges["amplitude"])
-            while True:
-                phase = float(rng.uniform(0.0, 2 * math.pi))
-                if min(abs(math.cos(phase)), abs(math.sin(phase))) >= 0.3:
-                    break
+            phase = tilt_phase(rng)
             effect = Tilt(force=amplitude * math.cos(phase), sine=amplitude * math.sin(phase))
             grid = np.linspace(0.0, upper, 181)
             peak = float(np.max(np.abs(effect.force * np.cos(grid) + effect.sine * np.sin(grid))))
