@@ -118,12 +118,12 @@ def find_breakaways(p: Prepared, limits: tuple[float, float]) -> list[Breakaway]
     events: list[Breakaway] = []
     for first, end in _rests(q, band, max(int(round(REST_S * rate)), 2)):
         rest = float(np.median(q[first:end]))
-        on_stop = rest <= limits[0] + stop or rest >= limits[1] - stop
+        on_lower, on_upper = rest <= limits[0] + stop, rest >= limits[1] - stop
         depart = end
         while depart < len(q) and depart - end <= lookback:
-            if rest <= limits[0] + stop:
+            if on_lower:
                 beyond = q[depart] > limits[0] + stop
-            elif rest >= limits[1] - stop:
+            elif on_upper:
                 beyond = q[depart] < limits[1] - stop
             else:
                 beyond = abs(q[depart] - rest) > 2.0 * band
@@ -153,7 +153,7 @@ def find_breakaways(p: Prepared, limits: tuple[float, float]) -> list[Breakaway]
         if events and events[-1].index == peak:  # the same start seen from two rests (a push, then let off)
             continue
         events.append(Breakaway(float(p.t[peak]), float(q[peak]), direction, force, peak, float(qdd[peak]),
-                                on_stop))
+                                on_lower or on_upper))
     return events
 
 

@@ -148,8 +148,9 @@ def steady(qd: np.ndarray, velocity: float, half: int, on_stop: np.ndarray | Non
 
 def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, margin: float | None = None,
              limits: tuple[float, float] | None = None, breakaways: bool = True) -> Rows:
-    """The fit rows of every trial (see the module docstring): the moving samples, then (``breakaways``) each
-    trial's breakaways from rest, weighted as one smoothing window each. ``velocity`` default
+    """The fit rows of every trial (see the module docstring): the steady moving samples and (``breakaways``: the
+    evidence from slow motion and rest) the creeps, then each trial's breakaways from rest, weighted as one
+    smoothing window each. ``velocity`` default
     :func:`fit_velocity`; ``limits`` default: the lowest and highest smoothed position over all trials."""
     joint = prepared[0].trial.joint
     velocity = fit_velocity(prepared) if velocity is None else velocity
@@ -159,17 +160,15 @@ def all_rows(prepared: Sequence[Prepared], *, velocity: float | None = None, mar
     parts = []
     for i, p in enumerate(prepared):
         window = p.settings.window_samples
-        away = ~touching(p.q, limits, margin, window // 2, p.f_smooth)
-        keep = (np.abs(p.qd) >= velocity) & away
-        keep &= steady(p.qd, velocity, window // 2, touching(p.q, limits, margin, 0))
+        keep = ~touching(p.q, limits, margin, window // 2, p.f_smooth) & steady(
+            p.qd, velocity, window // 2, touching(p.q, limits, margin, 0))
+        qd, qdd = p.qd, p.qdd
         if breakaways:  # creeps, away from the stops by a long difference's span
             slow, speed = creeping(p, velocity)
-            span = int(round(CREEP_SPAN_S * p.settings.rate_hz))
-            keep |= slow & ~touching(p.q, limits, margin, span)
-        else:
-            slow, speed = np.zeros(len(p.q), bool), p.qd
-        qd = np.where(slow, speed, p.qd)
-        qdd = np.where(slow, 0.0, p.qdd)  # a creep is at constant speed; its filtered acceleration is noise
+            slow &= ~touching(p.q, limits, margin, int(round(CREEP_SPAN_S * p.settings.rate_hz)))
+            keep |= slow
+            qd = np.where(slow, speed, p.qd)
+            qdd = np.where(slow, 0.0, p.qdd)  # a creep is at constant speed; its filtered acceleration is noise
         n = int(keep.sum())
         parts.append((p.t[keep], p.q[keep], qd[keep], qdd[keep], p.f_smooth[keep], np.full(n, i),
                       np.ones(n), np.zeros(n, bool)))
