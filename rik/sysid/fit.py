@@ -92,6 +92,15 @@ class Rows:
         return Motion(self.q, self.qd)
 
 
+def concat_rows(*parts: Rows) -> Rows:
+    """The rows of ``parts`` (of one joint and one set of trials) one after the other, weights and flags kept."""
+    def joined(name: str) -> np.ndarray:
+        return np.concatenate([getattr(p, name) for p in parts])
+
+    return Rows(parts[0].joint, joined("t"), joined("q"), joined("qd"), joined("qdd"), joined("f"), joined("trial"),
+                parts[0].names, joined("weights"), joined("breakaways"))
+
+
 @dataclass(frozen=True, eq=False)
 class Split:
     """Training and held-out rows, and which trials (or which part of a single trial) went where."""

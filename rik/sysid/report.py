@@ -27,7 +27,7 @@ import numpy as np
 from rik.paths import pyplot, save_figure, staged_directory, write_atomic
 from rik.schemas.joints import JointType, Spring
 from rik.sysid.discover import Discovery, describe
-from rik.sysid.fit import Fit, Rows
+from rik.sysid.fit import Fit, Rows, concat_rows
 from rik.sysid.select import MIN_BIC_DROP, MIN_GAIN
 
 if TYPE_CHECKING:
@@ -119,12 +119,10 @@ def all_residuals(d: Discovery) -> Residuals:
     """The moving fit rows (training then held-out; breakaways have their own plot), the baseline's and the
     chosen model's residuals, held-out flags."""
     sel = d.selection
-    parts = (d.split.train, d.split.heldout)
-    t, q, qd, qdd, f, trial = (np.concatenate([getattr(p, k) for p in parts]) for k in ("t", "q", "qd", "qdd", "f",
-                                                                                         "trial"))
-    moving = ~np.concatenate([p.breakaways for p in parts])
-    rows = Rows(d.joint, t, q, qd, qdd, f, trial, d.rows.names).take(moving)
-    held = np.concatenate([np.zeros(len(parts[0]), bool), np.ones(len(parts[1]), bool)])[moving]
+    every = concat_rows(d.split.train, d.split.heldout)
+    moving = ~every.breakaways
+    rows = every.take(moving)
+    held = np.concatenate([np.zeros(len(d.split.train), bool), np.ones(len(d.split.heldout), bool)])[moving]
     chosen = sel.final if sel.found else None
     return rows, _residuals(sel.baseline, rows), _residuals(chosen, rows) if chosen else None, held
 
@@ -229,10 +227,8 @@ def plot_resimulated(d: Discovery, res: Residuals, path: Path) -> Path:
 
 def breakaway_rows(d: Discovery) -> Rows:
     """The breakaway rows of the fit (training then held-out)."""
-    parts = [r.take(r.breakaways) for r in (d.split.train, d.split.heldout)]
-    t, q, qd, qdd, f, trial = (np.concatenate([getattr(p, k) for p in parts]) for k in ("t", "q", "qd", "qdd", "f",
-                                                                                         "trial"))
-    return Rows(d.joint, t, q, qd, qdd, f, trial, d.rows.names)
+    every = concat_rows(d.split.train, d.split.heldout)
+    return every.take(every.breakaways)
 
 
 def plot_breakaway(d: Discovery, res: Residuals, path: Path) -> Path:
