@@ -185,7 +185,8 @@ def test_gymnasium_env_passes_the_checker(variants: Path) -> None:
                    variants_dir=str(variants)).unwrapped
     check_env(env, skip_render_check=True)
     obs, info = env.reset(seed=1, options={"preset": "high"})
-    assert obs["state"].shape == (14,) and obs["front"].shape == (24, 32, 3)
+    assert obs["agent_pos"].shape == (11,) and obs["environment_state"].shape == (13,)
+    assert obs["pixels"]["front"].shape == (24, 32, 3) and obs["pixels"]["wrist"].dtype == np.uint8
     assert info["variant"] == KNOB.replace("__normal", "__high") and info["outcome"] == "F"
     obs, reward, terminated, truncated, info = env.step(np.array([0, -1, 0, 0, 0, 0, 0], np.float32))
     assert not terminated and info["outcome"] == "F"

@@ -1,8 +1,10 @@
 """What a rik episode becomes in a LeRobot dataset: the feature schema, the per-frame dicts (resampled to the
 dataset's rate) and the per-episode metadata.
 
-Features follow LeRobot's conventions: ``observation.state`` (the gym environment's 14 state numbers, named),
-``action`` (the recorded absolute target pose and gripper command, named), and one video feature per camera and
+Features follow LeRobot's conventions: ``observation.state`` (the robot's state) and
+``observation.environment_state`` (the front's state), named, as the gym environment's ``agent_pos`` and
+``environment_state`` (:mod:`rik.sim.observation`); ``action`` (the recorded absolute target pose and gripper
+command, named: what the environment takes with ``action_mode="absolute"``), and one video feature per camera and
 stream: ``observation.images.<camera>`` for the sim stream, ``observation.images.<camera>_rerendered`` for the
 Mitsuba one. Episode metadata are not features (policies take every ``observation.*`` feature): they are columns
 ``rik/<field>`` of ``meta/episodes``, which survive loading, ``episode_filter``, resuming and merging.
@@ -18,6 +20,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from rik.errors import RikError
+from rik.sim.observation import STREAM_SUFFIX, image_name
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -27,25 +30,26 @@ if TYPE_CHECKING:
 
 ACTION_NAMES = ("target_x", "target_y", "target_z", "target_pitch", "target_yaw", "target_roll", "gripper")
 """The recorded action: target pose of the gripper base (m, rad) and gripper command (0 open, 1 closed)."""
-STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
 META_PREFIX = "rik/"
 META_FIELDS = ("episode_id", "variant", "base_unit", "handle", "handle_type", "preset", "front", "operator",
                "operator_kind", "outcome", "seed", "final_opening", "source_fps")
-TYPE_WORDS = {"two_point": "handle", "knob": "knob", "finger_pull": "finger pull"}
 ROBOT_TYPE = "rik_hand_e"
 
 
 def image_key(camera: str, stream: str) -> str:
     """The dataset feature of a camera's stream, e.g. ``observation.images.front_rerendered``."""
-    return f"observation.images.{camera}{STREAM_SUFFIX[stream]}"
+    return f"observation.images.{image_name(camera, stream)}"
 
 
 def features(cameras: Sequence[str], streams: Sequence[str], width: int, height: int) -> dict[str, dict[str, Any]]:
     """The LeRobot feature dict of an export."""
-    from rik.sim.env import STATE_NAMES
+    from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
 
     out: dict[str, dict[str, Any]] = {
-        "observation.state": {"dtype": "float32", "shape": (len(STATE_NAMES),), "names": list(STATE_NAMES)},
+        "observation.state": {"dtype": "float32", "shape": (len(ROBOT_STATE_NAMES),),
+                              "names": list(ROBOT_STATE_NAMES)},
+        "observation.environment_state": {"dtype": "float32", "shape": (len(ENV_STATE_NAMES),),
+                                          "names": list(ENV_STATE_NAMES)},
         "action": {"dtype": "float32", "shape": (len(ACTION_NAMES),), "names": list(ACTION_NAMES)},
     }
     for cam in cameras:
@@ -56,11 +60,10 @@ def features(cameras: Sequence[str], streams: Sequence[str], width: int, height:
 
 
 def task_text(catalog: Catalog, meta: EpisodeMeta, front_kind: str) -> str:
-    """A natural instruction, e.g. "open the drawer by its bow handle"."""
-    handle = catalog.handles[meta.handle]
-    design = catalog.designs[handle.design]
-    shape = design.subtype.replace("_", " ").replace("-", " ")
-    return f"open the {front_kind} by its {shape} {TYPE_WORDS.get(meta.handle_type, 'handle')}"
+    """A natural instruction, e.g. "open the drawer by its bow handle" (the environment's task description)."""
+    from rik.sim.observation import instruction
+
+    return instruction(catalog, meta.handle, front_kind)
 
 
 def episode_metadata(meta: EpisodeMeta) -> dict[str, object]:
@@ -94,7 +97,7 @@ def episode_frames(catalog: Catalog, source: EpisodeSource, cameras: Sequence[st
                    variants: Path) -> tuple[EpisodeMeta, str, Iterator[dict[str, np.ndarray]], int]:
     """(meta, task, frame dicts for ``add_frame`` without the task, frame count) of one episode."""
     from rik.render.streams import read_frame
-    from rik.sim.env import observe_state
+    from rik.sim.env import state_observation
     from rik.sim.episode import read_episode, states
     from rik.sim.replay import episode_scene
 
@@ -111,7 +114,9 @@ def episode_frames(catalog: Catalog, source: EpisodeSource, cameras: Sequence[st
     def frames() -> Iterator[dict[str, np.ndarray]]:
         for k in picks:
             scene.restore(recorded[k])
-            frame: dict[str, np.ndarray] = {"observation.state": observe_state(scene).astype(np.float32),
+            state = state_observation(scene)
+            frame: dict[str, np.ndarray] = {"observation.state": state["agent_pos"],
+                                            "observation.environment_state": state["environment_state"],
                                             "action": actions[k].astype(np.float32)}
             for stream, folder in source.streams.items():
                 for cam in cameras:

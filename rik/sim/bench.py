@@ -16,16 +16,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.errors import RikError
+from rik.sim.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, choose_variant
 from rik.sim.outcome import OUTCOMES
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
 
-DEFAULT_TYPES = ("knob", "finger_pull", "two_point")
-DEFAULT_PRESETS = ("smooth", "normal", "high")
 DEFAULT_STRATEGIES = ("grasp_horizontal", "grasp_vertical", "contact_rich")
-DEFAULT_KINDS = ("drawer",)
-"""The paper's case study opens drawers."""
 SWEEP_GRIP_FORCES = (5.0, 10.0, 20.0, 40.0, 80.0, 130.0)
 """Grip forces of ``--sweep grip-force``, N (130 N: the Hand-E's maximum)."""
 MAX_SECONDS = 30.0
@@ -46,22 +43,6 @@ class BenchTask:
 
     def encode(self) -> str:
         return json.dumps(asdict(self), sort_keys=True)
-
-
-def _choose(catalog: Catalog, handle_type: str, preset: str, rng: np.random.Generator, kinds: Sequence[str],
-            compatible: set[str]) -> tuple[str, str]:
-    from rik.combinator.ids import variant_id
-
-    bases = sorted(b for b, u in catalog.base_units.items() if u.fronts[0].kind in kinds)
-    handles = sorted(h for h, v in catalog.handles.items() if catalog.handle_type(v).value == handle_type)
-    for _ in range(100):
-        base = bases[int(rng.integers(len(bases)))]
-        handle = handles[int(rng.integers(len(handles)))]
-        vid = variant_id(base, handle, preset)
-        if vid in compatible:
-            fronts = catalog.base_units[base].fronts
-            return vid, fronts[int(rng.integers(len(fronts)))].id
-    raise RikError(f"no valid {handle_type} variant on a {'/'.join(kinds)} base unit with preset {preset}")
 
 
 MAX_BENCH_SEED = (2**63 - 1) // 1_000_003 - 1
@@ -90,7 +71,7 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
         for pi, p in enumerate(presets):
             for i in range(per_cell):
                 task_seed = seed * 1_000_003 + ti * 10_007 + pi * 101 + i
-                vid, front = _choose(catalog, t, p, np.random.default_rng(task_seed), kinds, compatible)
+                vid, front = choose_variant(catalog, t, p, np.random.default_rng(task_seed), kinds, compatible)
                 for strategy in strategies:
                     for g in grip_forces:
                         tasks.append(BenchTask(t, p, strategy, i, task_seed, vid, front, g))

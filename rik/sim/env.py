@@ -1,140 +1,211 @@
 """``rik/OpenFront-v0``: a gymnasium environment that asks a policy to open a front of a rik variant.
 
-- **reset** by variant, front and seed (``options={"variant": ..., "front": ..., "preset": ...}``); the gripper
-  starts at a randomised pose in front of the handle;
-- **observation** (a dict): ``state`` = gripper base pose (x, y, z m; pitch, yaw, roll rad), jaw opening (m),
-  front joint position and velocity, pads' centre (m, world), opening (fraction of the range), normal force of
-  the gripper on the front (N); with ``images=True`` also ``front`` and ``wrist`` camera images (uint8 HxWx3);
-- **action**: 7 numbers in [-1, 1] (the last in [0, 1]): a target-pose change (scaled by :data:`MAX_DELTA`,
-  m and rad per control step) and the gripper command (0 open, 1 closed with full force);
-- **reward**: the gain in opening (fraction of the range) per step; **terminated** when the front is open to the
-  success threshold; **truncated** after ``max_seconds``; ``info["outcome"]`` is F, P or S (rik.sim.outcome).
+- **episodes**: one variant (``variant=``), or drawn from a catalog split by the reset's seed (``split=``,
+  :mod:`rik.sim.draw`: the same seed gives the same variant, front and start pose everywhere); a reset may also
+  name ``options={"variant": ..., "front": ..., "preset": ...}``. The gripper starts at a randomised pose in front of
+  the handle: a reset with seed ``S`` starts where ``rik record --seed S`` starts on that variant;
+- **observation** (a dict, shaped as LeRobot's environments return them): ``agent_pos`` = the robot's state and
+  ``environment_state`` = the front's state (:mod:`rik.sim.observation`), float32; with image streams also
+  ``pixels`` = ``{camera: uint8 HxWx3}`` (``front``, ``wrist``; ``front_rerendered`` for Mitsuba's stream);
+- **action** (``action_mode``): ``delta``, 7 numbers in [-1, 1] (the last in [0, 1]): a target-pose change scaled by
+  :data:`MAX_DELTA` (m and rad per control step) and the gripper command (0 open, 1 closed with full force); or
+  ``absolute``, the target pose itself (x, y, z m; pitch, yaw, roll rad) and the gripper command, as rik's
+  episodes and LeRobot exports record them;
+- **reward**: the gain in opening (fraction of the range) per step; **terminated** when the front is open to
+  rik's success threshold (90 %, as ManiSkill's OpenCabinetDrawer); **truncated** after ``episode_length``
+  control steps; ``info`` holds ``is_success``, the F/P/S ``outcome`` (rik.sim.outcome), ``opening`` and
+  ``max_opening``, and the episode's variant, front, handle type and preset. The last finished episode's
+  result stays in :attr:`OpenFrontEnv.last_result` (vector environments reset a finished one at once).
 
 Use: ``import rik.sim.env`` (registers the id), then ``gymnasium.make("rik/OpenFront-v0", variant=...)``.
 """
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 
+from rik.errors import RikError
+from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, ROBOT_STATE_NAMES, environment_state, image_name, robot_state
 from rik.sim.outcome import SUCCESS_OPENING, classify
-from rik.sim.scene import SimScene
+from rik.sim.scene import CONTROL_FPS, SimScene
 
 if TYPE_CHECKING:
-    import mujoco
+    from rik.render.renderers import FrameRenderer
 
 ENV_ID = "rik/OpenFront-v0"
 MAX_DELTA = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1])
 """Largest change of the target pose per control step: m for x, y, z; rad for pitch, yaw, roll."""
-STATE_NAMES = ("x", "y", "z", "pitch", "yaw", "roll", "jaw_opening", "front_qpos", "front_qvel", "tcp_x", "tcp_y",
-               "tcp_z", "opening", "contact_normal_force")
 DEFAULT_VARIANT = "drawer-chest-80__two_point-bow-128__normal"
-
-
-def observe_state(scene: SimScene) -> np.ndarray:
-    """The proprioceptive and front state of :data:`STATE_NAMES`."""
-    q, qd = scene.front_q()
-    return np.concatenate([scene.pose(), [scene.finger_opening(), q, qd], scene.tcp(),
-                           [scene.opening(), scene.contact_summary()["normal_force"]]]).astype(np.float64)
-
-
-def observe(scene: SimScene, renderer: mujoco.Renderer | None = None) -> dict[str, np.ndarray]:
-    """The observation dict (images when a renderer is given)."""
-    obs = {"state": observe_state(scene)}
-    if renderer is not None:
-        for cam in ("front", "wrist"):
-            renderer.update_scene(scene.data, camera=cam)
-            obs[cam] = renderer.render().copy()
-    return obs
+EPISODE_LENGTH = 400
+"""Control steps of an episode before it is truncated: 20 s at 20 Hz; scripted demonstrations take up to 232."""
+ACTION_MODES = ("delta", "absolute")
+SCENE_CACHE = 16
+"""Compiled scenes kept per environment (a split draws many variants)."""
 
 
 def delta_to_absolute(target: np.ndarray, action: np.ndarray) -> np.ndarray:
-    """An absolute action (target pose + gripper command) from the previous target and an environment action."""
+    """An absolute action (target pose + gripper command) from the previous target and a ``delta`` action."""
     a = np.asarray(action, np.float64)
     return np.concatenate([np.asarray(target, np.float64) + np.clip(a[:6], -1, 1) * MAX_DELTA,
                            [float(np.clip(a[6], 0.0, 1.0))]])
 
 
+def state_observation(scene: SimScene) -> dict[str, Any]:
+    """The state part of an observation: ``agent_pos`` and ``environment_state``, float32."""
+    return {"agent_pos": robot_state(scene).astype(np.float32),
+            "environment_state": environment_state(scene).astype(np.float32)}
+
+
 class OpenFrontEnv(gym.Env):
     """Open a front of a rik variant with the simulated gripper (see the module docstring)."""
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": CONTROL_FPS}
 
-    def __init__(self, variant: str = DEFAULT_VARIANT, front: str | None = None, *, images: bool = False,
-                 image_size: tuple[int, int] = (96, 128), max_seconds: float = 20.0,
-                 variants_dir: str | Path = "variants", render_mode: str | None = None,
-                 catalog_paths: tuple[str, ...] = ()) -> None:
+    def __init__(self, variant: str | None = DEFAULT_VARIANT, front: str | None = None, *,
+                 split: str | None = None, handle_types: tuple[str, ...] | None = None,
+                 presets: tuple[str, ...] | None = None, kinds: tuple[str, ...] | None = None,
+                 action_mode: str = "delta", images: bool = False, streams: tuple[str, ...] = (),
+                 cameras: tuple[str, ...] = CAMERAS, image_size: tuple[int, int] = (96, 128), spp: int = 16,
+                 episode_length: int = EPISODE_LENGTH, variants_dir: str | Path = "variants",
+                 render_mode: str | None = None, catalog_paths: tuple[str, ...] = ()) -> None:
         from rik.registry.load import load_catalog
+        from rik.sim.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, Draw
 
+        if action_mode not in ACTION_MODES:
+            raise RikError(f"action_mode '{action_mode}': use one of {', '.join(ACTION_MODES)}")
+        if episode_length < 1:
+            raise RikError(f"episode_length {episode_length}: must be at least 1 control step")
         self._catalog = load_catalog([Path(p) for p in catalog_paths])
         self._variants = Path(variants_dir)
+        self._draw = None
+        if split is not None or variant is None:
+            self._draw = Draw(split, tuple(handle_types or DEFAULT_TYPES), tuple(presets or DEFAULT_PRESETS),
+                              tuple(kinds or DEFAULT_KINDS))
+            self._draw.check(self._catalog)
         self._variant, self._front = variant, front
-        self._images, self._size = images, image_size
-        self._max_seconds = max_seconds
+        self.action_mode = action_mode
+        self._streams = tuple(streams) or (("sim",) if images else ())
+        self._cameras, self._size, self._spp = tuple(cameras), image_size, spp
+        self._max_episode_steps = episode_length
         self.render_mode = render_mode
-        self._scenes: dict[tuple[str, str | None], SimScene] = {}
-        self._renderer: mujoco.Renderer | None = None
-        self._renderer_model: mujoco.MjModel | None = None
-        self.scene = self._scene(variant, front)
-        n = len(STATE_NAMES)
-        spaces: dict[str, gym.Space[Any]] = {"state": gym.spaces.Box(-np.inf, np.inf, (n,), np.float64)}
-        if images:
+        self._scenes: OrderedDict[tuple[str, str | None], SimScene] = OrderedDict()
+        self._renderers: dict[str, FrameRenderer] = {}
+        self._renderer_model: Any = None
+        self.last_result: dict[str, Any] | None = None
+        self._episode: dict[str, Any] = {"seed": -1}
+        first = variant if variant is not None else self._draw.episode(self._catalog, 0).variant  # type: ignore[union-attr]
+        self.scene = self._scene(first, front)
+        self.task_description = ""
+        spaces: dict[str, gym.Space[Any]] = {
+            "agent_pos": gym.spaces.Box(-np.inf, np.inf, (len(ROBOT_STATE_NAMES),), np.float32),
+            "environment_state": gym.spaces.Box(-np.inf, np.inf, (len(ENV_STATE_NAMES),), np.float32)}
+        if self._streams:
             h, w = image_size
-            spaces |= {c: gym.spaces.Box(0, 255, (h, w, 3), np.uint8) for c in ("front", "wrist")}
+            spaces["pixels"] = gym.spaces.Dict({image_name(c, s): gym.spaces.Box(0, 255, (h, w, 3), np.uint8)
+                                                for s in self._streams for c in self._cameras})
         self.observation_space = gym.spaces.Dict(spaces)
-        self.action_space = gym.spaces.Box(np.array([-1.0] * 6 + [0.0], np.float32), np.ones(7, np.float32),
-                                           dtype=np.float32)
+        if action_mode == "delta":
+            low, high = np.array([-1.0] * 6 + [0.0]), np.ones(7)
+        else:
+            low, high = np.array([-np.inf] * 6 + [0.0]), np.array([np.inf] * 6 + [1.0])
+        self.action_space = gym.spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
 
+    # ---- scenes and images ----------------------------------------------------------------------------------
     def _scene(self, variant: str, front: str | None) -> SimScene:
         from rik.sim.record import variant_dir
         from rik.sim.scene import build_scene
 
         key = (variant, front)
-        if key not in self._scenes:
+        if key in self._scenes:
+            self._scenes.move_to_end(key)
+        else:
             self._scenes[key] = build_scene(variant_dir(self._catalog, variant, self._variants), front)
+            while len(self._scenes) > SCENE_CACHE:
+                self._scenes.popitem(last=False)
         return self._scenes[key]
 
-    def _get_renderer(self) -> mujoco.Renderer:
-        import mujoco
+    def _renderer(self, stream: str) -> FrameRenderer:
+        from rik.render.renderers import make_renderer
+        from rik.render.streams import StreamSpec
 
         if self._renderer_model is not self.scene.model:
-            h, w = self._size
-            self._renderer = mujoco.Renderer(self.scene.model, h, w)
+            self._close_renderers()
             self._renderer_model = self.scene.model
-        return self._renderer
+        if stream not in self._renderers:
+            h, w = self._size
+            spec = StreamSpec(stream, w, h, spp=self._spp)  # type: ignore[arg-type]
+            self._renderers[stream] = make_renderer(self.scene.model, self.scene.data, list(self._cameras), spec,
+                                                    self._catalog.finishes)
+        return self._renderers[stream]
 
+    def _close_renderers(self) -> None:
+        for r in self._renderers.values():
+            r.close()
+        self._renderers = {}
+
+    # ---- gym API ----------------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
         from rik.combinator.ids import VariantKey, parse_variant_id
+        from rik.sim.observation import instruction
         from rik.sim.record import randomise_start
 
         super().reset(seed=seed)
         options = options or {}
-        variant = options.get("variant", self._variant)
+        variant, front = self._variant, self._front
+        episode_seed = -1 if seed is None else int(seed)
+        if self._draw is not None and "variant" not in options:
+            draw_seed = episode_seed if seed is not None else int(self.np_random.integers(2**62))
+            drawn = self._draw.episode(self._catalog, draw_seed)
+            variant, front = drawn.variant, drawn.front
+        variant = options.get("variant", variant)
+        key = parse_variant_id(self._catalog, variant)
         if "preset" in options:
-            key = parse_variant_id(self._catalog, variant)
-            variant = VariantKey(key.base, key.handle, options["preset"]).id
-        self.scene = self._scene(variant, options.get("front", self._front))
+            key = VariantKey(key.base, key.handle, options["preset"])
+        self.scene = self._scene(key.id, options.get("front", front))
         self.scene.reset()  # positions computed before the start pose is read: as rik record starts
         randomise_start(self.scene, self.np_random)
         self._target = self.scene.pose()
-        self._opening = self.scene.opening()
-        self._max_opening = self._opening
+        self._opening = self._max_opening = self.scene.opening()
         self._steps = 0
+        handle = self._catalog.handles[key.handle]
+        self._episode = {"seed": episode_seed, "variant": key.id, "front": self.scene.front.id,
+                         "handle_type": self._catalog.handle_type(handle).value, "preset": key.preset}
+        self.task_description = instruction(self._catalog, key.handle, self.scene.front.kind)
         return self._obs(), self._info()
 
-    def _obs(self) -> dict[str, np.ndarray]:
-        return observe(self.scene, self._get_renderer() if self._images else None)
+    @property
+    def task(self) -> str:
+        return self.task_description
 
-    def _info(self) -> dict[str, object]:
-        return {"variant": self.scene.info["id"], "front": self.scene.front.id, "opening": self.scene.opening(),
-                "max_opening": self._max_opening, "outcome": classify(self.scene.opening())}
+    def _obs(self) -> dict[str, Any]:
+        obs = state_observation(self.scene)
+        if self._streams:
+            pixels = {}
+            for stream in self._streams:
+                for cam, img in self._renderer(stream).render(self.scene.data, self._steps).items():
+                    pixels[image_name(cam, stream)] = img
+            obs["pixels"] = pixels
+        return obs
+
+    def _info(self) -> dict[str, Any]:
+        opening = self.scene.opening()
+        return {**self._episode, "opening": opening, "max_opening": self._max_opening, "outcome": classify(opening),
+                "is_success": bool(opening >= SUCCESS_OPENING), "steps": self._steps}
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
-        absolute = delta_to_absolute(self._target, action)
+        if self.action_mode == "delta":
+            absolute = delta_to_absolute(self._target, action)
+        else:
+            a = np.asarray(action, np.float64).reshape(-1)
+            if a.shape != (7,) or not np.all(np.isfinite(a)):
+                raise RikError(f"action {a.tolist()}: an absolute action is 7 finite numbers (target x, y, z m; "
+                               "pitch, yaw, roll rad; gripper 0..1)")
+            absolute = np.concatenate([a[:6], [float(np.clip(a[6], 0.0, 1.0))]])
         self._target = absolute[:6]
         self.scene.step(absolute)
         self._steps += 1
@@ -143,20 +214,21 @@ class OpenFrontEnv(gym.Env):
         self._opening = opening
         self._max_opening = max(self._max_opening, opening)
         terminated = opening >= SUCCESS_OPENING
-        truncated = self._steps >= int(self._max_seconds * self.scene.control_fps)
-        return self._obs(), reward, bool(terminated), bool(truncated), self._info()
+        truncated = self._steps >= self._max_episode_steps
+        info = self._info()
+        if terminated or truncated:
+            self.last_result = {**info, "final_opening": opening}
+        return self._obs(), reward, bool(terminated), bool(truncated and not terminated), info
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":
             return None
-        r = self._get_renderer()
-        r.update_scene(self.scene.data, camera="front")
-        return r.render().copy()
+        stream = self._streams[0] if self._streams else "sim"
+        images = self._renderer(stream).render(self.scene.data, self._steps)
+        return images.get("front", next(iter(images.values())))
 
     def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        self._close_renderers()
 
 
 if ENV_ID not in gym.registry:

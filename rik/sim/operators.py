@@ -303,9 +303,9 @@ class PolicyOperator:
         self._target = scene.pose()
 
     def act(self, scene: SimScene) -> np.ndarray:
-        from rik.sim.env import delta_to_absolute, observe
+        from rik.sim.env import delta_to_absolute, state_observation
 
-        action = np.asarray(self.policy(observe(scene)), np.float64)
+        action = np.asarray(self.policy(state_observation(scene)), np.float64)
         absolute = delta_to_absolute(self._target, action)
         self._target = absolute[:6]
         return absolute

@@ -1,0 +1,124 @@
+"""Which variant and front an episode opens, drawn from its seed: the same draw for the gym environment,
+``rik record --split``, ``rik eval`` and ``lerobot-eval``, so an episode seed names one episode everywhere.
+
+Episodes of a draw cycle through the *cells* of the paper's Table 3 (handle type x resistance preset): seed ``s``
+falls in cell ``s mod (types x presets)``, so any run of ``cells x N`` consecutive seeds has exactly ``N``
+episodes per cell. Within its cell the seed picks a base unit of the wanted kinds and a handle of the split (and
+a front of the base unit) that fit together. The draw uses its own random stream (seeded by ``(seed,
+DRAW_STREAM)``), so the start pose of the episode, drawn from ``default_rng(seed)`` as ``rik record --seed``
+does, is the same as a recording of that variant with that seed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rik.errors import RikError
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+
+DEFAULT_TYPES = ("knob", "finger_pull", "two_point")
+DEFAULT_PRESETS = ("smooth", "normal", "high")
+DEFAULT_KINDS = ("drawer",)
+"""The paper's case study opens drawers."""
+DRAW_STREAM = 0x5EED_D4A1
+"""Second word of the draw's seed sequence, keeping it apart from the episode's own ``default_rng(seed)``."""
+
+
+@dataclass(frozen=True)
+class EpisodeDraw:
+    """One episode's cell and the variant and front it opens."""
+
+    seed: int
+    handle_type: str
+    preset: str
+    variant: str
+    front: str
+
+
+def choose_variant(catalog: Catalog, handle_type: str, preset: str, rng: np.random.Generator, kinds: Sequence[str],
+                   compatible: set[str], handles: Sequence[str] | None = None) -> tuple[str, str]:
+    """A (variant id, front id) of ``handle_type`` on a base unit of ``kinds`` with ``preset``, among the
+    ``compatible`` variant ids (and the ``handles`` given, default every handle of the type)."""
+    from rik.combinator.ids import variant_id
+
+    bases = sorted(b for b, u in catalog.base_units.items() if u.fronts[0].kind in kinds)
+    pool = sorted(h for h, v in catalog.handles.items() if catalog.handle_type(v).value == handle_type
+                  and (handles is None or h in handles))
+    for _ in range(100):
+        if not bases or not pool:
+            break
+        base = bases[int(rng.integers(len(bases)))]
+        handle = pool[int(rng.integers(len(pool)))]
+        vid = variant_id(base, handle, preset)
+        if vid in compatible:
+            fronts = catalog.base_units[base].fronts
+            return vid, fronts[int(rng.integers(len(fronts)))].id
+    raise RikError(f"no valid {handle_type} variant on a {'/'.join(kinds)} base unit with preset {preset}")
+
+
+@dataclass(frozen=True)
+class Draw:
+    """The episodes of a split: handle types x presets on base units of some kinds (see the module docstring)."""
+
+    split: str | None = "test"
+    """Catalog split of the handles (``rik catalog splits``), or None for every handle."""
+    handle_types: tuple[str, ...] = DEFAULT_TYPES
+    presets: tuple[str, ...] = DEFAULT_PRESETS
+    kinds: tuple[str, ...] = DEFAULT_KINDS
+
+    @property
+    def cells(self) -> list[tuple[str, str]]:
+        """(handle type, preset) of each cell, in seed order."""
+        return [(t, p) for t in self.handle_types for p in self.presets]
+
+    def check(self, catalog: Catalog) -> None:
+        """Unknown split, handle type, preset or kind: one clear line."""
+        from rik.registry.splits import split_handles
+
+        if self.split is not None:
+            split_handles(catalog, self.split)
+        types = {"knob", "finger_pull", "two_point"}
+        for t in self.handle_types:
+            if t not in types:
+                raise RikError(f"unknown handle type '{t}' (types: {', '.join(sorted(types))})")
+        for p in self.presets:
+            if p not in catalog.presets:
+                raise RikError(f"unknown preset '{p}' (presets: {', '.join(catalog.presets)})")
+        kinds = sorted({f.kind for u in catalog.base_units.values() for f in u.fronts})
+        for k in self.kinds:
+            if k not in kinds:
+                raise RikError(f"unknown front kind '{k}' (kinds: {', '.join(kinds)})")
+        if not (self.handle_types and self.presets and self.kinds):
+            raise RikError("a draw needs at least one handle type, preset and front kind")
+
+    def episode(self, catalog: Catalog, seed: int) -> EpisodeDraw:
+        """The episode of ``seed`` (an integer >= 0)."""
+        cells = self.cells
+        handle_type, preset = cells[seed % len(cells)]
+        rng = np.random.default_rng([seed, DRAW_STREAM])
+        compatible, handles = _pool(catalog, self)
+        variant, front = choose_variant(catalog, handle_type, preset, rng, self.kinds, compatible, handles)
+        return EpisodeDraw(seed, handle_type, preset, variant, front)
+
+
+_POOLS: dict[tuple[int, Draw], tuple[Catalog, set[str], tuple[str, ...] | None]] = {}
+
+
+def _pool(catalog: Catalog, draw: Draw) -> tuple[set[str], tuple[str, ...] | None]:
+    """(variant ids of the draw, handles of its split or None), computed once per catalog and draw."""
+    from rik.combinator.ids import select_variants
+    from rik.registry.splits import split_handles
+
+    hit = _POOLS.get((id(catalog), draw))
+    if hit is None or hit[0] is not catalog:
+        handles = None if draw.split is None else split_handles(catalog, draw.split)
+        ids = {k.id for k in select_variants(catalog, handle_types=draw.handle_types, presets=draw.presets,
+                                             handles=handles or ())}
+        hit = _POOLS[(id(catalog), draw)] = (catalog, ids, handles)
+    return hit[1], hit[2]

@@ -1,0 +1,69 @@
+"""What a policy sees of a scene, defined once for the gym environment, the LeRobot export and evaluation.
+
+Two state vectors, split as LeRobot's policies expect them (ACT and diffusion always read
+``observation.state`` and need an image or ``observation.environment_state`` besides):
+
+- the **robot's state** (:data:`ROBOT_STATE_NAMES`, ``observation.state``): what the robot knows of itself, the
+  gripper base's pose, the jaw opening, the point between its pads and the normal force its fingers feel;
+- the **front's state** (:data:`ENV_STATE_NAMES`, ``observation.environment_state``): the operated front's joint
+  position and velocity and its opening, the handle's grasp point, orientation and the direction it moves in when
+  the front opens. The robot's state alone does not say where the handle is.
+
+Images are uint8 HxWx3 of the :data:`CAMERAS`. Units are SI: m, rad, m/s or rad/s, N.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+    from rik.sim.scene import SimScene
+
+ROBOT_STATE_NAMES = ("x", "y", "z", "pitch", "yaw", "roll", "jaw_opening", "tcp_x", "tcp_y", "tcp_z",
+                     "contact_normal_force")
+"""Gripper base pose (m, world; rad), jaw opening (m), the pads' centre (m, world), the fingers' normal force on
+the front (N)."""
+ENV_STATE_NAMES = ("front_qpos", "front_qvel", "opening", "grasp_x", "grasp_y", "grasp_z", "handle_qw", "handle_qx",
+                   "handle_qy", "handle_qz", "pull_x", "pull_y", "pull_z")
+"""The front's joint position (m or rad) and velocity (m/s or rad/s), its opening (fraction of the range), the
+handle's grasp point (m, world), its orientation (unit quaternion w, x, y, z with w >= 0, world) and the unit
+direction in which the grasp point moves as the front opens (world)."""
+CAMERAS = ("front", "wrist")
+"""The scene's cameras: ``front`` looks at the base unit, ``wrist`` rides on the gripper."""
+STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
+"""Image stream -> suffix of its camera names: ``front`` is MuJoCo's image, ``front_rerendered`` Mitsuba's."""
+TYPE_WORDS = {"two_point": "handle", "knob": "knob", "finger_pull": "finger pull"}
+
+
+def image_name(camera: str, stream: str) -> str:
+    """A camera's image of a stream, as the environment's ``pixels`` key (``front_rerendered``); the dataset
+    feature is ``observation.images.<name>``."""
+    return f"{camera}{STREAM_SUFFIX[stream]}"
+
+
+def instruction(catalog: Catalog, handle_id: str, front_kind: str) -> str:
+    """The task in words, e.g. "open the drawer by its bow handle" (a dataset's task and the env's
+    ``task_description`` are the same string)."""
+    handle = catalog.handles[handle_id]
+    design = catalog.designs[handle.design]
+    shape = design.subtype.replace("_", " ").replace("-", " ")
+    return f"open the {front_kind} by its {shape} {TYPE_WORDS.get(design.type.value, 'handle')}"
+
+
+def robot_state(scene: SimScene) -> np.ndarray:
+    """The :data:`ROBOT_STATE_NAMES` of a scene, float64."""
+    return np.concatenate([scene.pose(), [scene.finger_opening()], scene.tcp(),
+                           [scene.contact_summary()["normal_force"]]]).astype(np.float64)
+
+
+def environment_state(scene: SimScene) -> np.ndarray:
+    """The :data:`ENV_STATE_NAMES` of a scene, float64."""
+    q, qd = scene.front_q()
+    quat = scene.data.xquat[scene.front.handle_body].copy()
+    if quat[0] < 0:
+        quat = -quat
+    return np.concatenate([[q, qd, scene.opening()], scene.grasp_point(), quat,
+                           scene.pull_direction()]).astype(np.float64)
