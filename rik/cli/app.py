@@ -6,7 +6,7 @@ import sys
 
 import typer
 
-from rik.cli import assets, catalog, export, render, rerender, sim, sysid, variants
+from rik.cli import assets, catalog, export, policy, render, rerender, sim, sysid, variants
 from rik.cli.common import CatalogOption, overlays
 from rik.errors import RikError
 
@@ -46,6 +46,7 @@ app.add_typer(sysid.app, name="sysid")
 for _command in (sim.record, sim.teleop, sim.replay, sim.bench, rerender.render, rerender.rerender,
                  render.visual_gap, export.export_lerobot):
     app.command()(_command)
+app.command("eval")(policy.eval_policy)
 
 
 @app.command()

@@ -140,8 +140,20 @@ def summarise(rows: Sequence[dict[str, Any]], by: Sequence[str] = ("handle_type"
     return out
 
 
-def table_markdown(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFAULT_PRESETS) -> str:
-    """Table 3 of the paper, rik's version: per handle type, one row per strategy, F/P/S per preset."""
+def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """The Wilson score interval of a success rate (95 % for ``z`` = 1.96): (low, high), fractions."""
+    if n == 0:
+        return 0.0, 1.0
+    p = successes / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, float(centre - half)), min(1.0, float(centre + half))
+
+
+def table_markdown(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFAULT_PRESETS, *,
+                   ci: bool = False) -> str:
+    """Table 3 of the paper, rik's version: per handle type, one row per strategy (scripted, or a learned policy
+    in ``rik eval``'s rows), F/P/S per preset; with ``ci`` the S cell also gives its 95 % Wilson interval."""
     summary = summarise(rows)
     types = list(dict.fromkeys(r["handle_type"] for r in rows))
     strategies = list(dict.fromkeys(r["strategy"] for r in rows))
@@ -155,8 +167,14 @@ def table_markdown(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFA
             n = 0
             for p in presets:
                 v = summary.get((t, s, p))
-                cells += [f"{v[o]:.2f}" for o in OUTCOMES] if v else ["-"] * 3
-                n = max(n, int(v["n"]) if v else 0)
+                if not v:
+                    cells += ["-"] * 3
+                    continue
+                cells += [f"{v[o]:.2f}" for o in OUTCOMES]
+                if ci:
+                    lo, hi = wilson(round(v["S"] * v["n"]), int(v["n"]))
+                    cells[-1] += f" [{lo:.2f}, {hi:.2f}]"
+                n = max(n, int(v["n"]))
             lines.append(f"| {s} | " + " | ".join(cells) + f" | {n} |")
         lines.append("")
     return "\n".join(lines)

@@ -79,9 +79,9 @@ class Draw:
 
     def check(self, catalog: Catalog) -> None:
         """Unknown split, handle type, preset or kind: one clear line."""
-        from rik.registry.splits import split_handles
-
         if self.split is not None:
+            from rik.registry.splits import split_handles
+
             split_handles(catalog, self.split)
         types = {"knob", "finger_pull", "two_point"}
         for t in self.handle_types:
@@ -113,11 +113,14 @@ _POOLS: dict[tuple[int, Draw], tuple[Catalog, set[str], tuple[str, ...] | None]]
 def _pool(catalog: Catalog, draw: Draw) -> tuple[set[str], tuple[str, ...] | None]:
     """(variant ids of the draw, handles of its split or None), computed once per catalog and draw."""
     from rik.combinator.ids import select_variants
-    from rik.registry.splits import split_handles
 
     hit = _POOLS.get((id(catalog), draw))
     if hit is None or hit[0] is not catalog:
-        handles = None if draw.split is None else split_handles(catalog, draw.split)
+        handles = None
+        if draw.split is not None:
+            from rik.registry.splits import split_handles
+
+            handles = split_handles(catalog, draw.split)
         ids = {k.id for k in select_variants(catalog, handle_types=draw.handle_types, presets=draw.presets,
                                              handles=handles or ())}
         hit = _POOLS[(id(catalog), draw)] = (catalog, ids, handles)

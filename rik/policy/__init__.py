@@ -1,0 +1,1 @@
+"""Learned policies on rik: loading a saved LeRobot policy and evaluating it on rik's benchmark."""

@@ -1,0 +1,300 @@
+"""``rik eval``: a saved LeRobot policy (or a scripted strategy) on rik's benchmark, as the paper's Table 3.
+
+Episodes are the seeds ``seed .. seed + cells x N - 1`` of a draw (:mod:`rik.sim.draw`): each falls in one cell
+(handle type x preset) and names one variant, front and start pose, the same as ``lerobot-eval --env.type=rik
+--seed S`` runs. A learned policy runs through lerobot's own ``rollout`` (``lerobot.scripts.lerobot_eval``) on a
+one-environment vector env made by the ``lerobot_env_rik`` config, so both tools execute the same code per
+episode. A scripted strategy (``strategy:contact_rich``) runs its operator in the same environment, so scripted
+and learned rows are paired episode by episode.
+
+Outputs (in ``--out``): ``table.md`` (F/P/S per handle type x preset, with Wilson intervals for S),
+``episodes.csv`` (one row per episode), ``eval_info.json`` (lerobot-eval's layout: ``per_task``, ``per_group``,
+``overall``; rik's rows under ``rik``) and ``videos/`` (the front camera of the first few episodes).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rik.errors import RikError
+from rik.sim.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
+
+STRATEGY_PREFIX = "strategy:"
+DEFAULT_SEED = 1000
+"""lerobot-eval's default first seed."""
+
+
+@dataclass(frozen=True)
+class EvalSpec:
+    """What ``rik eval`` runs."""
+
+    operator: str
+    """A saved policy's folder, or ``strategy:<name>`` for a scripted strategy."""
+    split: str | None = "test"
+    handle_types: tuple[str, ...] = DEFAULT_TYPES
+    presets: tuple[str, ...] = DEFAULT_PRESETS
+    kinds: tuple[str, ...] = DEFAULT_KINDS
+    episodes_per_cell: int = 10
+    seed: int = DEFAULT_SEED
+    episode_length: int = 400
+    allow_rerendered: bool = False
+    videos: int = 4
+    """Episodes filmed (the first ones), front camera."""
+    variants: str = "variants"
+    label: str = ""
+    """Name of the operator in tables (default: the strategy, or the policy's type and folder)."""
+    needs: dict[str, Any] = field(default_factory=dict)
+    """Filled by :func:`prepare`: the policy's cameras, streams and image size."""
+
+    @property
+    def strategy(self) -> str | None:
+        return self.operator[len(STRATEGY_PREFIX):] if self.operator.startswith(STRATEGY_PREFIX) else None
+
+    def seeds(self) -> list[int]:
+        cells = len(self.handle_types) * len(self.presets)
+        return list(range(self.seed, self.seed + cells * self.episodes_per_cell))
+
+
+def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
+    """The spec checked (split, presets, types, the policy folder and its inputs, the strategy), with its label
+    and the policy's needs filled in."""
+    from rik.sim.draw import Draw
+    from rik.sim.operators import make_operator
+
+    if spec.episodes_per_cell < 1:
+        raise RikError(f"--episodes-per-cell {spec.episodes_per_cell}: must be at least 1")
+    if spec.seed < 0:
+        raise RikError(f"--seed {spec.seed}: must be 0 or more")
+    Draw(spec.split, spec.handle_types, spec.presets, spec.kinds).check(catalog)
+    if spec.strategy is not None:
+        make_operator(spec.strategy)
+        return EvalSpec(**{**asdict(spec), "label": spec.label or spec.strategy})
+    from rik.policy.load import policy_needs
+
+    needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered)
+    label = spec.label or f"{needs.policy_type}:{Path(spec.operator).resolve().name}"
+    return EvalSpec(**{**asdict(spec), "label": label, "needs": asdict(needs)})
+
+
+def env_config(spec: EvalSpec) -> Any:
+    """The ``lerobot_env_rik`` config that runs ``spec``'s episodes (what ``lerobot-eval --env.*`` would say)."""
+    from lerobot_env_rik import RikEnvConfig
+
+    needs = spec.needs or {"cameras": (), "streams": ("sim",), "image_size": (96, 128)}
+    h, w = needs["image_size"]
+    return RikEnvConfig(episode_length=spec.episode_length, split=spec.split or "all",
+                        handle_types=",".join(spec.handle_types), presets=",".join(spec.presets),
+                        kinds=",".join(spec.kinds), cameras=",".join(needs["cameras"]),
+                        streams=",".join(needs["streams"]) or "sim", observation_height=h, observation_width=w,
+                        variants_dir=spec.variants)
+
+
+# ---- one worker's episodes ----------------------------------------------------------------------------------
+_CONTEXT: dict[str, Any] = {}
+
+
+def _context(spec: EvalSpec) -> dict[str, Any]:
+    """The environment (and policy with its processors) of this process, made once per spec."""
+    key = json.dumps(asdict(spec), sort_keys=True, default=list)
+    if _CONTEXT.get("key") == key:
+        return _CONTEXT
+    _CONTEXT.clear()
+    cfg = env_config(spec)
+    ctx: dict[str, Any] = {"key": key, "cfg": cfg}
+    if spec.strategy is None:
+        from lerobot.configs.policies import PreTrainedConfig
+        from lerobot.envs.factory import make_env_pre_post_processors
+        from lerobot.policies.factory import make_policy, make_pre_post_processors
+
+        policy_cfg = PreTrainedConfig.from_pretrained(spec.operator)
+        policy_cfg.pretrained_path = Path(spec.operator)
+        policy = make_policy(cfg=policy_cfg, env_cfg=cfg)
+        policy.eval()
+        pre, post = make_pre_post_processors(policy_cfg=policy_cfg, pretrained_path=str(spec.operator),
+                                             preprocessor_overrides={"device_processor":
+                                                                     {"device": str(policy.config.device)}})
+        env_pre, env_post = make_env_pre_post_processors(env_cfg=cfg, policy_cfg=policy_cfg)
+        ctx |= {"policy": policy, "processors": (env_pre, env_post, pre, post),
+                "vec": cfg.create_envs(n_envs=1)[cfg.type][0]}
+    else:
+        import gymnasium as gym
+
+        ctx["env"] = gym.make(cfg.gym_id, disable_env_checker=True, **cfg.gym_kwargs).unwrapped
+    _CONTEXT.update(ctx)
+    return _CONTEXT
+
+
+def run_episode(spec: EvalSpec, seed: int, video_dir: Path | None = None) -> dict[str, Any]:
+    """Run the episode of ``seed``; its row (with the path of its video when ``video_dir`` is given)."""
+    ctx = _context(spec)
+    start = time.perf_counter()
+    frames: list[Any] = []
+    if spec.strategy is None:
+        result = _policy_episode(ctx, seed, frames if video_dir else None)
+    else:
+        result = _scripted_episode(ctx, spec.strategy, seed, frames if video_dir else None)
+    row = {"seed": seed, "handle_type": result["handle_type"], "preset": result["preset"], "strategy": spec.label,
+           "variant": result["variant"], "front": result["front"], "outcome": result["outcome"],
+           "success": bool(result["success"]), "final_opening": round(float(result["final_opening"]), 4),
+           "max_opening": round(float(result["max_opening"]), 4), "steps": int(result["steps"]),
+           "sum_reward": float(result["sum_reward"]), "max_reward": float(result["max_reward"]),
+           "seconds": round(time.perf_counter() - start, 3), "video": ""}
+    if video_dir is not None and frames:
+        from lerobot.utils.io_utils import write_video
+
+        from rik.sim.scene import CONTROL_FPS
+
+        video_dir.mkdir(parents=True, exist_ok=True)
+        path = video_dir / f"episode_{seed}.mp4"
+        write_video(str(path), frames, CONTROL_FPS)
+        row["video"] = str(path)
+    return row
+
+
+def _policy_episode(ctx: dict[str, Any], seed: int, frames: list[Any] | None) -> dict[str, Any]:
+    import contextlib
+    import io
+
+    import numpy as np
+    import torch
+    from lerobot.scripts.lerobot_eval import rollout
+
+    vec = ctx["vec"]
+    env_pre, env_post, pre, post = ctx["processors"]
+    callback: Callable[[Any], None] | None = None
+    if frames is not None:
+        def callback(env: Any) -> None:
+            frames.append(env.call("render")[0])
+    torch.manual_seed(seed)  # stochastic policies (diffusion) draw the same noise for the same episode
+    with contextlib.redirect_stderr(io.StringIO()), torch.no_grad():  # rollout's own progress bar, per episode
+        data = rollout(vec, ctx["policy"], env_pre, env_post, pre, post, seeds=[seed], render_callback=callback)
+    done = data["done"][0].numpy()
+    last = int(np.argmax(done)) if done.any() else len(done) - 1
+    if frames is not None:
+        del frames[last + 1:]  # the vector env resets a finished episode at once: drop the next one's start
+    env = vec.envs[0].unwrapped
+    result = dict(env.last_result or {})
+    if not result:
+        raise RikError(f"episode {seed}: the environment recorded no end of episode")
+    rewards = data["reward"][0].numpy()[:last + 1]
+    return {**result, "success": bool(data["success"][0].numpy()[:last + 1].any()),
+            "sum_reward": float(rewards.sum()), "max_reward": float(rewards.max(initial=0.0))}
+
+
+def _scripted_episode(ctx: dict[str, Any], strategy: str, seed: int, frames: list[Any] | None) -> dict[str, Any]:
+    from rik.sim.operators import make_operator
+
+    env = ctx["env"]
+    env.reset(seed=seed)
+    operator = make_operator(strategy)
+    operator.reset(env.scene, env.np_random)  # the rng after the start pose, as rik record hands it over
+    if frames is not None:
+        frames.append(env.render())
+    rewards, info, success = [], env._info(), False
+    for _ in range(env._max_episode_steps):
+        if operator.done:
+            break
+        _, reward, terminated, truncated, info = env.step(operator.act(env.scene))
+        rewards.append(reward)
+        success = success or info["is_success"]
+        if frames is not None:
+            frames.append(env.render())
+        if terminated or truncated:
+            break
+    return {**info, "final_opening": info["opening"], "success": success, "sum_reward": float(sum(rewards)),
+            "max_reward": float(max(rewards, default=0.0))}
+
+
+# ---- the whole evaluation -----------------------------------------------------------------------------------
+def _worker_episode(spec_json: str, video_root: str, item: tuple[int, bool]) -> dict[str, Any]:
+    spec = EvalSpec(**json.loads(spec_json))
+    seed, film = item
+    return run_episode(spec, seed, Path(video_root) if film else None)
+
+
+def _init_worker(threads: int) -> None:
+    import torch
+
+    torch.set_num_threads(threads)
+
+
+def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
+             progress: Callable[[dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
+    """Run every episode of ``spec`` (in ``workers`` processes) and write the outputs into ``out``; rows in seed
+    order."""
+    from rik.combinator.build import build_variants
+    from rik.combinator.ids import parse_variant_id
+    from rik.sim.draw import Draw
+
+    draw = Draw(spec.split, spec.handle_types, spec.presets, spec.kinds)
+    seeds = spec.seeds()
+    keys = sorted({draw.episode(catalog, s).variant for s in seeds})
+    for r in build_variants(catalog, [parse_variant_id(catalog, k) for k in keys], Path(spec.variants),
+                            workers=workers):
+        if r.status == "rejected":
+            raise RikError(f"variant {r.id} rejected by check {r.failed_check}: {r.reason}")
+    videos = out / "videos"
+    items = [(s, i < spec.videos) for i, s in enumerate(seeds)]
+    spec_json = json.dumps(asdict(spec), default=list)
+    started = time.perf_counter()
+    rows: dict[int, dict[str, Any]] = {}
+    if workers > 1 and len(items) > 1:
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+        from functools import partial
+        from multiprocessing import get_context
+
+        fn = partial(_worker_episode, spec_json, str(videos))
+        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_init_worker,
+                                 initargs=(1,)) as pool:
+            futures = [pool.submit(fn, item) for item in items]
+            for future in as_completed(futures):
+                row = future.result()
+                rows[row["seed"]] = row
+                if progress is not None:
+                    progress(row)
+    else:
+        for item in items:
+            row = _worker_episode(spec_json, str(videos), item)
+            rows[row["seed"]] = row
+            if progress is not None:
+                progress(row)
+    ordered = [rows[s] for s in seeds]
+    write_outputs(out, spec, ordered, time.perf_counter() - started)
+    return ordered
+
+
+def eval_info(spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> dict[str, Any]:
+    """lerobot-eval's ``eval_info.json`` layout for the rows, with rik's own rows and settings under ``rik``."""
+    n = len(rows)
+    sums = [r["sum_reward"] for r in rows]
+    maxes = [r["max_reward"] for r in rows]
+    successes = [bool(r["success"]) for r in rows]
+    videos = [r["video"] for r in rows if r["video"]]
+    metrics = {"sum_rewards": sums, "max_rewards": maxes, "successes": successes, "video_paths": videos}
+    aggregate = {"avg_sum_reward": sum(sums) / max(n, 1), "avg_max_reward": sum(maxes) / max(n, 1),
+                 "pc_success": 100.0 * sum(successes) / max(n, 1), "n_episodes": n, "eval_s": seconds,
+                 "eval_ep_s": seconds / max(n, 1), "video_paths": videos}
+    return {"per_task": [{"task_group": "rik", "task_id": 0, "metrics": metrics}],
+            "per_group": {"rik": {k: v for k, v in aggregate.items() if k != "eval_s"}},
+            "overall": aggregate,
+            "rik": {"spec": {k: v for k, v in asdict(spec).items()}, "per_episode": list(rows)}}
+
+
+def write_outputs(out: Path, spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> None:
+    """``table.md``, ``episodes.csv`` and ``eval_info.json`` (atomically)."""
+    from rik.paths import write_atomic
+    from rik.sim.bench import rows_csv, table_markdown
+
+    out.mkdir(parents=True, exist_ok=True)
+    split = spec.split or "all"
+    head = (f"# {spec.label} on the {split} split\n\n{len(rows)} episodes, seeds {spec.seed}.."
+            f"{spec.seed + len(rows) - 1}, {spec.episodes_per_cell} per cell; F/P/S fractions, S with its 95 % "
+            "Wilson interval.\n\n")
+    write_atomic(out / "table.md", head + table_markdown(rows, spec.presets, ci=True))
+    write_atomic(out / "episodes.csv", rows_csv(rows))
+    write_atomic(out / "eval_info.json", json.dumps(eval_info(spec, rows, seconds), indent=2, default=list) + "\n")

@@ -1,0 +1,105 @@
+"""A saved LeRobot policy, and what rik's environment must supply to run it.
+
+``POLICY_DIR`` is a folder that ``lerobot-train`` wrote (``outputs/train/<run>/checkpoints/last/pretrained_model``)
+or any folder with a policy's ``config.json`` and weights; the policy may be of any type lerobot can load. Its
+input features say what the environment renders: ``observation.images.<camera>`` asks for MuJoCo's image of that
+camera, ``observation.images.<camera>_rerendered`` for Mitsuba's (only when the re-render is allowed: it is slow
+without a GPU), at the size the policy was trained on.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from rik.errors import RikError
+from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, ROBOT_STATE_NAMES, STREAM_SUFFIX
+
+CONFIG = "config.json"
+OLD_STATE_WIDTH = 14
+"""``observation.state`` of exports made before the state split (robot and front state in one vector)."""
+
+
+@dataclass(frozen=True)
+class PolicyNeeds:
+    """What a policy reads, as environment options."""
+
+    policy_type: str
+    cameras: tuple[str, ...]
+    streams: tuple[str, ...]
+    image_size: tuple[int, int]
+    """(height, width) of its images, px ((96, 128) when it takes none)."""
+
+
+def policy_config(policy_dir: Path) -> dict[str, Any]:
+    """The ``config.json`` of a saved policy, checked to be one."""
+    file = Path(policy_dir) / CONFIG
+    if not Path(policy_dir).is_dir():
+        raise RikError(f"{policy_dir}: no such folder (give a saved policy, e.g. "
+                       "outputs/train/<run>/checkpoints/last/pretrained_model)")
+    if not file.is_file():
+        raise RikError(f"{policy_dir}: no {CONFIG}: not a saved LeRobot policy (lerobot-train saves one in "
+                       "<output_dir>/checkpoints/<step>/pretrained_model)")
+    try:
+        data = json.loads(file.read_text())
+    except (OSError, ValueError) as e:
+        raise RikError(f"{file}: not readable JSON ({e})") from None
+    if not isinstance(data, dict) or not isinstance(data.get("type"), str):
+        raise RikError(f"{file}: field 'type' (the policy type, e.g. act) is missing")
+    return data
+
+
+def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False) -> PolicyNeeds:
+    """What the policy in ``policy_dir`` reads, checked against what rik's environment supplies."""
+    config = policy_config(policy_dir)
+    file = Path(policy_dir) / CONFIG
+    inputs = config.get("input_features") or {}
+    cameras: list[str] = []
+    streams: list[str] = []
+    size: tuple[int, int] | None = None
+    widths = {"observation.state": len(ROBOT_STATE_NAMES), "observation.environment_state": len(ENV_STATE_NAMES)}
+    for key, feature in inputs.items():
+        shape = tuple(feature.get("shape", ()))
+        if key in widths:
+            if key == "observation.state" and shape == (OLD_STATE_WIDTH,):
+                raise RikError(f"{file}: input 'observation.state' has {OLD_STATE_WIDTH} numbers: the policy was "
+                               "trained on an export made before rik split the robot's and the front's state; "
+                               "re-export the episodes (rik export-lerobot) and train again")
+            if shape != (widths[key],):
+                raise RikError(f"{file}: input '{key}' has shape {list(shape)}; rik's environment supplies "
+                               f"[{widths[key]}]")
+            continue
+        camera, stream = _image_feature(key)
+        if camera is None:
+            raise RikError(f"{file}: input '{key}' is not something rik's environment supplies (it gives "
+                           "observation.state, observation.environment_state and observation.images.<camera>"
+                           f"[_rerendered] for cameras {', '.join(CAMERAS)})")
+        if stream == "rerendered" and not allow_rerendered:
+            raise RikError(f"{file}: input '{key}' is a Mitsuba re-render, which the environment is not asked to "
+                           "render; pass --rerendered (slow without a GPU) or train without the _rerendered keys "
+                           "(--policy.input_features)")
+        if len(shape) != 3 or shape[0] != 3:
+            raise RikError(f"{file}: input '{key}' has shape {list(shape)}; images are [3, height, width]")
+        if size is not None and size != (shape[1], shape[2]):
+            raise RikError(f"{file}: input '{key}' is {shape[1]}x{shape[2]} px where another image is "
+                           f"{size[0]}x{size[1]}; rik renders all cameras at one size")
+        size = (int(shape[1]), int(shape[2]))
+        cameras.append(camera)
+        streams.append(stream)
+    if "observation.state" not in inputs:
+        raise RikError(f"{file}: the policy takes no 'observation.state'; rik's policies read the robot's state")
+    return PolicyNeeds(config["type"], tuple(dict.fromkeys(cameras)), tuple(dict.fromkeys(streams)),
+                       size or (96, 128))
+
+
+def _image_feature(key: str) -> tuple[str | None, str]:
+    prefix = "observation.images."
+    if not key.startswith(prefix):
+        return None, ""
+    name = key[len(prefix):]
+    for stream, suffix in sorted(STREAM_SUFFIX.items(), key=lambda kv: -len(kv[1])):
+        if name.endswith(suffix) and name[:len(name) - len(suffix)] in CAMERAS:
+            return name[:len(name) - len(suffix)], stream
+    return None, ""
