@@ -96,5 +96,10 @@ def test_bad_collision_modes_are_named(rik, folders: dict[str, Path], tmp_path: 
     assert len(r.err.strip().splitlines()) == 1 and not (tmp_path / "v").exists()
     r = rik("variants", "build", BOW, "--collision", "coacd", "--out", str(folders["hull"]))
     assert r.code == 2
-    assert "collision.json: this folder holds hull collision variants, not coacd; build --collision coacd " \
-           "variants into another --out folder" in r.err
+    assert f"{folders['hull']}: this folder holds hull collision variants, not coacd (its collision.json); build " \
+           "--collision coacd variants into another --out folder" in r.err
+    legacy = tmp_path / "variants"  # built before collision modes: variants, no collision.json
+    shutil.copytree(folders["coacd"], legacy)
+    (legacy / "collision.json").unlink()
+    r = rik("variants", "build", BOW, "--collision", "hull", "--out", str(legacy))
+    assert r.code == 2 and "this folder holds coacd collision variants, not hull" in r.err

@@ -139,10 +139,11 @@ def check_collision(mode: str, what: str = "--collision") -> str:
 
 
 def folder_collision(out: Path) -> str | None:
-    """The collision mode recorded in ``<out>/collision.json``; None when the folder has no marker."""
+    """The collision mode recorded in ``<out>/collision.json``; without it ``coacd`` when the folder holds
+    variants (written before modes existed), None when it holds none."""
     marker = out / COLLISION_MARKER
     if not marker.exists():
-        return None
+        return "coacd" if next(out.glob("*/report.json"), None) is not None else None
     try:
         mode = json.loads(marker.read_text(encoding="utf-8"))["collision"]
     except (OSError, ValueError, KeyError, TypeError) as exc:
@@ -159,8 +160,8 @@ def resolve_collision(out: Path, collision: str | None = None) -> str:
         return marked or "coacd"
     check_collision(collision)
     if marked is not None and marked != collision:
-        raise RikError(f"{out / COLLISION_MARKER}: this folder holds {marked} collision variants, not {collision}; "
-                       f"build --collision {collision} variants into another --out folder")
+        raise RikError(f"{out}: this folder holds {marked} collision variants, not {collision} (its "
+                       f"{COLLISION_MARKER}); build --collision {collision} variants into another --out folder")
     return collision
 
 
