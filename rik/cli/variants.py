@@ -153,12 +153,18 @@ def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g
           base: BaseOpt = None, handle_type: TypeOpt = None, handle: HandleOpt = None, preset: PresetOpt = None,
           workers: WorkersOpt = DEFAULT_WORKERS, out: OutOpt = Path("variants"),
           force: Annotated[bool, typer.Option("--force", help="Rebuild variants that are already valid.")] = False,
+          collision: Annotated[str | None, typer.Option(
+              "--collision", metavar="coacd|hull", show_default=False,
+              help="Handle collision: coacd (its CoACD hulls) or hull (its single convex hull, the baseline). "
+                   "Default: the --out folder's mode (its collision.json), coacd for a new folder. Keep hull "
+                   "builds in their own folder.")] = None,
           catalog: CatalogOption = None) -> None:
     """Build variants into --out/<id>/ (model.xml, scene.xml, meshes/, report.json); valid ones are skipped."""
-    from rik.combinator.build import MANIFEST, build_variants
+    from rik.combinator.build import MANIFEST, build_variants, resolve_collision
     from rik.combinator.ids import parse_variant_id
     from rik.registry.load import load_catalog
 
+    collision = resolve_collision(out, collision)  # a bad mode or a folder of the other mode: fail first
     cat = load_catalog(overlays(catalog))
     filters = any((base, handle_type, handle, preset))
     if ids and (everything or filters):
@@ -182,13 +188,14 @@ def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g
                 progress.console.print(f"{built} assets built into the cache first")
 
         results = build_variants(cat, keys, out, workers=workers, overlays=overlays(catalog), force=force,
-                                 on_result=advance, on_assets=assets_done)
+                                 on_result=advance, on_assets=assets_done, collision=collision)
     rejected = [r for r in results if r.status == "rejected"]
     counts = {s: sum(r.status == s for r in results) for s in ("built", "skipped")}
     for r in rejected:
         con.print(f"[red]rejected[/] {r.id}: check {r.failed_check}: {r.reason}")
     con.print(f"{len(results)} variants: {counts['built'] + counts['skipped']} valid ({counts['built']} built, "
-              f"{counts['skipped']} already valid), {len(rejected)} rejected. Manifest: {out / MANIFEST}")
+              f"{counts['skipped']} already valid), {len(rejected)} rejected; handle collision: {collision}. "
+              f"Manifest: {out / MANIFEST}")
     if rejected:
         if len(results) == 1:
             raise RikError(f"variant {rejected[0].id} rejected by check {rejected[0].failed_check}: "

@@ -6,6 +6,12 @@ directory under ``<out>`` is always a whole, valid variant. Mesh files are store
 variants of 83 handles take the disk of 83. ``<out>/manifest.json`` lists every variant asked for and its
 status. A variant whose report matches its current spec hash and whose files match their recorded sha256 is
 skipped (resumable builds).
+
+A folder holds variants of one collision mode (:data:`rik.combinator.mjcf.COLLISION_MODES`): ``coacd`` (the
+handle collides as its CoACD hulls, the default) or ``hull`` (as its single convex hull). The mode is part of a
+variant's spec hash and its report, and ``<out>/collision.json`` names the folder's mode, so anything that
+builds into the folder later (``rik record --variants``, ``rik bench`` ...) rebuilds with that mode. A folder
+without the marker is a ``coacd`` folder (every folder written before modes existed).
 """
 
 from __future__ import annotations
@@ -36,6 +42,8 @@ DEFAULT_OUT = Path("variants")
 MESH_STORE = ".meshes"
 STAGING = ".staging"
 MANIFEST = "manifest.json"
+COLLISION_MARKER = "collision.json"
+"""``<out>/collision.json``: ``{"collision": "<mode>"}``, the collision mode of every variant in ``<out>``."""
 COMBINATOR_DIR = Path(__file__).parent
 JOINTS_DIR = COMBINATOR_DIR.parent / "joints"
 """rik.joints: the joint model's MJCF mapping and laws, part of what decides a variant's files."""
@@ -98,9 +106,9 @@ def _code_digest() -> str:
     return source_digest(sorted(COMBINATOR_DIR.glob("*.py")) + sorted(JOINTS_DIR.glob("*.py")))
 
 
-def spec_identity(catalog: Catalog, key: VariantKey) -> dict[str, object]:
-    """Everything that decides a variant's files: the catalog entries, the asset keys, the combinator's code
-    and the library versions."""
+def spec_identity(catalog: Catalog, key: VariantKey, collision: str = "coacd") -> dict[str, object]:
+    """Everything that decides a variant's files: the catalog entries, the asset keys, the collision mode, the
+    combinator's code and the library versions."""
     from rik.assets.build import asset_key
 
     unit, handle = catalog.base_unit(key.base), catalog.handle(key.handle)
@@ -110,14 +118,60 @@ def spec_identity(catalog: Catalog, key: VariantKey) -> dict[str, object]:
             "design": catalog.designs[handle.design].model_dump(mode="json"),
             "preset": catalog.preset(key.preset).model_dump(mode="json"),
             "finishes": [catalog.finishes[f].model_dump(mode="json") for f in finishes],
-            "assets": [asset_key(catalog, key.handle), asset_key(catalog, key.base)],
+            "assets": [asset_key(catalog, key.handle), asset_key(catalog, key.base)], "collision": collision,
             "code": _code_digest(), "versions": _versions()}
 
 
-def spec_hash(catalog: Catalog, key: VariantKey) -> str:
+def spec_hash(catalog: Catalog, key: VariantKey, collision: str = "coacd") -> str:
     from rik.assets.cache import content_key
 
-    return content_key(spec_identity(catalog, key))
+    return content_key(spec_identity(catalog, key, collision))
+
+
+# ---- collision mode of a folder ---------------------------------------------------------------------------------
+def check_collision(mode: str, what: str = "--collision") -> str:
+    """``mode`` when it is a collision mode, else a :class:`RikError` naming the valid ones."""
+    from rik.combinator.mjcf import COLLISION_MODES
+
+    if mode not in COLLISION_MODES:
+        raise RikError(f"{what} {mode!r}: not a collision mode; valid modes are {', '.join(COLLISION_MODES)}")
+    return mode
+
+
+def folder_collision(out: Path) -> str | None:
+    """The collision mode recorded in ``<out>/collision.json``; without it ``coacd`` when the folder holds
+    variants (written before modes existed), None when it holds none."""
+    marker = out / COLLISION_MARKER
+    if not marker.exists():
+        return "coacd" if next(out.glob("*/report.json"), None) is not None else None
+    try:
+        mode = json.loads(marker.read_text(encoding="utf-8"))["collision"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise RikError(f"{marker}: unreadable collision marker ({type(exc).__name__}); it must hold "
+                       '{"collision": "coacd"} or {"collision": "hull"}') from None
+    return check_collision(mode, f"{marker}: field collision")
+
+
+def resolve_collision(out: Path, collision: str | None = None) -> str:
+    """The collision mode to build into ``out`` with: ``collision`` when given (it must match the folder's
+    marker, if any), else the folder's mode (``coacd`` for a folder without a marker)."""
+    marked = folder_collision(out)
+    if collision is None:
+        return marked or "coacd"
+    check_collision(collision)
+    if marked is not None and marked != collision:
+        raise RikError(f"{out}: this folder holds {marked} collision variants, not {collision} (its "
+                       f"{COLLISION_MARKER}); build --collision {collision} variants into another --out folder")
+    return collision
+
+
+def mark_collision(out: Path, collision: str) -> None:
+    """Write ``<out>/collision.json`` naming the folder's mode (only when absent or different)."""
+    from rik.paths import write_atomic
+
+    if folder_collision(out) != collision:
+        out.mkdir(parents=True, exist_ok=True)
+        write_atomic(out / COLLISION_MARKER, json.dumps({"collision": collision}) + "\n")
 
 
 # ---- assemble and check -----------------------------------------------------------------------------------------
@@ -137,13 +191,15 @@ def _asset(catalog: Catalog, asset_id: str, cache: AssetCache) -> Asset:
 
 
 def assemble_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None = None,
-                     stop_at_failure: bool = True) -> CheckedVariant:
-    """Assemble a variant's spec in memory and run the checks of its geometry (nothing compiled yet)."""
+                     stop_at_failure: bool = True, collision: str = "coacd") -> CheckedVariant:
+    """Assemble a variant's spec in memory (handles colliding as ``collision`` says) and run the checks of its
+    geometry (nothing compiled yet)."""
     from rik.assets.cache import AssetCache
     from rik.combinator.mjcf import variant_spec
 
     cache = cache or AssetCache()
-    variant = variant_spec(catalog, key, _asset(catalog, key.handle, cache), _asset(catalog, key.base, cache))
+    variant = variant_spec(catalog, key, _asset(catalog, key.handle, cache), _asset(catalog, key.base, cache),
+                           collision)
     checks: list[CheckResult] = []
     for check in GEOMETRY_CHECKS:
         checks.append(check(catalog, variant))
@@ -153,11 +209,11 @@ def assemble_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None
 
 
 def check_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None = None,
-                  stop_at_failure: bool = True) -> CheckedVariant:
+                  stop_at_failure: bool = True, collision: str = "coacd") -> CheckedVariant:
     """Assemble a variant in memory and run its checks (geometry first, then the compiled model's)."""
     import mujoco
 
-    assembled = assemble_variant(catalog, key, cache, stop_at_failure)
+    assembled = assemble_variant(catalog, key, cache, stop_at_failure, collision)
     variant, checks = assembled.variant, assembled.checks
     if assembled.failed is not None and stop_at_failure:
         return assembled
@@ -288,15 +344,18 @@ def is_current(directory: Path, digest: str) -> bool:
 
 
 def build_variant(catalog: Catalog, key: VariantKey, out: Path = DEFAULT_OUT, cache: AssetCache | None = None,
-                  force: bool = False) -> VariantResult:
+                  force: bool = False, collision: str | None = None) -> VariantResult:
     """Build one variant into ``out/<id>`` unless it is already there and current; a variant that fails a check
-    is not written (the result says which check and why)."""
+    is not written (the result says which check and why). ``collision``: the handle's collision mode, by
+    default the folder's (:func:`resolve_collision`)."""
     t0 = time.perf_counter()
-    digest = spec_hash(catalog, key)
+    collision = resolve_collision(out, collision)
+    digest = spec_hash(catalog, key, collision)
     directory = out / key.id
     if not force and is_current(directory, digest):
         return VariantResult(key.id, "skipped", digest, time.perf_counter() - t0)
-    checked = check_variant(catalog, key, cache)
+    mark_collision(out, collision)
+    checked = check_variant(catalog, key, cache, collision=collision)
     failed = checked.failed
     if failed is not None:
         return VariantResult(key.id, "rejected", digest, time.perf_counter() - t0, failed.name, failed.reason)
@@ -307,11 +366,12 @@ def build_variant(catalog: Catalog, key: VariantKey, out: Path = DEFAULT_OUT, ca
 
 
 # ---- many variants ----------------------------------------------------------------------------------------------
-def _build_one(catalog: Catalog, variant: str, out: Path, cache_root: Path, force: bool) -> VariantResult:
+def _build_one(catalog: Catalog, variant: str, out: Path, cache_root: Path, force: bool,
+               collision: str) -> VariantResult:
     from rik.assets.cache import AssetCache
     from rik.combinator.ids import parse_variant_id
 
-    return build_variant(catalog, parse_variant_id(catalog, variant), out, AssetCache(cache_root), force)
+    return build_variant(catalog, parse_variant_id(catalog, variant), out, AssetCache(cache_root), force, collision)
 
 
 def read_manifest(out: Path) -> dict[str, Any]:
@@ -341,20 +401,23 @@ def write_manifest(out: Path, results: Sequence[VariantResult]) -> Path:
 def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEFAULT_OUT, *, workers: int = 1,
                    overlays: Sequence[Path] = (), cache: AssetCache | None = None, force: bool = False,
                    on_result: Callable[[VariantResult], None] | None = None,
-                   on_assets: Callable[[int], None] | None = None) -> list[VariantResult]:
+                   on_assets: Callable[[int], None] | None = None,
+                   collision: str | None = None) -> list[VariantResult]:
     """Build many variants (in ``workers`` processes), then record them in the manifest. Their assets are
-    built first (once each, also in parallel). ``on_result`` is called as each variant finishes."""
+    built first (once each, also in parallel). ``on_result`` is called as each variant finishes. ``collision``:
+    the handles' collision mode, by default the folder's (:func:`resolve_collision`)."""
     from rik.assets.build import build_assets
     from rik.assets.cache import AssetCache
     from rik.assets.workers import map_ids
 
+    collision = resolve_collision(out, collision)
     cache = cache or AssetCache()
     needed = list(dict.fromkeys([k.handle for k in keys] + [k.base for k in keys]))
     assets = build_assets(catalog, needed, overlays=overlays, workers=workers, cache=cache)
     if on_assets:
         on_assets(sum(r.status != "cached" for r in assets))
-    out.mkdir(parents=True, exist_ok=True)
-    fn = functools.partial(_build_one, out=out.resolve(), cache_root=cache.root, force=force)
+    mark_collision(out, collision)
+    fn = functools.partial(_build_one, out=out.resolve(), cache_root=cache.root, force=force, collision=collision)
     done: dict[str, VariantResult] = {}
     pending: list[VariantResult] = []
     order = sorted(keys, key=lambda k: (k.handle, k.base, k.preset))  # handle by handle: each loads once

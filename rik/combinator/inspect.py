@@ -12,10 +12,12 @@ from typing import TYPE_CHECKING, Any
 from rik.combinator.build import (
     DEFAULT_OUT,
     assemble_variant,
+    check_collision,
     check_variant,
     is_current,
     make_report,
     materialise,
+    resolve_collision,
     spec_hash,
 )
 from rik.combinator.checks import CheckResult, ModelContext, run_model_checks
@@ -74,7 +76,7 @@ def validate_variant(catalog: Catalog, target: str, out: Path = DEFAULT_OUT) -> 
         if (out / key.id / "model.xml").is_file():
             file = out / key.id / "model.xml"
         else:
-            checked = check_variant(catalog, key, stop_at_failure=False)
+            checked = check_variant(catalog, key, stop_at_failure=False, collision=resolve_collision(out))
             return Validation(key, checked.checks, "memory", [f"{out / key.id} does not exist: checked in memory"])
     try:
         model = mujoco.MjModel.from_xml_path(str(file))
@@ -84,10 +86,12 @@ def validate_variant(catalog: Catalog, target: str, out: Path = DEFAULT_OUT) -> 
     key = parse_variant_id(catalog, info["id"])
     directory = file.parent
     notes = []
-    if not is_current(directory, spec_hash(catalog, key)):
+    collision = check_collision(info.get("collision", "coacd"), f"{file}: rik.variant field collision")
+    if not is_current(directory, spec_hash(catalog, key, collision)):
         notes.append(f"{directory} is stale or damaged: its report's spec hash or file hashes differ from what the "
                      "catalog builds now (rik variants build rebuilds it)")
-    assembled = assemble_variant(catalog, key, stop_at_failure=False)  # the layout and the geometry checks
+    # the layout and the geometry checks
+    assembled = assemble_variant(catalog, key, stop_at_failure=False, collision=collision)
     loaded = CheckResult("compiles", True, f"{file.name} loads with mujoco.MjModel.from_xml_path")
     ctx = ModelContext(assembled.variant, assembled.variant.unit, model, mujoco.MjData(model))
     return Validation(key, [*assembled.checks, loaded, *run_model_checks(ctx, stop_at_failure=False)], "files",
@@ -109,9 +113,11 @@ def render_variant(catalog: Catalog, key: VariantKey, png: Path, *, out: Path = 
     directory = out / key.id
     with tempfile.TemporaryDirectory(prefix="rik-show-") as tmp:
         if not (directory / "scene.xml").is_file():
-            checked = check_variant(catalog, key, stop_at_failure=False)
+            collision = resolve_collision(out)
+            checked = check_variant(catalog, key, stop_at_failure=False, collision=collision)
             directory = Path(tmp) / key.id
-            materialise(checked, directory, make_report(catalog, checked, spec_hash(catalog, key), 0.0), Path(tmp))
+            materialise(checked, directory, make_report(catalog, checked, spec_hash(catalog, key, collision), 0.0),
+                        Path(tmp))
         model = mujoco.MjModel.from_xml_path(str(directory / "scene.xml"))
         model.vis.global_.offwidth, model.vis.global_.offheight = max(width, 64), max(height, 64)
         data = mujoco.MjData(model)

@@ -11,9 +11,12 @@ Layout of a model (MuJoCo Menagerie's conventions):
   middle of a loop); each front also carries ``<front>/mount`` (its allowed mount rectangle, a box site);
 - a passive actuator ``<front>/effect/<kind>`` per native joint effect of the preset (self-closing zone springs,
   a slide's tilt, direction-dependent friction; :mod:`rik.joints.mjcf`);
-- a text element ``rik.variant`` with the variant's ids and fronts as JSON, so tools can read a model alone; a
-  front whose preset has effects MuJoCo lacks lists them as ``runtime_effects`` (``effect.model_dump()``), which
-  rik's simulator applies each step (:class:`rik.joints.runtime.RuntimeEffects`).
+- a text element ``rik.variant`` with the variant's ids, collision mode and fronts as JSON, so tools can read a
+  model alone; a front whose preset has effects MuJoCo lacks lists them as ``runtime_effects``
+  (``effect.model_dump()``), which rik's simulator applies each step (:class:`rik.joints.runtime.RuntimeEffects`).
+
+The handle's collision is its CoACD hulls (collision mode ``coacd``, the default) or its single convex hull
+(mode ``hull``: the baseline of the fidelity ablation); base-unit parts are the same in both modes.
 
 Boards are box geoms (exact). Handle meshes are written as STL files under ``meshes/`` and referenced by
 relative paths. Masses and inertias are explicit: boards from their volume and a density per finish kind,
@@ -52,6 +55,9 @@ TIMESTEP = 0.002
 MESHDIR = "meshes"
 SITE_GROUP = 4
 """Sites are in group 4, hidden by default in MuJoCo's viewer."""
+COLLISION_MODES = ("coacd", "hull")
+"""How a handle collides: ``coacd`` (its CoACD decomposition, the default) or ``hull`` (its one convex hull)."""
+DEFAULT_COLLISION = "coacd"
 
 
 @dataclass
@@ -84,6 +90,8 @@ class VariantModel:
     unit: BaseUnit
     recess: tuple[float, float, float, float, float] | None = None
     """Inset handles: the recess cut into each front, (x0, y0, x1, y1) in the mount frame and its depth, m."""
+    collision: str = DEFAULT_COLLISION
+    """The handle's collision mode (:data:`COLLISION_MODES`)."""
 
     @property
     def hulls(self) -> int:
@@ -91,7 +99,7 @@ class VariantModel:
 
     def info(self) -> dict[str, Any]:
         return {"id": self.key.id, "base_unit": self.key.base, "handle": self.key.handle,
-                "handle_type": self.handle_type, "preset": self.key.preset,
+                "handle_type": self.handle_type, "preset": self.key.preset, "collision": self.collision,
                 "fronts": [{"id": f.id, "kind": f.kind, "motion": f.motion, "joint": f.id,
                             "handle_body": f"{f.id}/handle", "grasp_site": f"{f.id}/grasp",
                             "placement": f.placement.rule, "edge": f.placement.edge,
@@ -247,27 +255,30 @@ def _add_boxes(spec: mujoco.MjSpec, body: mujoco.MjsBody, boxes: list[Panel], pr
 def _add_mesh_part(spec: mujoco.MjSpec, body: mujoco.MjsBody, asset: Asset, part_name: str, prefix: str,
                    material: str, classes: dict[str, mujoco.MjsDefault], files: dict[str, bytes],
                    vertices: dict[str, int], pos: Sequence[float] | None = None,
-                   quat: Sequence[float] | None = None) -> None:
-    """A part from meshes: its visual mesh and its hulls (meshes added once per model, geoms per use)."""
+                   quat: Sequence[float] | None = None, single_hull: bool = False) -> None:
+    """A part from meshes: its visual mesh and its hulls (meshes added once per model, geoms per use);
+    ``single_hull`` collides it with its one convex hull (``part.baseline``) instead."""
     import mujoco
 
     part = asset.part(part_name)
+    hulls = part.baseline if single_hull else part.hulls
     stem = f"{asset.id.replace('/', '-')}-{part_name}"
+    hull = f"{stem}-convex-hull" if single_hull else f"{stem}-hull"
     frame = {} if pos is None or quat is None else {"pos": list(pos), "quat": list(quat)}
     visual = f"{stem}-visual"
     if f"{visual}.stl" not in files:
         files[f"{visual}.stl"] = stl_bytes(asset.key, part_name, -1, part.visual.vertices, part.visual.faces)
         spec.add_mesh(name=visual, file=f"{visual}.stl")
         vertices[visual] = len(part.visual.vertices)
-        for i, (v, f) in enumerate(part.hulls):
-            files[f"{stem}-hull-{i:02d}.stl"] = stl_bytes(asset.key, part_name, i, v, f)
-            spec.add_mesh(name=f"{stem}-hull-{i:02d}", file=f"{stem}-hull-{i:02d}.stl")
-            vertices[f"{stem}-hull-{i:02d}"] = len(v)
+        for i, (v, f) in enumerate(hulls):
+            files[f"{hull}-{i:02d}.stl"] = stl_bytes(asset.key, part_name, i, v, f)
+            spec.add_mesh(name=f"{hull}-{i:02d}", file=f"{hull}-{i:02d}.stl")
+            vertices[f"{hull}-{i:02d}"] = len(v)
     body.add_geom(name=f"{prefix}visual", default=classes["visual"], type=mujoco.mjtGeom.mjGEOM_MESH,
                   meshname=visual, material=material, **frame)
-    for i in range(len(part.hulls)):
+    for i in range(len(hulls)):
         body.add_geom(name=f"{prefix}hull-{i:02d}", default=classes["collision"], type=mujoco.mjtGeom.mjGEOM_MESH,
-                      meshname=f"{stem}-hull-{i:02d}", **frame)
+                      meshname=f"{hull}-{i:02d}", **frame)
 
 
 def _set_inertial(body: mujoco.MjsBody, mass: float, com: list[float], full: list[float]) -> None:
@@ -286,8 +297,10 @@ def _mesh_inertial(catalog: Catalog, asset: Asset, part_name: str, finish: str) 
             _full(np.asarray(props["inertia"]) * density))
 
 
-def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_asset: Asset) -> VariantModel:
-    """The MjSpec of one variant (not compiled)."""
+def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_asset: Asset,
+                 collision: str = DEFAULT_COLLISION) -> VariantModel:
+    """The MjSpec of one variant (not compiled), its handles colliding as ``collision`` says
+    (:data:`COLLISION_MODES`)."""
     import mujoco
     import numpy as np
 
@@ -361,14 +374,14 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
         _add_mount_site(body, front)
         hbody = body.add_body(name=f"{front.id}/handle", pos=list(placement.pos), quat=list(placement.quat))
         _add_mesh_part(spec, hbody, handle_asset, "handle", f"{front.id}/handle/", handle_material, classes, files,
-                       vertices)
+                       vertices, single_hull=collision == "hull")
         _set_inertial(hbody, handle.mass, h_com, h_inertia)
         hbody.add_site(name=f"{front.id}/handle", group=SITE_GROUP, size=[0.003, 0.003, 0.003])
         hbody.add_site(name=f"{front.id}/grasp", group=SITE_GROUP, pos=((bounds[0] + bounds[1]) / 2).tolist(),
                        size=[0.004, 0.004, 0.004], rgba=[1.0, 0.2, 0.2, 0.6])
         fronts.append(FrontLayout(front.id, front.kind, front_motion(front), placement, front.joint.range,
                                   jmodel.runtime_effects))
-    model = VariantModel(key, spec, files, vertices, fronts, handle_type.value, bounds, unit, recess)
+    model = VariantModel(key, spec, files, vertices, fronts, handle_type.value, bounds, unit, recess, collision)
     spec.add_text(name="rik.variant", data=json.dumps(model.info(), separators=(",", ":")))
     return model
 

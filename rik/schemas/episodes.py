@@ -36,6 +36,9 @@ class EpisodeMeta(Frozen):
     handle: CatalogId
     handle_type: str
     preset: SimpleId
+    collision: Literal["coacd", "hull"] = "coacd"
+    """The handle's collision mode in the simulator it was recorded in (``rik variants build --collision``);
+    episodes recorded before modes existed are ``coacd``."""
     front: SimpleId
     operator: str = Field(description="strategy, device or policy name")
     operator_kind: Literal["strategy", "device", "policy"]

@@ -138,7 +138,8 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
         info = s.info
         meta = EpisodeMeta(
             id=episode, variant=info["id"], base_unit=info["base_unit"], handle=info["handle"],
-            handle_type=info["handle_type"], preset=info["preset"], front=s.front.id, operator=operator,
+            handle_type=info["handle_type"], preset=info["preset"], collision=info.get("collision", "coacd"),
+            front=s.front.id, operator=operator,
             operator_kind=operator_kind, seed=seed, fps=s.control_fps, timestep=float(s.model.opt.timestep),
             steps=recorder.steps, state_size=len(table.column("state")[0]), outcome=classify(s.opening()),
             final_opening=round(s.opening(), 6), max_opening=round(recorder.max_opening, 6),

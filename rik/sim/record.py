@@ -25,7 +25,8 @@ START_JITTER = (0.03, 0.03, 0.03, 0.08, 0.08, 0.08)
 
 
 def variant_dir(catalog: Catalog, variant: str, variants: Path) -> Path:
-    """The directory of a built variant, building it (with its checks) first when it is missing or stale."""
+    """The directory of a built variant, building it (with its checks, in the folder's collision mode:
+    :func:`rik.combinator.build.resolve_collision`) first when it is missing or stale."""
     from rik.combinator.build import build_variant
     from rik.combinator.ids import parse_variant_id
 

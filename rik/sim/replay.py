@@ -37,6 +37,10 @@ def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: Episo
     gripper = HAND_E.with_(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
                            arm_force=g.arm_force)
     scene = build_scene(variant_dir(catalog, meta.variant, variants), meta.front, gripper, meta.fps)
+    collision = scene.info.get("collision", "coacd")
+    if collision != meta.collision:
+        raise EpisodeError(f"{Path(directory) / 'meta.json'}: field 'collision': {meta.collision}, but {variants} "
+                           f"holds {collision} collision variants (pass --variants with a {meta.collision} folder)")
     import mujoco
 
     size = mujoco.mj_stateSize(scene.model, mujoco.mjtState.mjSTATE_INTEGRATION)

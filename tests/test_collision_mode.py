@@ -1,0 +1,105 @@
+"""Collision modes of variant builds: a handle colliding as its CoACD hulls (``coacd``) or as its single convex
+hull (``hull``, the fidelity ablation's baseline); folders keep their mode, and episodes say theirs."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from rik.combinator.build import build_variants, spec_hash
+from rik.combinator.ids import parse_variant_id
+from rik.errors import RikError
+from rik.registry import load_catalog
+from rik.sim.record import variant_dir
+
+CAT = load_catalog()
+BOW = "drawer-bedside-45__two_point-bow-128__normal"
+"""One front with a bow handle: concave, so CoACD splits it into several hulls."""
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    root = tmp_path_factory.mktemp("collision")
+    key = parse_variant_id(CAT, BOW)
+    for mode in ("coacd", "hull"):
+        [result] = build_variants(CAT, [key], root / mode, collision=mode)
+        assert result.status == "built", result
+    return {"coacd": root / "coacd", "hull": root / "hull"}
+
+
+def _handle_collision_geoms(directory: Path) -> dict[str, int]:
+    """Front id -> number of collision geoms on its handle body, from the written model."""
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_path(str(directory / "model.xml"))
+    counts: dict[str, int] = {}
+    for g in range(model.ngeom):
+        body = model.body(model.geom_bodyid[g]).name
+        if body.endswith("/handle") and model.geom_contype[g]:
+            counts[body] = counts.get(body, 0) + 1
+    return counts
+
+
+def test_hull_build_collides_each_handle_as_one_convex_hull(folders: dict[str, Path]) -> None:
+    hull, coacd = _handle_collision_geoms(folders["hull"] / BOW), _handle_collision_geoms(folders["coacd"] / BOW)
+    assert hull == {"drawer/handle": 1}
+    assert coacd["drawer/handle"] > 1  # the bow is concave
+    for mode, folder in folders.items():
+        report = json.loads((folder / BOW / "report.json").read_text(encoding="utf-8"))
+        assert report["collision"] == mode and report["status"] == "valid"
+        assert json.loads((folder / "collision.json").read_text(encoding="utf-8")) == {"collision": mode}
+        assert f'"collision":"{mode}"' in (folder / BOW / "model.xml").read_text(encoding="utf-8")
+    key = parse_variant_id(CAT, BOW)
+    assert spec_hash(CAT, key, "hull") != spec_hash(CAT, key, "coacd") == spec_hash(CAT, key)
+    digests = {json.loads((f / BOW / "report.json").read_text(encoding="utf-8"))["spec_hash"]
+               for f in folders.values()}
+    assert len(digests) == 2
+
+
+def test_a_folder_rebuilds_its_variants_with_its_own_mode(folders: dict[str, Path], tmp_path: Path) -> None:
+    folder = tmp_path / "variants-hull"
+    shutil.copytree(folders["hull"], folder)
+    shutil.rmtree(folder / BOW)  # missing: variant_dir builds it again, with the folder's mode
+    directory = variant_dir(CAT, BOW, folder)
+    assert json.loads((directory / "report.json").read_text(encoding="utf-8"))["collision"] == "hull"
+    assert _handle_collision_geoms(directory) == {"drawer/handle": 1}
+    (folder / "collision.json").write_text('{"collision": "convex"}', encoding="utf-8")
+    with pytest.raises(RikError, match=r"collision.json: field collision 'convex': not a collision mode; valid "
+                                       r"modes are coacd, hull$"):
+        variant_dir(CAT, BOW, folder)
+
+
+def test_record_and_replay_in_a_hull_folder(rik, folders: dict[str, Path], tmp_path: Path) -> None:
+    folder = tmp_path / "variants-hull"
+    r = rik("variants", "build", BOW, "--collision", "hull", "--out", str(folder))
+    assert r.code == 0, r.err
+    assert "handle collision: hull" in r.out
+    report = (folder / BOW / "report.json").read_text(encoding="utf-8")
+    r = rik("record", BOW, "--strategy", "grasp_vertical", "--variants", str(folder), "--out", str(tmp_path / "ep"))
+    assert r.code == 0, r.err
+    assert (folder / BOW / "report.json").read_text(encoding="utf-8") == report  # used as found, not rebuilt
+    [episode] = [d for d in (tmp_path / "ep").iterdir() if (d / "meta.json").is_file()]
+    assert json.loads((episode / "meta.json").read_text(encoding="utf-8"))["collision"] == "hull"
+    r = rik("replay", str(episode), "--variants", str(folder))
+    assert r.code == 0 and "exact" in r.out, r.out + r.err
+    r = rik("replay", str(episode), "--variants", str(folders["coacd"]))
+    assert r.code == 2 and "field 'collision': hull, but" in r.err and "holds coacd collision variants" in r.err
+
+
+def test_bad_collision_modes_are_named(rik, folders: dict[str, Path], tmp_path: Path) -> None:
+    r = rik("variants", "build", BOW, "--collision", "nope", "--out", str(tmp_path / "v"))
+    assert r.code == 2
+    assert "rik: error: --collision 'nope': not a collision mode; valid modes are coacd, hull" in r.err
+    assert len(r.err.strip().splitlines()) == 1 and not (tmp_path / "v").exists()
+    r = rik("variants", "build", BOW, "--collision", "coacd", "--out", str(folders["hull"]))
+    assert r.code == 2
+    assert f"{folders['hull']}: this folder holds hull collision variants, not coacd (its collision.json); build " \
+           "--collision coacd variants into another --out folder" in r.err
+    legacy = tmp_path / "variants"  # built before collision modes: variants, no collision.json
+    shutil.copytree(folders["coacd"], legacy)
+    (legacy / "collision.json").unlink()
+    r = rik("variants", "build", BOW, "--collision", "hull", "--out", str(legacy))
+    assert r.code == 2 and "this folder holds coacd collision variants, not hull" in r.err
