@@ -43,6 +43,7 @@ def list_entries(
     joint: Annotated[JointOpt | None, typer.Option(help="Joint type of a front (bases).")] = None,
     min_length: Annotated[float | None, typer.Option(help="Minimum overall handle length, m.")] = None,
     max_length: Annotated[float | None, typer.Option(help="Maximum overall handle length, m.")] = None,
+    split: Annotated[str | None, typer.Option(help="Split: train, val or test (handles, designs).")] = None,
     format: Annotated[OutputFormat, typer.Option("--format", "-f", help="table for people; json or csv "
                                                  "(SI units) for scripts.")] = OutputFormat.table,
     catalog: CatalogOption = None,
@@ -52,10 +53,11 @@ def list_entries(
     from rik.registry.views import KINDS
 
     section = KINDS[kind.value]
-    _check_filters(kind.value, type=type, design=design, joint=joint, min_length=min_length, max_length=max_length)
+    _check_filters(kind.value, type=type, design=design, joint=joint, min_length=min_length, max_length=max_length,
+                   split=split)
     rows = catalog_index(overlays(catalog)).select(
         section, type=type and type.value, design=design, joint=joint and joint.value,
-        min_length=min_length, max_length=max_length)
+        min_length=min_length, max_length=max_length, split=split)
     if format is OutputFormat.json:
         print_json(rows)
     elif format is OutputFormat.csv:
@@ -66,7 +68,7 @@ def list_entries(
 
 #: Which kinds (CLI names) each filter applies to.
 FILTER_KINDS = {"type": ("handles", "designs"), "design": ("handles",), "joint": ("bases",),
-                "min_length": ("handles",), "max_length": ("handles",)}
+                "min_length": ("handles",), "max_length": ("handles",), "split": ("handles", "designs")}
 
 
 def _check_filters(kind: str, **given: object) -> None:
@@ -135,6 +137,29 @@ def stats(catalog: CatalogOption = None,
         print_json(numbers)
     else:
         print_summary(numbers)
+
+
+@app.command()
+def splits(catalog: CatalogOption = None,
+           format: Annotated[OutputFormat, typer.Option("--format", "-f")] = OutputFormat.table) -> None:
+    """The named splits (train, val, test): designs and handles per handle type, and the split version."""
+    from rik.registry.index import catalog_index
+    from rik.registry.stats import HANDLE_TYPES, split_stats
+    from rik.registry.views import format_columns
+
+    numbers = split_stats(catalog_index(overlays(catalog)))
+    if format is OutputFormat.json:
+        print_json(numbers)
+        return
+    if format is OutputFormat.csv:
+        _print_csv([{"split": name, **row} for name, row in numbers["splits"].items()])
+        return
+    headers = ["split", *(f"{t} designs / handles" for t in HANDLE_TYPES), "designs", "handles"]
+    rows = [[name, *(f"{row['by_type'][t]['designs']} / {row['by_type'][t]['handles']}" for t in HANDLE_TYPES),
+             str(row["designs"]), str(row["handles"])] for name, row in numbers["splits"].items()]
+    print(format_columns(headers, rows))
+    print(f"splits v{numbers['version']}: whole designs held out; every split spans all base units and presets "
+          "(list one with `rik catalog list --split test`)")
 
 
 def print_summary(numbers: dict[str, Any]) -> None:

@@ -60,8 +60,12 @@ def parse_variant_id(catalog: Catalog, text: str) -> VariantKey:
 
 
 def select_variants(catalog: Catalog, *, bases: Iterable[str] = (), handle_types: Iterable[str] = (),
-                    handles: Iterable[str] = (), presets: Iterable[str] = ()) -> list[VariantKey]:
+                    handles: Iterable[str] = (), presets: Iterable[str] = (),
+                    split: str | None = None) -> list[VariantKey]:
     """Every base unit x handle x preset pairing, filtered; empty filters mean all. Unknown ids raise.
+
+    ``split`` (train, val or test) keeps the handles of that split (:mod:`rik.registry.splits`); base units and
+    presets are not split. An unknown split name raises.
 
     Order: base units and handles in catalog order, presets in the order asked for (default: catalog order).
     """
@@ -70,5 +74,10 @@ def select_variants(catalog: Catalog, *, bases: Iterable[str] = (), handle_types
     types = set(handle_types)
     if types:
         handle_ids = [h for h in handle_ids if catalog.handle_type(catalog.handles[h]).value in types]
+    if split is not None:
+        from rik.registry.splits import split_handles
+
+        in_split = set(split_handles(catalog, split))
+        handle_ids = [h for h in handle_ids if h in in_split]
     preset_ids = [catalog.preset(p).id for p in presets] or list(catalog.presets)
     return [VariantKey(b, h, p) for b in base_ids for h in handle_ids for p in preset_ids]

@@ -31,6 +31,10 @@ class Catalog:
     finishes: Mapping[str, Finish]
     origins: Mapping[tuple[str, str], Origin] = field(default_factory=dict)
     """(section, id) -> where the entry was defined."""
+    splits: Mapping[str, str] = field(default_factory=dict)
+    """Design id -> its split (train, val or test; :mod:`rik.registry.splits`)."""
+    splits_version: int = 0
+    """Version of the split assignment (:data:`rik.registry.splits.SPLITS_VERSION`)."""
 
     # ---- lookups with suggestions -------------------------------------------------------------------------
     def handle(self, handle_id: str) -> Handle:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from rik import CATALOG_SCHEMA, __version__
 from rik.registry.index import CatalogIndex
-from rik.registry.stats import HANDLE_TYPES, catalog_stats
+from rik.registry.stats import HANDLE_TYPES, catalog_stats, split_stats
 from rik.registry.views import COLUMNS, Row, mm
 
 TYPE_TITLES = {"knob": "Knobs", "two_point": "Two-point handles", "finger_pull": "Finger-pull handles"}
@@ -97,7 +97,8 @@ def render_catalog_md(index: CatalogIndex, root: Path) -> str:
         f"| **all** | **{stats['designs']}** | **{stats['handles']}** |",
         "",
         "Contents: " + ", ".join(f"[{TYPE_TITLES[t]}](#{_anchor(TYPE_TITLES[t])})" for t in HANDLE_TYPES)
-        + ", [Base units](#base-units), [Resistance presets](#resistance-presets), [Finishes](#finishes).",
+        + ", [Base units](#base-units), [Resistance presets](#resistance-presets), [Finishes](#finishes), "
+        "[Splits](#splits).",
         "",
     ]
     handle_cols = [c for c in COLUMNS["handles"] if c[0] not in ("type",)]
@@ -137,7 +138,34 @@ def render_catalog_md(index: CatalogIndex, root: Path) -> str:
     out += ["", "## Finishes", ""]
     out += _md_table([h for h, _ in COLUMNS["finishes"]],
                      [[cell(f) for _, cell in COLUMNS["finishes"]] for f in index.entries("finishes")])
+    out += ["", *_splits_section(index)]
     return "\n".join(out) + "\n"
+
+
+def _splits_section(index: CatalogIndex) -> list[str]:
+    """The Splits section: counts per split and type, then each split's designs by type."""
+    numbers = split_stats(index)
+    out = ["## Splits", "",
+           f"Named splits, version {numbers['version']} (`rik/registry/data/splits.yaml`; "
+           "`rik catalog splits`, `rik catalog list --split test`). Whole designs are held out: every handle of a "
+           "design is in its design's split, and each split holds all three handle types. Base units and resistance "
+           "presets are not split: every split spans all of them. Designs of a user catalog are in train unless "
+           "its own `splits:` mapping places them.", "",
+           "| split | " + " | ".join(f"{TYPE_TITLES[t]} (designs / handles)" for t in HANDLE_TYPES)
+           + " | designs | handles |",
+           "|---|" + "---:|" * (len(HANDLE_TYPES) + 2)]
+    for name, row in numbers["splits"].items():
+        cells = [f"{row['by_type'][t]['designs']} / {row['by_type'][t]['handles']}" for t in HANDLE_TYPES]
+        out.append(f"| {name} | {' | '.join(cells)} | {row['designs']} | {row['handles']} |")
+    out.append("")
+    designs = index.entries("designs")
+    for name in numbers["splits"]:
+        out += [f"**{name}**:", ""]
+        for t in HANDLE_TYPES:
+            ids = [d["id"] for d in designs if d["split"] == name and d["type"] == t]
+            out.append(f"- {TYPE_TITLES[t]} ({len(ids)}): " + ", ".join(f"`{i}`" for i in ids))
+        out.append("")
+    return out[:-1]
 
 
 def _md_table(headers: list[str], rows: list[list[str]]) -> list[str]:

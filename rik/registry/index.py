@@ -33,13 +33,15 @@ LOOKUP_ORDER = ("handles", "designs", "base_units", "presets", "finishes")
 @dataclass(frozen=True)
 class CatalogIndex:
     """Catalog entries as plain dicts (SI units, as in the YAML), in definition order, with derived fields:
-    handles get ``type``, designs ``handle_count``, base units ``joint_types``; every entry gets ``origin``
-    (``builtin`` or ``overlay``)."""
+    handles get ``type``, designs ``handle_count``, handles and designs ``split``, base units ``joint_types``;
+    every entry gets ``origin`` (``builtin`` or ``overlay``)."""
 
     fingerprint: str
     sections: dict[str, list[dict[str, Any]]]
     pairings: dict[str, int]
     """``total`` base unit x handle pairings and how many ``fit`` every front of the base unit."""
+    splits_version: int = 0
+    """Version of the split assignment (:mod:`rik.registry.splits`)."""
 
     def entries(self, section: str) -> list[dict[str, Any]]:
         return self.sections[section]
@@ -61,17 +63,24 @@ class CatalogIndex:
 
     def select(self, section: str, *, type: str | None = None, design: str | None = None,
                joint: str | None = None, min_length: float | None = None,
-               max_length: float | None = None) -> list[dict[str, Any]]:
+               max_length: float | None = None, split: str | None = None) -> list[dict[str, Any]]:
         """Entries of a section matching every given criterion.
 
         ``type``: handle type (handles, designs); ``design``: design id (handles); ``joint``: joint type of
-        any front (base units); ``min_length``/``max_length``: overall handle length, m, inclusive.
+        any front (base units); ``min_length``/``max_length``: overall handle length, m, inclusive; ``split``:
+        train, val or test (handles, designs).
         """
         if design is not None:
             self.get("designs", design)  # an unknown design is an error with suggestions, not an empty list
+        if split is not None:
+            from rik.registry.splits import check_split
+
+            check_split(split)
         rows = self.sections[section]
         if type is not None:
             rows = [r for r in rows if r.get("type") == type]
+        if split is not None:
+            rows = [r for r in rows if r.get("split") == split]
         if design is not None:
             rows = [r for r in rows if r.get("design") == design]
         if joint is not None:
@@ -119,14 +128,17 @@ def build_index(catalog: Catalog, key: str = "") -> CatalogIndex:
         sections[section] = rows
     for row in sections["handles"]:
         row["type"] = catalog.handle_type(catalog.handles[row["id"]]).value
+    for row in sections["handles"]:
+        row["split"] = catalog.splits[row["design"]]
     for row in sections["designs"]:
         row["handle_count"] = len(catalog.handles_of(row["id"]))
+        row["split"] = catalog.splits[row["id"]]
     for row in sections["base_units"]:
         row["joint_types"] = [j.value for j in catalog.joint_types(catalog.base_units[row["id"]])]
     fit = sum(all(fitting_rotations(h, f) for f in b.fronts)
               for b in catalog.base_units.values() for h in catalog.handles.values())
     pairings = {"total": len(catalog.base_units) * len(catalog.handles), "fit": fit}
-    return CatalogIndex(key, sections, pairings)
+    return CatalogIndex(key, sections, pairings, catalog.splits_version)
 
 
 def fingerprint(files: Sequence[tuple[Path, bool]]) -> str:
@@ -142,7 +154,7 @@ def fingerprint(files: Sequence[tuple[Path, bool]]) -> str:
     return digest.hexdigest()
 
 
-INDEX_FORMAT = 2
+INDEX_FORMAT = 3
 """Layout of the cached file: a header (format, fingerprint, the sha256 of the payload) then the payload."""
 
 
@@ -180,7 +192,7 @@ def _read(path: Path, key: str) -> CatalogIndex | None:
         return None
     try:
         data = json.loads(payload)
-        return CatalogIndex(key, data["sections"], data["pairings"])
+        return CatalogIndex(key, data["sections"], data["pairings"], data["splits_version"])
     except (ValueError, KeyError, TypeError):
         return None
 
@@ -188,7 +200,8 @@ def _read(path: Path, key: str) -> CatalogIndex | None:
 def _write(path: Path, index: CatalogIndex) -> None:
     """Write atomically, with the sha256 of the payload in the header; a cache that cannot be written (read-only
     home) is not an error."""
-    payload = json.dumps({"sections": index.sections, "pairings": index.pairings})
+    payload = json.dumps({"sections": index.sections, "pairings": index.pairings,
+                          "splits_version": index.splits_version})
     sha = hashlib.sha256(payload.encode()).hexdigest()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

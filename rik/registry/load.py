@@ -12,7 +12,8 @@ from pathlib import Path
 from rik.registry import checks
 from rik.registry.catalog import Catalog, Origin
 from rik.registry.entries import SECTION_MODELS, CatalogModel, parse_entry
-from rik.registry.sources import NOUNS, RawEntry, catalog_sources, read_file
+from rik.registry.sources import NOUNS, SPLITS_KEY, RawEntry, catalog_sources, read_file
+from rik.registry.splits import assign_splits
 from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
 
 
@@ -26,9 +27,11 @@ def load_catalog(overlays: Iterable[Path] | None = None) -> Catalog:
 
 
 def build_catalog(entries: Sequence[RawEntry]) -> Catalog:
-    """Validate raw entries (each against its schema, then the cross-entry checks) into a :class:`Catalog`."""
+    """Validate raw entries (each against its schema, then the cross-entry checks, then the split assignment)
+    into a :class:`Catalog`."""
     parsed: dict[str, list[tuple[RawEntry, CatalogModel]]] = {s: [] for s in SECTION_MODELS}
-    for entry in entries:
+    split_entries = [e for e in entries if e.section == SPLITS_KEY]
+    for entry in (e for e in entries if e.section != SPLITS_KEY):
         parsed[entry.section].append((entry, parse_entry(entry)))
     for section, items in parsed.items():
         checks.check_unique_ids(items, NOUNS[section])
@@ -47,8 +50,10 @@ def build_catalog(entries: Sequence[RawEntry]) -> Catalog:
     for entry, base in _entries(parsed, "base_units", BaseUnit):
         checks.check_base_unit(entry, base, finishes, presets)
     origins = {(s, m.id): Origin(str(e.file), e.builtin) for s, items in parsed.items() for e, m in items}
+    splits, version = assign_splits(split_entries, {m.id: e.builtin for e, m in _entries(parsed, "designs",
+                                                                                           HandleDesign)})
     return Catalog(designs=designs, handles=handles, base_units=base_units, presets=presets, finishes=finishes,
-                   origins=origins)
+                   origins=origins, splits=splits, splits_version=version)
 
 
 def _entries[M: CatalogModel](parsed: dict[str, list[tuple[RawEntry, CatalogModel]]], section: str,

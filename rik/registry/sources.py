@@ -16,6 +16,9 @@ if TYPE_CHECKING:
 
 #: Top-level sections a catalog file may hold, each a list of entries.
 SECTIONS = ("finishes", "presets", "designs", "handles", "base_units")
+#: Top-level key of a catalog file that assigns designs to the named splits (:mod:`rik.registry.splits`); its
+#: value is one mapping (``version``, ``train``, ``val``, ``test``), read as a single raw entry of this name.
+SPLITS_KEY = "splits"
 #: How messages name one entry of each section.
 NOUNS = {"finishes": "finish", "presets": "preset", "designs": "design", "handles": "handle",
          "base_units": "base unit"}
@@ -101,9 +104,13 @@ def read_file(path: Path, builtin: bool) -> list[RawEntry]:
     for section, items in doc.items():
         if section == "schema":
             continue
+        if section == SPLITS_KEY:
+            if items is not None:
+                entries.append(RawEntry(SPLITS_KEY, 0, items, path, builtin))
+            continue
         if section not in SECTIONS:
-            raise CatalogError(shown, None, str(section), f"unknown section; valid sections: {', '.join(SECTIONS)}",
-                               line_of(path, (section,)))
+            raise CatalogError(shown, None, str(section), "unknown section; valid sections: "
+                               f"{', '.join((*SECTIONS, SPLITS_KEY))}", line_of(path, (section,)))
         if items is None:
             continue
         if not isinstance(items, list):

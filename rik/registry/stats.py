@@ -29,3 +29,21 @@ def catalog_stats(index: CatalogIndex) -> dict[str, Any]:
         "pairings": dict(index.pairings),
         "overlay_entries": sum(e["origin"] == "overlay" for s in index.sections.values() for e in s),
     }
+
+
+def split_stats(index: CatalogIndex) -> dict[str, Any]:
+    """The split version and, per split (train, val, test), its designs and handles per handle type and in all."""
+    from rik.registry.splits import SPLITS
+
+    handles, designs = index.entries("handles"), index.entries("designs")
+    per_split: dict[str, Any] = {}
+    for split in SPLITS:
+        split_designs = [d for d in designs if d["split"] == split]
+        split_handles = [h for h in handles if h["split"] == split]
+        per_split[split] = {
+            "designs": len(split_designs),
+            "handles": len(split_handles),
+            "by_type": {t: {"designs": sum(d["type"] == t for d in split_designs),
+                            "handles": sum(h["type"] == t for h in split_handles)} for t in HANDLE_TYPES},
+        }
+    return {"version": index.splits_version, "splits": per_split}

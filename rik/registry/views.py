@@ -56,6 +56,7 @@ COLUMNS: dict[str, list[tuple[str, Callable[[Row], str]]]] = {
         ("mount", lambda r: r["mount"]["kind"] + (f" ({r['mount']['edge']})" if r["mount"].get("edge") else "")),
         ("finish", lambda r: r["finish"]),
         ("mass g", lambda r: f"{r['mass'] * 1000:.0f}"),
+        ("split", lambda r: r["split"]),
     ],
     "designs": [
         ("id", lambda r: r["id"]),
@@ -64,6 +65,7 @@ COLUMNS: dict[str, list[tuple[str, Callable[[Row], str]]]] = {
         ("name", lambda r: r["name"]),
         ("generator", _generator),
         ("handles", lambda r: str(r["handle_count"])),
+        ("split", lambda r: r["split"]),
     ],
     "base_units": [
         ("id", lambda r: r["id"]),

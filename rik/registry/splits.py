@@ -1,0 +1,130 @@
+"""Named, versioned splits of the catalog: every handle design is in exactly one of train, val and test.
+
+Whole designs are held out (all handles of a design share its split) and every split holds all three handle
+types. Base units and presets are not split: every split spans all of them. The assignment is committed data,
+``rik/registry/data/splits.yaml`` (a catalog file whose top-level ``splits`` key holds ``version`` and a list of
+design ids per split). A user overlay may add a ``splits`` mapping of its own that places its own designs;
+overlay designs it does not place are in :data:`OVERLAY_DEFAULT` (train), so the held-out sets only grow when a
+user says so. Changing which built-in design is in which split means a new :data:`SPLITS_VERSION`.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
+from rik.errors import CatalogError, RikError, UnknownIdError
+from rik.registry.sources import BUILTIN_DIR, SPLITS_KEY, RawEntry, display_path, line_of
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+
+#: The split names, in the order they are listed.
+SPLITS = ("train", "val", "test")
+#: Version of the built-in assignment; datasets and evaluations record it ("splits v1").
+SPLITS_VERSION = 1
+#: The split of an overlay design that no ``splits`` mapping places.
+OVERLAY_DEFAULT = "train"
+#: Where the built-in assignment lives.
+BUILTIN_SPLITS_FILE = BUILTIN_DIR / "splits.yaml"
+
+
+def check_split(name: str) -> str:
+    """``name`` if it is a split; otherwise a one-line :class:`RikError` (with a close match when there is one)."""
+    if name in SPLITS:
+        return name
+    close = difflib.get_close_matches(name, SPLITS, n=1, cutoff=0.6)
+    hint = f"; did you mean '{close[0]}'?" if close else ""
+    raise RikError(f"unknown split '{name}' (splits: {', '.join(SPLITS)}){hint}")
+
+
+def split_designs(catalog: Catalog, name: str) -> tuple[str, ...]:
+    """Design ids of split ``name``, in catalog order."""
+    check_split(name)
+    return tuple(d for d in catalog.designs if catalog.splits[d] == name)
+
+
+def split_handles(catalog: Catalog, name: str) -> tuple[str, ...]:
+    """Handle ids of split ``name``, in catalog order."""
+    check_split(name)
+    return tuple(h.id for h in catalog.handles.values() if catalog.splits[h.design] == name)
+
+
+def split_of(catalog: Catalog, handle_id: str) -> str:
+    """The split a handle is in (that of its design); an unknown handle raises with close ids."""
+    return catalog.splits[catalog.handle(handle_id).design]
+
+
+def splits_version(catalog: Catalog) -> int:
+    """The version of the catalog's split assignment (:data:`SPLITS_VERSION`)."""
+    return catalog.splits_version
+
+
+def assign_splits(entries: Sequence[RawEntry], builtin_designs: Mapping[str, bool]) -> tuple[dict[str, str], int]:
+    """Validate the ``splits`` mappings of the catalog files: (design id -> split, version).
+
+    ``builtin_designs``: every design id of the catalog, in catalog order, -> whether it is rik's own. Every
+    built-in design must be in exactly one split of rik's own files; an overlay may place only its own designs.
+    Raises :class:`CatalogError` naming the file, the split and the design.
+    """
+    placed: dict[str, tuple[str, RawEntry, int]] = {}
+    version: int | None = None
+    builtin_file = next((e.file for e in entries if e.builtin), BUILTIN_SPLITS_FILE)
+    for entry in entries:
+        data = entry.data
+        shown = display_path(entry.file)
+        if not isinstance(data, dict):
+            raise CatalogError(shown, None, SPLITS_KEY, f"must be a mapping of version, {', '.join(SPLITS)}",
+                               line_of(entry.file, (SPLITS_KEY,)))
+        for key, value in data.items():
+            field = f"{SPLITS_KEY}.{key}"
+            line = line_of(entry.file, (SPLITS_KEY, key))
+            if key == "version":
+                if type(value) is not int or value != SPLITS_VERSION:
+                    raise CatalogError(shown, None, field, f"must be {SPLITS_VERSION}, the splits version this rik "
+                                       f"reads (got {value!r})", line)
+                version = value if entry.builtin else version
+                continue
+            if key not in SPLITS:
+                raise CatalogError(shown, None, field, f"unknown split; valid fields: version, {', '.join(SPLITS)}",
+                                   line)
+            if value is None:
+                continue
+            if not isinstance(value, list):
+                raise CatalogError(shown, None, field, "must be a list of design ids", line)
+            for i, design in enumerate(value):
+                _place(entry, key, i, design, builtin_designs, placed)
+        if entry.builtin and "version" not in data:
+            raise CatalogError(shown, None, f"{SPLITS_KEY}.version", "required field is missing",
+                               line_of(entry.file, (SPLITS_KEY,)))
+    for design, builtin in builtin_designs.items():
+        if builtin and design not in placed:
+            raise CatalogError(display_path(builtin_file), None, SPLITS_KEY, f"design '{design}' is in no split; "
+                               f"add it to one of {', '.join(SPLITS)}", line_of(builtin_file, (SPLITS_KEY,)))
+    splits = {d: placed[d][0] if d in placed else OVERLAY_DEFAULT for d in builtin_designs}
+    return splits, SPLITS_VERSION if version is None else version
+
+
+def _place(entry: RawEntry, split: str, index: int, design: object, builtin_designs: Mapping[str, bool],
+           placed: dict[str, tuple[str, RawEntry, int]]) -> None:
+    """Record ``design`` (item ``index`` of ``split`` in ``entry``) in ``placed``, or raise."""
+    shown = display_path(entry.file)
+    field = f"{SPLITS_KEY}.{split}"
+    line = line_of(entry.file, (SPLITS_KEY, split, index))
+    if not isinstance(design, str):
+        raise CatalogError(shown, None, field, f"must list design ids (got {design!r})", line)
+    if design not in builtin_designs:
+        raise CatalogError(shown, None, field, str(UnknownIdError("design", design, builtin_designs)), line)
+    if builtin_designs[design] and not entry.builtin:
+        raise CatalogError(shown, None, field, f"design '{design}' is built in and has its split in rik's own "
+                           "splits.yaml; an overlay may place only its own designs", line)
+    if not builtin_designs[design] and entry.builtin:  # pragma: no cover - built-in data never names overlay ids
+        raise CatalogError(shown, None, field, f"design '{design}' is not built in", line)
+    if design in placed:
+        other, other_entry, other_index = placed[design]
+        where = display_path(other_entry.file)
+        other_line = line_of(other_entry.file, (SPLITS_KEY, other, other_index))
+        raise CatalogError(shown, None, field, f"design '{design}' is already in split '{other}' "
+                           f"({where}:{other_line}); a design is in exactly one split", line)
+    placed[design] = (split, entry, index)
