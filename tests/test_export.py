@@ -208,7 +208,8 @@ def test_export_messages(rik, dataset: Path, work: Path, tmp_path: Path) -> None
         return result.err.strip()
 
     assert run(out=dataset) == f"rik: error: {dataset}: already exists; choose another --out (or delete it)"
-    assert run("--streams", "sim,photo") == "rik: error: --streams: unknown stream 'photo' (streams: sim, rerendered)"
+    assert run("--streams", "sim,photo") == ("rik: error: --streams: unknown stream 'photo' (streams: sim, rerendered, "
+                                          "or none)")
     assert run("--codec", "auto") == "rik: error: --codec: 'auto' is not offered (codecs: libsvtav1, h264, hevc)"
     err = run("--cameras", "top")
     assert err.startswith("rik: error: ") and err.endswith(": no camera 'top' in the scene (cameras: front, wrist)")
