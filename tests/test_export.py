@@ -21,6 +21,7 @@ from rik.exporters.lerobot_export import ExportSpec, export_lerobot
 from rik.exporters.lerobot_frames import resample_indices
 from rik.registry import load_catalog
 from rik.sim.episode import write_meta
+from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
 from rik.sim.record import record
 
 CAT = load_catalog()
@@ -60,7 +61,8 @@ def test_export_loads_with_both_streams_metadata_and_matching_counts(dataset: Pa
     assert ds.meta.total_episodes == 3 and ds.meta.fps == 20
     for key in KEYS:
         assert ds.meta.features[key]["dtype"] == "video" and tuple(ds.meta.features[key]["shape"]) == (24, 32, 3)
-    assert ds.meta.features["observation.state"]["names"][:3] == ["x", "y", "z"]
+    assert ds.meta.features["observation.state"]["names"] == list(ROBOT_STATE_NAMES)
+    assert ds.meta.features["observation.environment_state"]["names"] == list(ENV_STATE_NAMES)
     assert ds.meta.features["action"]["names"][-1] == "gripper"
     for ep in ds.meta.episodes:
         meta = metas[ep["rik/episode_id"]]
@@ -90,20 +92,23 @@ def test_behaviour_cloning_loss_goes_down(dataset: Path) -> None:
                         delta_timestamps={"action": [k / 20 for k in range(chunk)]})
     loader = torch.utils.data.DataLoader(ds, batch_size=16, shuffle=True, num_workers=0,
                                          generator=torch.Generator().manual_seed(0))
-    state_mean = torch.tensor(ds.meta.stats["observation.state"]["mean"], dtype=torch.float32)
-    state_std = torch.tensor(ds.meta.stats["observation.state"]["std"], dtype=torch.float32) + 1e-3
+
+    def stat(key: str, name: str) -> torch.Tensor:
+        return torch.tensor(ds.meta.stats[key][name], dtype=torch.float32)
+
+    states = ("observation.state", "observation.environment_state")
     act_mean = torch.tensor(ds.meta.stats["action"]["mean"], dtype=torch.float32)
     act_std = torch.tensor(ds.meta.stats["action"]["std"], dtype=torch.float32) + 1e-3
     vision = torch.nn.Sequential(torch.nn.Conv2d(3, 8, 5, stride=2), torch.nn.ReLU(), torch.nn.AdaptiveAvgPool2d(1),
                                  torch.nn.Flatten())
-    head = torch.nn.Sequential(torch.nn.Linear(8 + 14, 64), torch.nn.ReLU(), torch.nn.Linear(64, 7 * chunk))
+    head = torch.nn.Sequential(torch.nn.Linear(8 + len(ROBOT_STATE_NAMES) + len(ENV_STATE_NAMES), 64), torch.nn.ReLU(), torch.nn.Linear(64, 7 * chunk))
     params = list(vision.parameters()) + list(head.parameters())
     opt = torch.optim.Adam(params, lr=3e-3)
     losses = []
     for _epoch in range(6):
         for batch in loader:
-            feats = torch.cat([vision(batch["observation.images.front_rerendered"]),
-                               (batch["observation.state"] - state_mean) / state_std], dim=1)
+            feats = torch.cat([vision(batch["observation.images.front_rerendered"])]
+                              + [(batch[k] - stat(k, "mean")) / (stat(k, "std") + 1e-3) for k in states], dim=1)
             target = (batch["action"] - act_mean) / act_std
             assert target.shape[1:] == (chunk, 7)
             loss = torch.nn.functional.mse_loss(head(feats).view(-1, chunk, 7), target)
@@ -203,7 +208,8 @@ def test_export_messages(rik, dataset: Path, work: Path, tmp_path: Path) -> None
         return result.err.strip()
 
     assert run(out=dataset) == f"rik: error: {dataset}: already exists; choose another --out (or delete it)"
-    assert run("--streams", "sim,photo") == "rik: error: --streams: unknown stream 'photo' (streams: sim, rerendered)"
+    assert run("--streams", "sim,photo") == ("rik: error: --streams: unknown stream 'photo' (streams: sim, rerendered, "
+                                          "or none)")
     assert run("--codec", "auto") == "rik: error: --codec: 'auto' is not offered (codecs: libsvtav1, h264, hevc)"
     err = run("--cameras", "top")
     assert err.startswith("rik: error: ") and err.endswith(": no camera 'top' in the scene (cameras: front, wrist)")
@@ -276,3 +282,77 @@ def test_identical_exports_are_byte_identical(dataset: Path, work: Path, tmp_pat
     assert files[0] == files[1]
     differ = [str(f) for f in files[0] if (roots[0] / f).read_bytes() != (roots[1] / f).read_bytes()]
     assert differ == []
+
+
+def test_state_only_export_has_the_two_state_vectors_and_action(rik, work: Path, tmp_path: Path) -> None:
+    """``--streams none``: no video features and nothing rendered; loads with LeRobotDataset, and lerobot's policies
+    see the front's state as ENV; the card names both vectors and the normalisation to pass for ENV."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+    from lerobot.utils.feature_utils import dataset_to_policy_features
+
+    from rik.exporters.lerobot_card import NORMALIZATION
+
+    out, renders = tmp_path / "states", tmp_path / "renders"
+    res = rik("export-lerobot", str(work / "episodes"), "--streams", "none", "--repo-id", REPO, "--out", str(out),
+              "--renders", str(renders), "--variants", str(work / "variants"), "--shard-episodes", "2")
+    assert res.code == 0, res.err
+    assert "state layout 2" in res.out and "no video features to check (a state-only export)" in res.out
+    assert not renders.exists()
+    ds = LeRobotDataset(REPO, root=out, video_backend="pyav")
+    defaults = {"timestamp", "frame_index", "episode_index", "index", "task_index"}
+    assert set(ds.meta.features) - defaults == {"observation.state", "observation.environment_state", "action"}
+    assert ds.meta.video_keys == [] and not (out / "videos").exists() and ds.meta.total_episodes == 3
+    shapes = {k: (tuple(f["shape"]), f["names"]) for k, f in ds.meta.features.items() if k not in defaults}
+    assert shapes == {"observation.state": ((11,), list(ROBOT_STATE_NAMES)),
+                      "observation.environment_state": ((13,), list(ENV_STATE_NAMES)),
+                      "action": ((7,), ["target_x", "target_y", "target_z", "target_pitch", "target_yaw",
+                                        "target_roll", "gripper"])}
+    item = ds[len(ds) - 1]
+    assert tuple(item["observation.environment_state"].shape) == (13,) and float(item["observation.state"][2]) > 0.3
+    types = {k: f.type.value for k, f in dataset_to_policy_features(ds.meta.features).items()}
+    assert types == {"observation.state": "STATE", "observation.environment_state": "ENV", "action": "ACTION"}
+    card = (out / "README.md").read_text()
+    assert "`grasp_x`, `grasp_y`, `grasp_z`" in card and "`contact_normal_force`" in card
+    assert f"--policy.normalization_mapping='{NORMALIZATION['act']}'" in card and "state-only export" in card
+    base = ["export-lerobot", str(work / "episodes"), "--repo-id", REPO, "--out", str(tmp_path / "bad")]
+    err = rik(*base, "--streams", "none,sim").err.strip()
+    assert err == ("rik: error: --streams none,sim: 'none' (a state-only export) cannot be combined with image "
+                   "streams; give either none or some of sim, rerendered")
+    err = rik(*base, "--streams", "none", "--cameras", "front").err.strip()
+    assert err == ("rik: error: --cameras front: a state-only export (--streams none) has no cameras; drop --cameras "
+                   "or give --streams")
+    assert rik(*base, "--streams", ",").err.strip() == ("rik: error: --streams: give at least one of sim, rerendered, "
+                                                         "or none for a state-only export")
+    assert not (tmp_path / "bad").exists()
+
+
+def test_resume_of_an_older_layout_says_to_export_again(rik, work: Path, tmp_path: Path) -> None:
+    """A partial export written before the state split (plan.json without a layout) is not continued."""
+    from rik.exporters.lerobot_export import _plan
+    from rik.sim.episode import find_episodes, read_meta
+
+    out = tmp_path / "old"
+    partial = tmp_path / "old.partial"
+    metas = {d: read_meta(d) for d in find_episodes([work / "episodes"])}
+    plan = _plan(metas, ExportSpec(REPO, streams=(), shard_episodes=16), 20)
+    del plan["spec"]["layout"]  # what rik wrote before the layout was recorded
+    (partial / "shards" / "shard-0000").mkdir(parents=True)
+    (partial / "plan.json").write_text(json.dumps(plan, indent=1) + "\n")
+    res = rik("export-lerobot", str(work / "episodes"), "--streams", "none", "--repo-id", REPO, "--out", str(out),
+              "--variants", str(work / "variants"), "--resume")
+    assert res.code == 2 and res.err.strip() == (
+        f"rik: error: {partial}: the interrupted export there has rik's state layout 1 (one 14-number "
+        "observation.state) and this rik writes layout 2 (observation.state and observation.environment_state); "
+        "delete it and export again without --resume (the episodes are unchanged)")
+    assert not out.exists() and (partial / "plan.json").is_file()
+
+
+def test_check_names_the_state_layout(dataset: Path) -> None:
+    from rik.exporters.lerobot_check import check_dataset, describe_layout, state_layout
+    from rik.exporters.lerobot_frames import LAYOUT_1_STATE_NAMES
+
+    assert check_dataset(dataset, REPO, 3)["layout"] == 2
+    old = {"observation.state": {"dtype": "float32", "shape": [14], "names": list(LAYOUT_1_STATE_NAMES)},
+           "action": {"dtype": "float32", "shape": [7], "names": None}}
+    assert state_layout(old) == 1 and describe_layout(1).startswith("1 (one 14-number observation.state")
+    assert state_layout({"observation.state": {"names": ["a"]}}) is None

@@ -30,7 +30,8 @@ def export_lerobot(
         repo_id: Annotated[str, typer.Option("--repo-id", help="Dataset id, OWNER/NAME (e.g. local/rik-drawers).",
                                              show_default=False)],
         streams: Annotated[str, typer.Option("--streams", help="Comma-separated image streams: sim (MuJoCo), "
-                                             "rerendered (Mitsuba 3).")] = "sim,rerendered",
+                                             "rerendered (Mitsuba 3); or none: state-only, nothing rendered.")]
+        = "sim,rerendered",
         cameras: CamerasOpt = None, res: ResOpt = "256",
         fps: Annotated[int | None, typer.Option("--fps", help="Dataset rate, Hz (default: the episodes' own; "
                                                 "other rates are resampled).", show_default=False)] = None,
@@ -49,16 +50,17 @@ def export_lerobot(
                                               "are rendered).")] = Path("renders"),
         workers: WorkersOpt = 1, variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
     """Export recorded episodes to a LeRobot v3.0 dataset through lerobot's own writer: observation.state,
-    action, one video per camera and stream, a task string and rik's metadata per episode, a dataset card.
-    Renders missing image streams first; crash-safe (sharded, --resume); checks every episode's frame count."""
-    from rik.exporters.lerobot_export import ExportSpec
+    observation.environment_state, action, one video per camera and stream (none with --streams none), a task
+    string and rik's metadata per episode, a dataset card. Renders missing image streams first; crash-safe
+    (sharded, --resume); checks every episode's frame count."""
+    from rik.exporters.lerobot_export import ExportSpec, parse_streams
     from rik.exporters.lerobot_export import export_lerobot as run
     from rik.registry.load import load_catalog
     from rik.render.streams import parse_resolution
 
     quiet_writers()
     width, height = parse_resolution(res)
-    spec = ExportSpec(repo_id, tuple(s.strip() for s in streams.split(",") if s.strip()),
+    spec = ExportSpec(repo_id, parse_streams(streams),
                       tuple(c.strip() for c in cameras.split(",") if c.strip()) if cameras else (), width, height,
                       fps, codec, spp, denoise, variant, shard_episodes)
     cat = load_catalog(overlays(catalog))
@@ -76,7 +78,8 @@ def export_lerobot(
     con.print(f"dataset {result.root} ({result.repo_id}): {result.episodes} episodes, {result.frames} frames at "
               f"{result.fps} Hz; shards written {result.shards_written}, reused {result.shards_skipped}")
     con.print(f"features: {', '.join(result.features)}")
-    con.print("checked: loads offline with LeRobotDataset; " + result.checks["frame_counts"])
+    con.print(f"checked: loads offline with LeRobotDataset; state layout {result.checks['layout']}; "
+              + result.checks["frame_counts"])
     con.print(f'load it: LeRobotDataset("{result.repo_id}", root="{result.root}")')
     if push_to_hub:
         from rik.exporters.lerobot_export import push

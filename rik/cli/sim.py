@@ -22,22 +22,77 @@ def _strategies_help() -> str:
     return "grasp_horizontal, grasp_vertical, grasp_natural or contact_rich"
 
 
-def record(variant: VariantArg,
-           strategy: Annotated[str, typer.Option("--strategy", "-s", help=f"Scripted strategy: {_strategies_help()}.")],
+ALL_SPLIT = "all"
+"""``rik record --split all``: draw from every handle of the catalog."""
+
+
+def _csv(text: str | None) -> tuple[str, ...] | None:
+    return None if text is None else tuple(s.strip() for s in text.split(",") if s.strip())
+
+
+def _draw(split: str, types: str | None, presets: str | None, kinds: str | None) -> Any:
+    """The :class:`rik.sim.draw.Draw` of ``rik record --split``."""
+    from rik.sim import draw as d
+
+    return d.Draw(split=None if split == ALL_SPLIT else split, handle_types=_csv(types) or d.DEFAULT_TYPES,
+                  presets=_csv(presets) or d.DEFAULT_PRESETS, kinds=_csv(kinds) or d.DEFAULT_KINDS)
+
+
+def record(variant: Annotated[str | None, typer.Argument(
+               help="Variant id, e.g. drawer-chest-80__two_point-bow-128__normal (built into --variants first if "
+               "needed); or none, with --split.", show_default=False)] = None,
+           strategy: Annotated[str, typer.Option("--strategy", "-s", help=f"Scripted strategy: {_strategies_help()}.")
+                               ] = ...,  # type: ignore[assignment]
            episodes: Annotated[int, typer.Option("--episodes", "-n", min=1, help="Episodes to record.")] = 1,
            seed: Annotated[int, typer.Option("--seed", help="Seed of the first episode (then +1 each).")] = 0,
            front: FrontOpt = None, out: EpisodesOutOpt = Path("episodes"), variants: VariantsOpt = Path("variants"),
+           split: Annotated[str | None, typer.Option("--split", help="Instead of a VARIANT: draw each episode's "
+                                                     "variant and front from its seed among the handles of this "
+                                                     f"catalog split (train, val, test; {ALL_SPLIT}: every handle), "
+                                                     "as the gym environment and rik eval do.",
+                                                     show_default=False)] = None,
+           types: Annotated[str | None, typer.Option("--types", help="With --split: comma-separated handle types "
+                                                     "(default knob,finger_pull,two_point).", show_default=False)]
+           = None,
+           presets: Annotated[str | None, typer.Option("--presets", help="With --split: comma-separated presets "
+                                                       "(default smooth,normal,high).", show_default=False)] = None,
+           kinds: Annotated[str | None, typer.Option("--kinds", help="With --split: comma-separated front kinds "
+                                                     "(default drawer).", show_default=False)] = None,
+           workers: Annotated[int, typer.Option("--workers", "-j", min=1, help="With --split: episodes in this "
+                                                "many processes.")] = 1,
            catalog: CatalogOption = None) -> None:
-    """Record episodes of a scripted strategy on a variant into --out/<id>/ (meta.json, states.parquet)."""
+    """Record episodes of a scripted strategy on a variant, or on variants drawn from a catalog split (--split),
+    into --out/<id>/ (meta.json, states.parquet)."""
     from rik.registry.load import load_catalog
     from rik.sim.record import record as run
+    from rik.sim.record import record_split
 
+    if variant is not None and split is not None:
+        raise RikError(f"give a VARIANT or --split, not both (got {variant} and --split {split})")
+    if variant is None and split is None:
+        raise RikError(f"give a VARIANT to record, or --split SPLIT (train, val, test or {ALL_SPLIT}) to draw "
+                       "each episode's variant from its seed")
+    if split is None and (types, presets, kinds) != (None, None, None):
+        raise RikError("--types, --presets and --kinds choose the variants of --split; give --split too, or drop "
+                       "them")
+    if split is not None and front is not None:
+        raise RikError(f"--front {front}: with --split each episode's front is drawn from its seed; drop --front")
     cat = load_catalog(overlays(catalog))
     con = console()
     with progress_bar() as progress:
         task = progress.add_task("episodes", total=episodes, last="")
-        metas = run(cat, variant, strategy, episodes=episodes, seed=seed, out=out, variants=variants, front=front,
-                    progress=lambda m: progress.update(task, advance=1, last=f"{m.id} {m.outcome}"))
+
+        def report(m: Any) -> None:
+            progress.update(task, advance=1, last=f"{m.id} {m.outcome}")
+
+        if split is not None:
+            metas = record_split(cat, _draw(split, types, presets, kinds), strategy, episodes=episodes, seed=seed,
+                                 out=out, variants=variants, workers=workers, overlays=overlays(catalog),
+                                 progress=report)
+        else:
+            assert variant is not None
+            metas = run(cat, variant, strategy, episodes=episodes, seed=seed, out=out, variants=variants,
+                        front=front, progress=report)
     for m in metas:
         con.print(f"{out / m.id}: {m.outcome} (opened {m.final_opening:.0%}, {m.steps} steps at {m.fps} Hz)")
 

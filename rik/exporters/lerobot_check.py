@@ -1,5 +1,6 @@
 """Checks of a written LeRobot dataset: every episode's decoded video frames equal its table rows (nobody else
-checks this, and lerobot's streaming encoder can drop frames silently), and it loads offline with its metadata."""
+checks this, and lerobot's streaming encoder can drop frames silently), it loads offline with its metadata, and
+which of rik's state layouts it holds (:data:`rik.exporters.lerobot_frames.LAYOUT`)."""
 
 from __future__ import annotations
 
@@ -59,6 +60,33 @@ def check_frame_counts(root: Path) -> dict[str, int]:
     return decoded
 
 
+def state_layout(features: dict[str, Any]) -> int | None:
+    """rik's state layout of a dataset's ``features`` (info.json): 2 (``observation.state`` of the robot,
+    ``observation.environment_state`` of the front), 1 (one 14-number ``observation.state``, exports made before
+    the split), or None (not a rik layout)."""
+    from rik.exporters.lerobot_frames import LAYOUT_1_STATE_NAMES
+    from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
+
+    def names(key: str) -> tuple[str, ...] | None:
+        return tuple(features[key].get("names") or ()) if key in features else None
+
+    if names("observation.state") == ROBOT_STATE_NAMES and names("observation.environment_state") == ENV_STATE_NAMES:
+        return 2
+    if names("observation.state") == LAYOUT_1_STATE_NAMES and "observation.environment_state" not in features:
+        return 1
+    return None
+
+
+def describe_layout(layout: int | None) -> str:
+    """A state layout in words."""
+    if layout == 2:
+        return "2 (observation.state: the robot's 11 numbers; observation.environment_state: the front's 13)"
+    if layout == 1:
+        return ("1 (one 14-number observation.state, no observation.environment_state: an export made before the "
+                "state split; export the episodes again for layout 2)")
+    return "unknown (not one of rik's layouts)"
+
+
 def check_dataset(root: Path, repo_id: str, episodes: int) -> dict[str, Any]:
     """Load the dataset offline with ``LeRobotDataset``, check its episode count, rik's metadata columns and its
     frame counts; returns a summary."""
@@ -71,6 +99,14 @@ def check_dataset(root: Path, repo_id: str, episodes: int) -> dict[str, Any]:
     missing = [c for c in ("rik/variant", "rik/outcome", "rik/seed") if c not in columns]
     if missing:
         raise RikError(f"{root}: meta/episodes lacks rik's columns {missing}")
+    from rik.exporters.lerobot_frames import LAYOUT
+
+    layout = state_layout(ds.meta.features)
+    if layout != LAYOUT:
+        raise RikError(f"{root}: holds rik's state layout {describe_layout(layout)}, not layout {LAYOUT}")
     decoded = check_frame_counts(root)
+    counts = ("every episode's video frames equal its rows" if decoded else
+              "no video features to check (a state-only export)")
     return {"episodes": ds.meta.total_episodes, "frames": ds.meta.total_frames, "fps": ds.meta.fps,
-            "video_frames_decoded": decoded, "frame_counts": "every episode's video frames equal its rows"}
+            "layout": layout, "layout_text": describe_layout(layout), "video_frames_decoded": decoded,
+            "frame_counts": counts}

@@ -26,14 +26,16 @@ from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
 from rik.exporters.lerobot_frames import (
+    LAYOUT,
+    LAYOUT_1_STATE_NAMES,
     ROBOT_TYPE,
-    STREAM_SUFFIX,
     EpisodeSource,
     episode_frames,
     episode_metadata,
     features,
 )
 from rik.paths import write_atomic
+from rik.sim.observation import STREAM_SUFFIX
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -41,6 +43,8 @@ if TYPE_CHECKING:
 
 STREAMS = tuple(STREAM_SUFFIX)
 """The image streams an export can hold: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
+NO_STREAMS = "none"
+"""``--streams none``: a state-only export (no video features, nothing rendered)."""
 CODECS = ("libsvtav1", "h264", "hevc")
 """Video codecs offered: the software encoders of lerobot's PyAV build (never ``auto``: it picks NVENC)."""
 ENCODER_OPTIONS: dict[str, dict[str, str]] = {"h264": {"x264-params": "mbtree=0"}}
@@ -59,6 +63,7 @@ class ExportSpec:
 
     repo_id: str
     streams: tuple[str, ...] = STREAMS
+    """Image streams to export (empty: a state-only dataset, nothing rendered)."""
     cameras: tuple[str, ...] = ()
     """Cameras to export (empty: every camera of the scenes)."""
     width: int = 256
@@ -85,12 +90,27 @@ class ExportResult:
     checks: dict[str, Any] = field(default_factory=dict)
 
 
+def parse_streams(text: str) -> tuple[str, ...]:
+    """The streams of ``--streams`` (comma-separated); ``none`` alone gives () (a state-only export)."""
+    items = tuple(s.strip() for s in text.split(",") if s.strip())
+    if NO_STREAMS in items:
+        if len(items) > 1:
+            raise RikError(f"--streams {text}: '{NO_STREAMS}' (a state-only export) cannot be combined with image "
+                           "streams; give either none or some of " + ", ".join(STREAMS))
+        return ()
+    if not items:
+        raise RikError(f"--streams: give at least one of {', '.join(STREAMS)}, or {NO_STREAMS} for a state-only "
+                       "export")
+    return items
+
+
 def _check_spec(spec: ExportSpec) -> None:
     for s in spec.streams:
         if s not in STREAMS:
-            raise RikError(f"--streams: unknown stream '{s}' (streams: {', '.join(STREAMS)})")
-    if not spec.streams:
-        raise RikError("--streams: give at least one of " + ", ".join(STREAMS))
+            raise RikError(f"--streams: unknown stream '{s}' (streams: {', '.join(STREAMS)}, or {NO_STREAMS})")
+    if not spec.streams and spec.cameras:
+        raise RikError(f"--cameras {','.join(spec.cameras)}: a state-only export (--streams {NO_STREAMS}) has no "
+                       "cameras; drop --cameras or give --streams")
     if spec.codec not in CODECS:
         raise RikError(f"--codec: '{spec.codec}' is not offered (codecs: {', '.join(CODECS)})")
     if spec.repo_id.count("/") != 1 or not all(spec.repo_id.split("/")):
@@ -125,8 +145,19 @@ def _check_same_features(dirs: list[Path]) -> None:
 
 
 def _plan(metas: dict[Path, EpisodeMeta], spec: ExportSpec, fps: int) -> dict[str, Any]:
-    return {"spec": {**asdict(spec), "fps": fps}, "encoder_options": ENCODER_OPTIONS.get(spec.codec, {}),
+    return {"spec": {**asdict(spec), "fps": fps, "layout": LAYOUT},
+            "encoder_options": ENCODER_OPTIONS.get(spec.codec, {}),
             "episodes": [[m.id, m.states_sha256] for m in metas.values()]}  # an older partial export is not mixed in
+
+
+def _check_layout(partial_dir: Path, plan: Any) -> None:
+    """An interrupted export of an older state layout (before :data:`LAYOUT`) cannot be continued."""
+    layout = plan.get("spec", {}).get("layout", 1) if isinstance(plan, dict) else None
+    if layout is not None and layout != LAYOUT:
+        raise RikError(f"{partial_dir}: the interrupted export there has rik's state layout {layout} (one "
+                       f"{len(LAYOUT_1_STATE_NAMES)}-number observation.state) and this rik writes layout {LAYOUT} "
+                       "(observation.state and observation.environment_state); delete it and export again without "
+                       "--resume (the episodes are unchanged)")
 
 
 def _shards(items: list[Path], size: int) -> list[list[Path]]:
@@ -158,7 +189,8 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     root.parent.mkdir(parents=True, exist_ok=True)
     ds = LeRobotDataset.create(repo_id=repo_id, fps=fps, features=features(cameras, spec.streams, spec.width,
                                                                              spec.height),
-                               root=root / "ds", robot_type=ROBOT_TYPE, use_videos=True, video_backend="pyav",
+                               root=root / "ds", robot_type=ROBOT_TYPE, use_videos=bool(spec.streams),
+                               video_backend="pyav",
                                rgb_encoder=RGBEncoderConfig(vcodec=spec.codec,
                                                              extra_options=dict(ENCODER_OPTIONS.get(spec.codec, {}))),
                                image_writer_threads=4)
@@ -248,6 +280,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
             old = json.loads((partial_dir / PLAN).read_text(encoding="utf-8"))
         except (OSError, ValueError):
             old = None
+        _check_layout(partial_dir, old)
         if old != json.loads(json.dumps(plan)):
             raise RikError(f"{partial_dir}: the interrupted export there was of other episodes or settings; delete "
                            "it, or run it again with the same ones")

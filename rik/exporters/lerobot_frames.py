@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from rik.errors import RikError
-from rik.sim.observation import STREAM_SUFFIX, image_name
+from rik.sim.observation import image_name
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -34,6 +34,13 @@ META_PREFIX = "rik/"
 META_FIELDS = ("episode_id", "variant", "base_unit", "handle", "handle_type", "preset", "front", "operator",
                "operator_kind", "outcome", "seed", "final_opening", "source_fps")
 ROBOT_TYPE = "rik_hand_e"
+LAYOUT = 2
+"""Version of the state layout an export writes: 2 is ``observation.state`` (the robot's state,
+:data:`rik.sim.observation.ROBOT_STATE_NAMES`) beside ``observation.environment_state`` (the front's state); 1 was
+one 14-number ``observation.state`` (:data:`LAYOUT_1_STATE_NAMES`), exports made before the split."""
+LAYOUT_1_STATE_NAMES = ("x", "y", "z", "pitch", "yaw", "roll", "jaw_opening", "front_qpos", "front_qvel", "tcp_x",
+                        "tcp_y", "tcp_z", "opening", "contact_normal_force")
+"""The single state vector of layout 1."""
 
 
 def image_key(camera: str, stream: str) -> str:

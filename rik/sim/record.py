@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -17,6 +17,7 @@ from rik.sim.scene import SimScene, build_scene, start_pose
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
+    from rik.sim.draw import Draw
 
 MAX_SECONDS = 30.0
 """Longest episode, simulated s."""
@@ -75,3 +76,58 @@ def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, 
         if progress is not None:
             progress(meta)
     return metas
+
+
+def record_one(directory: Path, strategy: str, seed: int, out: Path, *, front: str | None = None,
+               gripper: GripperSpec = HAND_E, max_seconds: float = MAX_SECONDS) -> Any:
+    """Record one episode of ``strategy`` with ``seed`` on the built variant at ``directory`` into ``out``, as
+    :func:`record` does for each of its seeds; returns its meta."""
+    scene = build_scene(directory, front, gripper)
+    rng = np.random.default_rng(seed)
+    randomise_start(scene, rng)
+    operator = make_operator(strategy)
+    recorder = run_operator(scene, operator, rng, max_seconds, EpisodeRecorder(scene))
+    return write_episode(recorder, out, episode=episode_id(scene.info["id"], scene.front.id, strategy, seed),
+                         operator=strategy, operator_kind="strategy", seed=seed, log=tuple(operator.log))
+
+
+def _record_drawn(catalog: Catalog, seed: str, *, draw: Draw, strategy: str, out: Path, dirs: dict[str, Path],
+                  gripper: GripperSpec, max_seconds: float) -> Any:
+    """One episode of :func:`record_split` (module level: it runs in worker processes)."""
+    episode = draw.episode(catalog, int(seed))
+    return record_one(dirs[episode.variant], strategy, int(seed), out, front=episode.front, gripper=gripper,
+                      max_seconds=max_seconds)
+
+
+def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int = 1, seed: int = 0,
+                 out: Path = DEFAULT_EPISODES, variants: Path = Path("variants"), gripper: GripperSpec = HAND_E,
+                 max_seconds: float = MAX_SECONDS, workers: int = 1, overlays: Sequence[Path] = (),
+                 progress: Callable[[Any], None] | None = None) -> list[Any]:
+    """Record ``episodes`` episodes of ``strategy`` whose variant and front come from ``draw``
+    (:class:`rik.sim.draw.Draw`) for seeds ``seed``, ``seed + 1``, ...: each exactly as :func:`record` writes that
+    variant, front and seed. Builds the variants first, then records in ``workers`` processes; metas in seed
+    order."""
+    import functools
+
+    from rik.assets.workers import map_ids
+    from rik.combinator.build import build_variants
+    from rik.combinator.ids import parse_variant_id
+
+    check_seeds(seed, episodes)
+    make_operator(strategy)  # unknown strategy: fail before building anything
+    draw.check(catalog)
+    seeds = list(range(seed, seed + episodes))
+    wanted = sorted({draw.episode(catalog, s).variant for s in seeds})
+    keys = [parse_variant_id(catalog, v) for v in wanted]
+    for r in build_variants(catalog, keys, variants, workers=workers, overlays=overlays):
+        if r.status == "rejected":
+            raise RikError(f"variant {r.id} cannot be simulated: check {r.failed_check} failed: {r.reason}")
+    dirs = {k.id: inside(variants, k.id, what="variant id") for k in keys}
+    fn = functools.partial(_record_drawn, draw=draw, strategy=strategy, out=out, dirs=dirs, gripper=gripper,
+                           max_seconds=max_seconds)
+    metas: dict[int, Any] = {}
+    for s, meta in map_ids(fn, catalog, [str(s) for s in seeds], workers=workers, overlays=overlays):
+        metas[int(s)] = meta
+        if progress is not None:
+            progress(meta)
+    return [metas[s] for s in seeds]
