@@ -103,3 +103,19 @@ def test_bad_collision_modes_are_named(rik, folders: dict[str, Path], tmp_path: 
     (legacy / "collision.json").unlink()
     r = rik("variants", "build", BOW, "--collision", "hull", "--out", str(legacy))
     assert r.code == 2 and "this folder holds coacd collision variants, not hull" in r.err
+
+
+def test_record_split_skips_variants_rejected_in_a_hull_folder(rik, tmp_path: Path) -> None:
+    """A finger pull's single convex hull fills the gap behind its lip and sinks into the front: in a hull folder its
+    variant fails the seating check, and ``rik record --split`` records the other seeds and lists the skipped ones."""
+    hull = tmp_path / "hull"
+    res = rik("variants", "build", "drawer-bedside-45__finger_pull-cup-64__smooth", "--collision", "hull", "--out",
+              str(hull))
+    assert res.code == 0, res.err
+    res = rik("record", "--split", "train", "--types", "finger_pull", "--presets", "smooth", "--seed", "0",
+              "--episodes", "3", "-s", "contact_rich", "--out", str(tmp_path / "eps"), "--variants", str(hull))
+    assert res.code == 0, res.err
+    assert "seed 0 skipped: variant drawer-bench-120__finger_pull-side-edge-150__smooth cannot be simulated: check " \
+           "handle_seated failed" in " ".join(res.out.split())
+    assert "__s0002: " in res.out and "__s0000: " not in res.out
+    assert sorted(p.name.rsplit("__", 1)[1] for p in (tmp_path / "eps").iterdir()) == ["s0002"]

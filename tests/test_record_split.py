@@ -5,11 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from rik.registry import load_catalog
-
-pytest.importorskip("rik.registry.splits", reason="the draw imports rik.registry.splits (branch h-splits)")
 
 CAT = load_catalog()
 DRAW_ARGS = ("--types", "knob", "--presets", "smooth")

@@ -79,6 +79,7 @@ def record(variant: Annotated[str | None, typer.Argument(
         raise RikError(f"--front {front}: with --split each episode's front is drawn from its seed; drop --front")
     cat = load_catalog(overlays(catalog))
     con = console()
+    skipped: list[tuple[int, str, str]] = []
     with progress_bar() as progress:
         task = progress.add_task("episodes", total=episodes, last="")
 
@@ -88,13 +89,17 @@ def record(variant: Annotated[str | None, typer.Argument(
         if split is not None:
             metas = record_split(cat, _draw(split, types, presets, kinds), strategy, episodes=episodes, seed=seed,
                                  out=out, variants=variants, workers=workers, overlays=overlays(catalog),
-                                 progress=report)
+                                 progress=report, skipped=skipped)
         else:
             assert variant is not None
             metas = run(cat, variant, strategy, episodes=episodes, seed=seed, out=out, variants=variants,
                         front=front, progress=report)
     for m in metas:
         con.print(f"{out / m.id}: {m.outcome} (opened {m.final_opening:.0%}, {m.steps} steps at {m.fps} Hz)")
+    for s, _, reason in skipped:
+        con.print(f"[yellow]seed {s} skipped[/]: {reason}")
+    if skipped:
+        con.print(f"{len(metas)} episodes recorded, {len(skipped)} skipped (their variants fail their checks here)")
 
 
 def teleop(variant: VariantArg,

@@ -77,8 +77,17 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     from rik.policy.load import policy_needs
 
     needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered)
-    label = spec.label or f"{needs.policy_type}:{Path(spec.operator).resolve().name}"
+    label = spec.label or f"{needs.policy_type}:{run_name(Path(spec.operator))}"
     return EvalSpec(**{**asdict(spec), "label": label, "needs": asdict(needs)})
+
+
+def run_name(policy_dir: Path) -> str:
+    """The training run a saved policy comes from: ``outputs/train/act-drawers/checkpoints/last/pretrained_model``
+    is ``act-drawers``; any other folder is its own name."""
+    path = policy_dir.resolve()
+    if path.name == "pretrained_model" and len(path.parents) > 2 and path.parents[1].name == "checkpoints":
+        return path.parents[2].name
+    return path.name
 
 
 def env_config(spec: EvalSpec) -> Any:

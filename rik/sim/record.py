@@ -102,11 +102,14 @@ def _record_drawn(catalog: Catalog, seed: str, *, draw: Draw, strategy: str, out
 def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int = 1, seed: int = 0,
                  out: Path = DEFAULT_EPISODES, variants: Path = Path("variants"), gripper: GripperSpec = HAND_E,
                  max_seconds: float = MAX_SECONDS, workers: int = 1, overlays: Sequence[Path] = (),
-                 progress: Callable[[Any], None] | None = None) -> list[Any]:
+                 progress: Callable[[Any], None] | None = None,
+                 skipped: list[tuple[int, str, str]] | None = None) -> list[Any]:
     """Record ``episodes`` episodes of ``strategy`` whose variant and front come from ``draw``
     (:class:`rik.sim.draw.Draw`) for seeds ``seed``, ``seed + 1``, ...: each exactly as :func:`record` writes that
     variant, front and seed. Builds the variants first, then records in ``workers`` processes; metas in seed
-    order."""
+    order. A seed whose variant fails its checks in ``variants`` (e.g. a handle whose single convex hull sinks
+    into the front, in a ``--collision hull`` folder) is not recorded: it is appended to ``skipped`` as (seed,
+    variant id, reason); without a ``skipped`` list, or when every seed is skipped, that is an error."""
     import functools
 
     from rik.assets.workers import map_ids
@@ -119,10 +122,21 @@ def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int =
     seeds = list(range(seed, seed + episodes))
     wanted = sorted({draw.episode(catalog, s).variant for s in seeds})
     keys = [parse_variant_id(catalog, v) for v in wanted]
+    rejected = {}
     for r in build_variants(catalog, keys, variants, workers=workers, overlays=overlays):
         if r.status == "rejected":
-            raise RikError(f"variant {r.id} cannot be simulated: check {r.failed_check} failed: {r.reason}")
-    dirs = {k.id: inside(variants, k.id, what="variant id") for k in keys}
+            reason = f"variant {r.id} cannot be simulated: check {r.failed_check} failed: {r.reason}"
+            if skipped is None:
+                raise RikError(reason)
+            rejected[r.id] = reason
+    drawn = {s: draw.episode(catalog, s).variant for s in seeds}
+    if rejected:
+        if all(v in rejected for v in drawn.values()):
+            raise RikError(f"every drawn variant was rejected; the first: {next(iter(rejected.values()))}")
+        assert skipped is not None
+        skipped += [(s, v, rejected[v]) for s, v in drawn.items() if v in rejected]
+        seeds = [s for s in seeds if drawn[s] not in rejected]
+    dirs = {k.id: inside(variants, k.id, what="variant id") for k in keys if k.id not in rejected}
     fn = functools.partial(_record_drawn, draw=draw, strategy=strategy, out=out, dirs=dirs, gripper=gripper,
                            max_seconds=max_seconds)
     metas: dict[int, Any] = {}
