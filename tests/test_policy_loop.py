@@ -255,3 +255,21 @@ def test_draw_gives_n_episodes_per_cell_from_the_split() -> None:
     test = set(split_handles(CAT, "test"))
     assert all(_handle_of(e.variant) in test for e in episodes)
     assert [draw.episode(CAT, s) for s in range(1000, 1012)] == episodes
+
+
+def test_env_renders_the_rerendered_stream_for_policies_trained_on_it(tmp_path: Path) -> None:
+    """A policy trained on ``observation.images.front_rerendered`` can be evaluated: the environment renders Mitsuba's
+    stream of the same state (slow without a GPU: a low sample count here)."""
+    import gymnasium as gym
+
+    import rik.sim.env  # noqa: F401
+
+    env = gym.make("rik/OpenFront-v0", variant="drawer-bedside-45__knob-mushroom-30__normal", streams=("sim",
+                   "rerendered"), cameras=("front",), image_size=(24, 32), spp=2,
+                   variants_dir=str(tmp_path / "variants")).unwrapped
+    obs, _ = env.reset(seed=0)
+    assert set(obs["pixels"]) == {"front", "front_rerendered"}
+    sim, mitsuba = obs["pixels"]["front"], obs["pixels"]["front_rerendered"]
+    assert sim.shape == mitsuba.shape == (24, 32, 3) and mitsuba.dtype == np.uint8
+    assert mitsuba.std() > 5 and not np.array_equal(sim, mitsuba)  # an image, and not MuJoCo's
+    env.close()

@@ -1,5 +1,5 @@
 """``rik eval``: a saved LeRobot policy, or a scripted strategy, on rik's benchmark. Only parsing and printing
-here; :mod:`rik.policy.evaluate` does the work."""
+here; :mod:`rik.evaluation.evaluate` does the work."""
 
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ def eval_policy(
         catalog: CatalogOption = None) -> None:
     """Evaluate a policy on rik's benchmark: episodes drawn from a split, F/P/S per handle type x preset (the
     paper's Table 3) with Wilson intervals, per-episode rows, videos and lerobot-eval's eval_info.json."""
-    from rik.policy.evaluate import EvalSpec, prepare, run_eval
+    from rik.evaluation.evaluate import EvalSpec, prepare, run_eval
     from rik.registry.load import load_catalog
 
     cat = load_catalog(overlays(catalog))

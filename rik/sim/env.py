@@ -109,10 +109,8 @@ class OpenFrontEnv(gym.Env):
             spaces["pixels"] = gym.spaces.Dict({image_name(c, s): gym.spaces.Box(0, 255, (h, w, 3), np.uint8)
                                                 for s in self._streams for c in self._cameras})
         self.observation_space = gym.spaces.Dict(spaces)
-        if action_mode == "delta":
-            low, high = np.array([-1.0] * 6 + [0.0]), np.ones(7)
-        else:
-            low, high = np.array([-np.inf] * 6 + [0.0]), np.array([np.inf] * 6 + [1.0])
+        bound = 1.0 if action_mode == "delta" else np.inf
+        low, high = np.array([-bound] * 6 + [0.0]), np.array([bound] * 6 + [1.0])
         self.action_space = gym.spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
 
     # ---- scenes and images ----------------------------------------------------------------------------------
@@ -163,6 +161,8 @@ class OpenFrontEnv(gym.Env):
             drawn = self._draw.episode(self._catalog, draw_seed)
             variant, front = drawn.variant, drawn.front
         variant = options.get("variant", variant)
+        if variant is None:
+            raise RikError("reset: no variant (give variant= or split= to the environment, or options['variant'])")
         key = parse_variant_id(self._catalog, variant)
         if "preset" in options:
             key = VariantKey(key.base, key.handle, options["preset"])

@@ -74,7 +74,7 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     if spec.strategy is not None:
         make_operator(spec.strategy)
         return EvalSpec(**{**asdict(spec), "label": spec.label or spec.strategy})
-    from rik.policy.load import policy_needs
+    from rik.evaluation.load import policy_needs
 
     needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered)
     label = spec.label or f"{needs.policy_type}:{run_name(Path(spec.operator))}"

@@ -1,1 +1,0 @@
-"""Learned policies on rik: loading a saved LeRobot policy and evaluating it on rik's benchmark."""
