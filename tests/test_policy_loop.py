@@ -273,3 +273,20 @@ def test_env_renders_the_rerendered_stream_for_policies_trained_on_it(tmp_path: 
     assert sim.shape == mitsuba.shape == (24, 32, 3) and mitsuba.dtype == np.uint8
     assert mitsuba.std() > 5 and not np.array_equal(sim, mitsuba)  # an image, and not MuJoCo's
     env.close()
+
+
+def test_eval_tables_several_operators_side_by_side_and_reuses_finished_runs(rik, tmp_path: Path) -> None:
+    args = ("strategy:contact_rich", "strategy:grasp_vertical", "--split", "test", *DRAW, "-n", "1", "--videos", "0",
+            "--workers", "1", "--out", str(tmp_path / "both"), "--variants", str(tmp_path / "variants"))
+    r = rik("eval", *args)
+    assert r.code == 0, r.err
+    table = (tmp_path / "both" / "table.md").read_text()
+    assert "| contact_rich |" in table and "| grasp_vertical |" in table
+    assert (tmp_path / "both" / "contact_rich" / "eval_info.json").is_file()
+    before = (tmp_path / "both" / "contact_rich" / "eval_info.json").read_bytes()
+    r = rik("eval", *args)
+    assert r.code == 0 and "contact_rich: already evaluated on these episodes" in " ".join(r.out.split())
+    assert (tmp_path / "both" / "contact_rich" / "eval_info.json").read_bytes() == before
+    r = rik("eval", *args, "--label", "mine")
+    assert r.code == 2 and r.err.strip() == ("rik: error: --label names one policy; with several, each is named by "
+                                             "its type and training run")

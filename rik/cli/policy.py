@@ -3,8 +3,9 @@ here; :mod:`rik.evaluation.evaluate` does the work."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -15,10 +16,18 @@ def _names(text: str) -> tuple[str, ...]:
     return tuple(t.strip() for t in text.split(",") if t.strip())
 
 
+def _advance(progress: Any, label: str, total: int) -> Callable[[dict[str, Any]], None]:
+    """A progress callback for one operator's episodes."""
+    task = progress.add_task(label, total=total, last="")
+    return lambda r: progress.update(task, advance=1, last=f"seed {r['seed']} {r['variant']} {r['outcome']}")
+
+
 def eval_policy(
-        policy: Annotated[str, typer.Argument(help="A saved LeRobot policy's folder (e.g. outputs/train/<run>/"
-                                              "checkpoints/last/pretrained_model), or strategy:<name> for a "
-                                              "scripted strategy (strategy:contact_rich).", show_default=False)],
+        policies: Annotated[list[str], typer.Argument(help="Saved LeRobot policies' folders (e.g. outputs/train/"
+                                                      "<run>/checkpoints/last/pretrained_model), or strategy:<name> "
+                                                      "for a scripted strategy (strategy:contact_rich); several are "
+                                                      "run on the same episodes and tabled side by side.",
+                                                      show_default=False)],
         split: Annotated[str, typer.Option("--split", help="Catalog split of the handles: train, val, test "
                                            "(rik catalog splits), or all.")] = "test",
         presets: Annotated[str, typer.Option("--presets", help="Comma-separated presets.")] = "smooth,normal,high",
@@ -36,7 +45,7 @@ def eval_policy(
                                                  "trained on _rerendered images (slow without a GPU).")] = False,
         videos: Annotated[int, typer.Option("--videos", min=0, help="Episodes filmed (the first ones).")] = 4,
         label: Annotated[str, typer.Option("--label", help="Name of the policy in the table (default: its type "
-                                           "and folder).")] = "",
+                                           "and training run; one policy only).")] = "",
         out: Annotated[Path, typer.Option("--out", "-o", help="Where table.md, episodes.csv, eval_info.json and "
                                           "videos/ go.")] = Path("eval"),
         workers: WorkersOpt = DEFAULT_WORKERS,
@@ -44,21 +53,34 @@ def eval_policy(
         catalog: CatalogOption = None) -> None:
     """Evaluate a policy on rik's benchmark: episodes drawn from a split, F/P/S per handle type x preset (the
     paper's Table 3) with Wilson intervals, per-episode rows, videos and lerobot-eval's eval_info.json."""
-    from rik.evaluation.evaluate import EvalSpec, prepare, run_eval
+    from rik.errors import RikError
+    from rik.evaluation.evaluate import EvalSpec, finished_rows, prepare, run_eval, slug, write_comparison
     from rik.registry.load import load_catalog
 
+    if label and len(policies) > 1:
+        raise RikError("--label names one policy; with several, each is named by its type and training run")
     cat = load_catalog(overlays(catalog))
-    spec = prepare(cat, EvalSpec(policy, None if split == "all" else split, _names(types), _names(presets),
-                                 _names(kinds), per_cell, seed, episode_length, rerendered, videos, str(variants),
-                                 label))
-    n = len(spec.seeds())
-    with progress_bar() as progress:
-        task = progress.add_task(f"{spec.label}", total=n, last="")
-        rows = run_eval(cat, spec, out, workers=workers,
-                        progress=lambda r: progress.update(task, advance=1,
-                                                           last=f"seed {r['seed']} {r['variant']} {r['outcome']}"))
+    specs = [prepare(cat, EvalSpec(p, None if split == "all" else split, _names(types), _names(presets),
+                                   _names(kinds), per_cell, seed, episode_length, rerendered, videos, str(variants),
+                                   label)) for p in policies]
+    labels = [s.label for s in specs]
+    if len(set(labels)) < len(labels):
+        raise RikError(f"two policies have the same name ({', '.join(labels)}): give them different run folders")
     con = console()
+    every: list[dict[str, Any]] = []
+    for spec in specs:
+        where = out if len(specs) == 1 else out / slug(spec.label)
+        rows = finished_rows(where, spec)
+        if rows is None:
+            with progress_bar() as progress:
+                rows = run_eval(cat, spec, where, workers=workers, progress=_advance(progress, spec.label,
+                                                                                      len(spec.seeds())))
+        else:
+            con.print(f"{spec.label}: already evaluated on these episodes in {where}")
+        wins = sum(r["success"] for r in rows)
+        con.print(f"{spec.label}: {len(rows)} episodes, {wins} successes ({100 * wins / len(rows):.1f} %); "
+                  f"table.md, episodes.csv, eval_info.json in {where}")
+        every += rows
+    if len(specs) > 1:
+        write_comparison(out, specs, every)
     con.print((out / "table.md").read_text())
-    wins = sum(r["success"] for r in rows)
-    con.print(f"{len(rows)} episodes, {wins} successes ({100 * wins / len(rows):.1f} %); table.md, episodes.csv, "
-              f"eval_info.json in {out}")

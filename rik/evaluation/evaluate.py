@@ -277,6 +277,40 @@ def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
     return ordered
 
 
+def _spec_json(spec: EvalSpec) -> Any:
+    return json.loads(json.dumps(asdict(spec), default=list))
+
+
+def finished_rows(out: Path, spec: EvalSpec) -> list[dict[str, Any]] | None:
+    """The rows of an earlier run of exactly ``spec`` into ``out`` (its ``eval_info.json``), or None."""
+    try:
+        info = json.loads((out / "eval_info.json").read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(info, dict) or info.get("rik", {}).get("spec") != _spec_json(spec):
+        return None
+    return list(info["rik"]["per_episode"])
+
+
+def slug(label: str) -> str:
+    """A folder name for an operator's label (``act:act-cr`` -> ``act-act-cr``)."""
+    return "".join(c if c.isalnum() or c in "-_." else "-" for c in label)
+
+
+def write_comparison(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[str, Any]]) -> None:
+    """One ``table.md`` and ``episodes.csv`` for several operators on the same episodes, side by side."""
+    from rik.paths import write_atomic
+    from rik.sim.bench import rows_csv, table_markdown
+
+    first = specs[0]
+    head = (f"# {', '.join(s.label for s in specs)} on the {first.split or 'all'} split\n\nThe same "
+            f"{len(first.seeds())} episodes for each (seeds {first.seed}..{first.seed + len(first.seeds()) - 1}, "
+            f"{first.episodes_per_cell} per cell); F/P/S fractions, S with its 95 % Wilson interval.\n\n")
+    out.mkdir(parents=True, exist_ok=True)
+    write_atomic(out / "table.md", head + table_markdown(rows, first.presets, ci=True))
+    write_atomic(out / "episodes.csv", rows_csv(rows))
+
+
 def eval_info(spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> dict[str, Any]:
     """lerobot-eval's ``eval_info.json`` layout for the rows, with rik's own rows and settings under ``rik``."""
     n = len(rows)
@@ -291,7 +325,7 @@ def eval_info(spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) ->
     return {"per_task": [{"task_group": "rik", "task_id": 0, "metrics": metrics}],
             "per_group": {"rik": {k: v for k, v in aggregate.items() if k != "eval_s"}},
             "overall": aggregate,
-            "rik": {"spec": {k: v for k, v in asdict(spec).items()}, "per_episode": list(rows)}}
+            "rik": {"spec": _spec_json(spec), "per_episode": list(rows)}}
 
 
 def write_outputs(out: Path, spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> None:
