@@ -282,6 +282,7 @@ def test_eval_tables_several_operators_side_by_side_and_reuses_finished_runs(rik
     assert r.code == 0, r.err
     table = (tmp_path / "both" / "table.md").read_text()
     assert "| contact_rich |" in table and "| grasp_vertical |" in table
+    assert (tmp_path / "both" / "success.png").stat().st_size > 10_000
     assert (tmp_path / "both" / "contact_rich" / "eval_info.json").is_file()
     before = (tmp_path / "both" / "contact_rich" / "eval_info.json").read_bytes()
     r = rik("eval", *args)

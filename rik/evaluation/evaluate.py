@@ -309,6 +309,40 @@ def write_comparison(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[s
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "table.md", head + table_markdown(rows, first.presets, ci=True))
     write_atomic(out / "episodes.csv", rows_csv(rows))
+    success_plot(rows, out / "success.png", title=f"{first.split or 'all'} split, {len(first.seeds())} episodes each")
+
+
+def success_plot(rows: Sequence[dict[str, Any]], png: Path, title: str = "") -> Path:
+    """Success rate (S) per operator, overall and per handle type, with 95 % Wilson intervals: one group of bars
+    per operator."""
+    import numpy as np
+
+    from rik.paths import pyplot, save_figure
+    from rik.sim.bench import wilson
+
+    operators = list(dict.fromkeys(r["strategy"] for r in rows))
+    groups = ["all", *dict.fromkeys(r["handle_type"] for r in rows)]
+    fig, ax = pyplot().subplots(figsize=(max(6.4, 1.3 * len(operators) + 1.5), 3.6), dpi=120)
+    width = 0.8 / len(groups)
+    for gi, group in enumerate(groups):
+        rates, lows, highs = [], [], []
+        for op in operators:
+            sel = [r["outcome"] == "S" for r in rows if r["strategy"] == op and group in ("all", r["handle_type"])]
+            lo, hi = wilson(sum(sel), len(sel))
+            rate = sum(sel) / max(len(sel), 1)
+            rates.append(rate)
+            lows.append(max(0.0, rate - lo))
+            highs.append(max(0.0, hi - rate))
+        x = np.arange(len(operators)) + (gi - (len(groups) - 1) / 2) * width
+        ax.bar(x, rates, width, yerr=[lows, highs], capsize=2, label=group, alpha=0.9 if group == "all" else 0.6)
+    ax.set_xticks(np.arange(len(operators)), operators, rotation=20, ha="right")
+    ax.set_ylabel("success rate (S: at least 90 % open)")
+    ax.set_ylim(0, 1.05)
+    ax.set_title(title, fontsize=10)
+    ax.legend(frameon=False, fontsize=8, ncols=len(groups))
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    return save_figure(fig, png)
 
 
 def eval_info(spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> dict[str, Any]:
