@@ -64,14 +64,7 @@ def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, 
     directory = variant_dir(catalog, variant, variants)
     metas = []
     for k in range(episodes):
-        s = seed + k
-        scene = build_scene(directory, front, gripper)
-        rng = np.random.default_rng(s)
-        randomise_start(scene, rng)
-        operator = make_operator(strategy)
-        recorder = run_operator(scene, operator, rng, max_seconds, EpisodeRecorder(scene))
-        meta = write_episode(recorder, out, episode=episode_id(scene.info["id"], scene.front.id, strategy, s),
-                             operator=strategy, operator_kind="strategy", seed=s, log=tuple(operator.log))
+        meta = record_one(directory, strategy, seed + k, out, front=front, gripper=gripper, max_seconds=max_seconds)
         metas.append(meta)
         if progress is not None:
             progress(meta)
