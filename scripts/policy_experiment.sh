@@ -15,10 +15,11 @@ DEMOS=${DEMOS:-90}
 STEPS=${STEPS:-3000}
 PER_CELL=${PER_CELL:-10}
 WORKERS=${WORKERS:-2}
-export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl}
-RIK=(uv run --locked rik)
-mkdir -p "$WORK"
+# one thread per process: training and evaluations beside each other otherwise fight over the cores
+export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl} OMP_NUM_THREADS=1
 REPO=$(pwd)
+RIK=(uv run --project "$REPO" --locked rik)
+mkdir -p "$WORK"
 cd "$WORK"
 
 record() {  # record NAME STRATEGY VARIANTS_DIR
@@ -35,12 +36,12 @@ export_ds() {  # export_ds NAME VARIANTS_DIR [EPISODE_FOLDERS...]: successful de
   "${RIK[@]}" export-lerobot "sel-$name" --out "ds-$name" --repo-id "local/rik-$name" --streams none \
     --variants "$variants"
 }
-train() {  # train NAME DATASET act|diffusion
+train() {  # train NAME DATASET act|diffusion [SEED]
   [ -f "runs/$1/checkpoints/last/pretrained_model/model.safetensors" ] && return
   rm -rf "runs/$1"
   local common=(--dataset.repo_id="local/rik-$2" --dataset.root="ds-$2" --policy.push_to_hub=false
                 --policy.device=cpu --steps="$STEPS" --batch_size=32 --log_freq=200 --save_freq="$STEPS"
-                --env_eval_freq=1000000 --output_dir="runs/$1" --wandb.enable=false --num_workers=0 --seed=0)
+                --env_eval_freq=1000000 --output_dir="runs/$1" --wandb.enable=false --num_workers=0 --seed="${4:-0}")
   if [ "$3" = act ]; then
     uv run --project "$REPO" --locked lerobot-train "${common[@]}" --policy.type=act --policy.dim_model=128 \
       --policy.dim_feedforward=512 --policy.n_heads=4 --policy.chunk_size=20 --policy.n_action_steps=10 \
@@ -73,11 +74,12 @@ matched=(); for d in demos-cr-hull/*; do
   grep -q '"outcome": "S"' "$d/meta.json" && matched+=("demos-cr/$(basename "$d")"); done
 export_ds cr72 variants "${matched[@]}"
 # 3. training (timed)
-for job in "act-cr cr act" "act-gv gv act" "act-hull hull act" "act-cr72 cr72 act" "dp-cr cr diffusion"; do
+for job in "act-cr cr act" "act-gv gv act" "act-hull hull act" "act-cr72 cr72 act" "dp-cr cr diffusion" \
+           "act-hull-s1 hull act 1" "act-cr72-s1 cr72 act 1"; do
   set -- $job
   start=$SECONDS
   if [ ! -f "runs/$1/checkpoints/last/pretrained_model/model.safetensors" ]; then
-    train "$1" "$2" "$3" > "train-$1.log" 2>&1
+    train "$1" "$2" "$3" "${4:-0}" > "train-$1.log" 2>&1
     echo "$1 $((SECONDS - start)) s" >> train-times.txt
   fi
 done
@@ -86,7 +88,8 @@ for split_seed in "test 1000" "train 5000"; do
   set -- $split_seed
   evaluate strategy:contact_rich contact_rich "$1" "$2"
   evaluate strategy:grasp_vertical grasp_vertical "$1" "$2"
-  for run in act-cr act-gv act-hull act-cr72 dp-cr; do
+  for run in act-cr act-gv act-hull act-cr72 dp-cr act-hull-s1 act-cr72-s1; do
     evaluate "runs/$run/checkpoints/last/pretrained_model" "$run" "$1" "$2"
   done
 done
+# (docs/policies.md evaluates the train split with 5 episodes per cell, for the scripted strategies, act-cr and act-gv)
