@@ -21,7 +21,7 @@ import json
 import os
 import shutil
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -396,6 +396,24 @@ def write_manifest(out: Path, results: Sequence[VariantResult]) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / MANIFEST, json.dumps(manifest, indent=1) + "\n")
     return out / MANIFEST
+
+
+def rejected_variants(catalog: Catalog, variant_ids: Iterable[str], out: Path = DEFAULT_OUT, *, workers: int = 1,
+                      overlays: Sequence[Path] = ()) -> dict[str, VariantResult]:
+    """Build the variants ``variant_ids`` name into ``out`` where missing or stale (in the folder's collision mode);
+    the ones that fail a check, by id in id order. Callers decide whether a rejection stops them."""
+    from rik.combinator.ids import parse_variant_id
+
+    keys = [parse_variant_id(catalog, v) for v in sorted(set(variant_ids))]
+    return {r.id: r for r in build_variants(catalog, keys, out, workers=workers, overlays=overlays)
+            if r.status == "rejected"}
+
+
+def require_variants(catalog: Catalog, variant_ids: Iterable[str], out: Path = DEFAULT_OUT, *, workers: int = 1,
+                     overlays: Sequence[Path] = ()) -> None:
+    """:func:`rejected_variants`, where any rejection is an error naming the first variant and its check."""
+    for r in rejected_variants(catalog, variant_ids, out, workers=workers, overlays=overlays).values():
+        raise RikError(f"variant {r.id} rejected by check {r.failed_check}: {r.reason}")
 
 
 def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEFAULT_OUT, *, workers: int = 1,

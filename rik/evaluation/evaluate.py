@@ -220,58 +220,40 @@ def _scripted_episode(ctx: dict[str, Any], strategy: str, seed: int, frames: lis
 
 
 # ---- the whole evaluation -----------------------------------------------------------------------------------
-def _worker_episode(spec_json: str, video_root: str, item: tuple[int, bool]) -> dict[str, Any]:
-    spec = EvalSpec(**json.loads(spec_json))
-    seed, film = item
-    return run_episode(spec, seed, Path(video_root) if film else None)
+def _episode_item(spec_json: str, video_root: str, threads: int | None, catalog: Any, item: str) -> dict[str, Any]:
+    """One episode of :func:`run_eval` (``item``: ``"<seed>:<film 0|1>"``); ``threads`` caps PyTorch's threads
+    in worker processes, where several evaluations share the cores."""
+    if threads is not None:
+        import torch
 
-
-def _init_worker(threads: int) -> None:
-    import torch
-
-    torch.set_num_threads(threads)
+        torch.set_num_threads(threads)
+    seed, film = (int(x) for x in item.split(":"))
+    return run_episode(EvalSpec(**json.loads(spec_json)), seed, Path(video_root) if film else None)
 
 
 def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
              progress: Callable[[dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
-    """Run every episode of ``spec`` (in ``workers`` processes) and write the outputs into ``out``; rows in seed
-    order."""
-    from rik.combinator.build import build_variants
-    from rik.combinator.ids import parse_variant_id
+    """Run every episode of ``spec`` (in ``workers`` processes, one PyTorch thread each) and write the outputs
+    into ``out``; rows in seed order."""
+    from functools import partial
+
+    from rik.assets.workers import map_ids
+    from rik.combinator.build import require_variants
     from rik.sim.draw import Draw
 
     draw = Draw(spec.split, spec.handle_types, spec.presets, spec.kinds)
     seeds = spec.seeds()
-    keys = sorted({draw.episode(catalog, s).variant for s in seeds})
-    for r in build_variants(catalog, [parse_variant_id(catalog, k) for k in keys], Path(spec.variants),
-                            workers=workers):
-        if r.status == "rejected":
-            raise RikError(f"variant {r.id} rejected by check {r.failed_check}: {r.reason}")
-    videos = out / "videos"
-    items = [(s, i < spec.videos) for i, s in enumerate(seeds)]
-    spec_json = json.dumps(asdict(spec), default=list)
+    require_variants(catalog, (draw.episode(catalog, s).variant for s in seeds), Path(spec.variants),
+                     workers=workers)
+    items = [f"{s}:{int(i < spec.videos)}" for i, s in enumerate(seeds)]
+    parallel = workers > 1 and len(items) > 1  # as map_ids decides
+    fn = partial(_episode_item, json.dumps(asdict(spec), default=list), str(out / "videos"), 1 if parallel else None)
     started = time.perf_counter()
     rows: dict[int, dict[str, Any]] = {}
-    if workers > 1 and len(items) > 1:
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-        from functools import partial
-        from multiprocessing import get_context
-
-        fn = partial(_worker_episode, spec_json, str(videos))
-        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_init_worker,
-                                 initargs=(1,)) as pool:
-            futures = [pool.submit(fn, item) for item in items]
-            for future in as_completed(futures):
-                row = future.result()
-                rows[row["seed"]] = row
-                if progress is not None:
-                    progress(row)
-    else:
-        for item in items:
-            row = _worker_episode(spec_json, str(videos), item)
-            rows[row["seed"]] = row
-            if progress is not None:
-                progress(row)
+    for _, row in map_ids(fn, catalog, items, workers=workers):
+        rows[row["seed"]] = row
+        if progress is not None:
+            progress(row)
     ordered = [rows[s] for s in seeds]
     write_outputs(out, spec, ordered, time.perf_counter() - started)
     return ordered
@@ -297,19 +279,22 @@ def slug(label: str) -> str:
     return "".join(c if c.isalnum() or c in "-_." else "-" for c in label)
 
 
-def write_comparison(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[str, Any]]) -> None:
-    """One ``table.md`` and ``episodes.csv`` for several operators on the same episodes, side by side."""
+def write_tables(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[str, Any]]) -> None:
+    """``table.md`` and ``episodes.csv`` of one operator's rows, or of several operators' on the same episodes side
+    by side (with ``success.png``)."""
     from rik.paths import write_atomic
     from rik.sim.bench import rows_csv, table_markdown
 
-    first = specs[0]
-    head = (f"# {', '.join(s.label for s in specs)} on the {first.split or 'all'} split\n\nThe same "
-            f"{len(first.seeds())} episodes for each (seeds {first.seed}..{first.seed + len(first.seeds()) - 1}, "
-            f"{first.episodes_per_cell} per cell); F/P/S fractions, S with its 95 % Wilson interval.\n\n")
+    first, n = specs[0], len(specs[0].seeds())
+    seeds = f"seeds {first.seed}..{first.seed + n - 1}, {first.episodes_per_cell} per cell"
+    episodes = f"The same {n} episodes for each ({seeds})" if len(specs) > 1 else f"{n} episodes, {seeds}"
+    head = (f"# {', '.join(s.label for s in specs)} on the {first.split or 'all'} split\n\n{episodes}; F/P/S "
+            "fractions, S with its 95 % Wilson interval.\n\n")
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "table.md", head + table_markdown(rows, first.presets, ci=True))
     write_atomic(out / "episodes.csv", rows_csv(rows))
-    success_plot(rows, out / "success.png", title=f"{first.split or 'all'} split, {len(first.seeds())} episodes each")
+    if len(specs) > 1:
+        success_plot(rows, out / "success.png", title=f"{first.split or 'all'} split, {n} episodes each")
 
 
 def success_plot(rows: Sequence[dict[str, Any]], png: Path, title: str = "") -> Path:
@@ -363,15 +348,8 @@ def eval_info(spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) ->
 
 
 def write_outputs(out: Path, spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> None:
-    """``table.md``, ``episodes.csv`` and ``eval_info.json`` (atomically)."""
+    """``table.md``, ``episodes.csv`` and ``eval_info.json`` of one operator (atomically)."""
     from rik.paths import write_atomic
-    from rik.sim.bench import rows_csv, table_markdown
 
-    out.mkdir(parents=True, exist_ok=True)
-    split = spec.split or "all"
-    head = (f"# {spec.label} on the {split} split\n\n{len(rows)} episodes, seeds {spec.seed}.."
-            f"{spec.seed + len(rows) - 1}, {spec.episodes_per_cell} per cell; F/P/S fractions, S with its 95 % "
-            "Wilson interval.\n\n")
-    write_atomic(out / "table.md", head + table_markdown(rows, spec.presets, ci=True))
-    write_atomic(out / "episodes.csv", rows_csv(rows))
+    write_tables(out, [spec], rows)
     write_atomic(out / "eval_info.json", json.dumps(eval_info(spec, rows, seconds), indent=2, default=list) + "\n")

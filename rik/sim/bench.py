@@ -110,13 +110,9 @@ def run_bench(catalog: Catalog, tasks: Sequence[BenchTask], *, workers: int = 1,
     import functools
 
     from rik.assets.workers import map_ids
-    from rik.combinator.build import build_variants
-    from rik.combinator.ids import parse_variant_id
+    from rik.combinator.build import require_variants
 
-    keys = [parse_variant_id(catalog, v) for v in sorted({t.variant for t in tasks})]
-    for r in build_variants(catalog, keys, variants, workers=workers, overlays=overlays):
-        if r.status == "rejected":
-            raise RikError(f"variant {r.id} rejected by check {r.failed_check}: {r.reason}")
+    require_variants(catalog, (t.variant for t in tasks), variants, workers=workers, overlays=overlays)
     order = {t.encode(): i for i, t in enumerate(tasks)}
     rows: list[dict[str, Any] | None] = [None] * len(tasks)
     fn = functools.partial(run_task, variants=variants)

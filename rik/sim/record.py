@@ -106,30 +106,24 @@ def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int =
     import functools
 
     from rik.assets.workers import map_ids
-    from rik.combinator.build import build_variants
-    from rik.combinator.ids import parse_variant_id
+    from rik.combinator.build import rejected_variants
 
     check_seeds(seed, episodes)
     make_operator(strategy)  # unknown strategy: fail before building anything
     draw.check(catalog)
     seeds = list(range(seed, seed + episodes))
-    wanted = sorted({draw.episode(catalog, s).variant for s in seeds})
-    keys = [parse_variant_id(catalog, v) for v in wanted]
-    rejected = {}
-    for r in build_variants(catalog, keys, variants, workers=workers, overlays=overlays):
-        if r.status == "rejected":
-            reason = f"variant {r.id} cannot be simulated: check {r.failed_check} failed: {r.reason}"
-            if skipped is None:
-                raise RikError(reason)
-            rejected[r.id] = reason
     drawn = {s: draw.episode(catalog, s).variant for s in seeds}
+    rejected = {r.id: f"variant {r.id} cannot be simulated: check {r.failed_check} failed: {r.reason}"
+                for r in rejected_variants(catalog, drawn.values(), variants, workers=workers,
+                                           overlays=overlays).values()}
     if rejected:
+        if skipped is None:
+            raise RikError(next(iter(rejected.values())))
         if all(v in rejected for v in drawn.values()):
             raise RikError(f"every drawn variant was rejected; the first: {next(iter(rejected.values()))}")
-        assert skipped is not None
         skipped += [(s, v, rejected[v]) for s, v in drawn.items() if v in rejected]
         seeds = [s for s in seeds if drawn[s] not in rejected]
-    dirs = {k.id: inside(variants, k.id, what="variant id") for k in keys if k.id not in rejected}
+    dirs = {v: inside(variants, v, what="variant id") for v in set(drawn.values()) if v not in rejected}
     fn = functools.partial(_record_drawn, draw=draw, strategy=strategy, out=out, dirs=dirs, gripper=gripper,
                            max_seconds=max_seconds)
     metas: dict[int, Any] = {}
