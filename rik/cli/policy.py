@@ -12,10 +12,6 @@ import typer
 from rik.cli.common import DEFAULT_WORKERS, CatalogOption, WorkersOpt, console, overlays, progress_bar
 
 
-def _names(text: str) -> tuple[str, ...]:
-    return tuple(t.strip() for t in text.split(",") if t.strip())
-
-
 def _advance(progress: Any, label: str, total: int) -> Callable[[dict[str, Any]], None]:
     """A progress callback for one operator's episodes."""
     task = progress.add_task(label, total=total, last="")
@@ -54,15 +50,17 @@ def eval_policy(
     """Evaluate a policy on rik's benchmark: episodes drawn from a split, F/P/S per handle type x preset (the
     paper's Table 3) with Wilson intervals, per-episode rows, videos and lerobot-eval's eval_info.json."""
     from rik.errors import RikError
-    from rik.evaluation.evaluate import EvalSpec, finished_rows, prepare, run_eval, slug, write_comparison
+    from rik.evaluation.evaluate import EvalSpec, finished_rows, prepare, run_eval, slug, write_tables
     from rik.registry.load import load_catalog
 
     if label and len(policies) > 1:
         raise RikError("--label names one policy; with several, each is named by its type and training run")
+    from rik.sim.draw import Draw
+
     cat = load_catalog(overlays(catalog))
-    specs = [prepare(cat, EvalSpec(p, None if split == "all" else split, _names(types), _names(presets),
-                                   _names(kinds), per_cell, seed, episode_length, rerendered, videos, str(variants),
-                                   label)) for p in policies]
+    draw = Draw.parse(split, types, presets, kinds)
+    specs = [prepare(cat, EvalSpec(p, draw.split, draw.handle_types, draw.presets, draw.kinds, per_cell, seed,
+                                   episode_length, rerendered, videos, str(variants), label)) for p in policies]
     labels = [s.label for s in specs]
     if len(set(labels)) < len(labels):
         raise RikError(f"two policies have the same name ({', '.join(labels)}): give them different run folders")
@@ -82,5 +80,5 @@ def eval_policy(
                   f"table.md, episodes.csv, eval_info.json in {where}")
         every += rows
     if len(specs) > 1:
-        write_comparison(out, specs, every)
+        write_tables(out, specs, every)
     con.print((out / "table.md").read_text())

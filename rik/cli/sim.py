@@ -23,19 +23,8 @@ def _strategies_help() -> str:
 
 
 ALL_SPLIT = "all"
-"""``rik record --split all``: draw from every handle of the catalog."""
-
-
-def _csv(text: str | None) -> tuple[str, ...] | None:
-    return None if text is None else tuple(s.strip() for s in text.split(",") if s.strip())
-
-
-def _draw(split: str, types: str | None, presets: str | None, kinds: str | None) -> Any:
-    """The :class:`rik.sim.draw.Draw` of ``rik record --split``."""
-    from rik.sim import draw as d
-
-    return d.Draw(split=None if split == ALL_SPLIT else split, handle_types=_csv(types) or d.DEFAULT_TYPES,
-                  presets=_csv(presets) or d.DEFAULT_PRESETS, kinds=_csv(kinds) or d.DEFAULT_KINDS)
+"""``rik record --split all``: draw from every handle of the catalog (``rik.sim.draw.ALL_SPLIT``, spelled here so
+that the help text needs no import of the simulator's modules)."""
 
 
 def record(variant: Annotated[str | None, typer.Argument(
@@ -87,7 +76,9 @@ def record(variant: Annotated[str | None, typer.Argument(
             progress.update(task, advance=1, last=f"{m.id} {m.outcome}")
 
         if split is not None:
-            metas = record_split(cat, _draw(split, types, presets, kinds), strategy, episodes=episodes, seed=seed,
+            from rik.sim.draw import Draw
+
+            metas = record_split(cat, Draw.parse(split, types, presets, kinds), strategy, episodes=episodes, seed=seed,
                                  out=out, variants=variants, workers=workers, overlays=overlays(catalog),
                                  progress=report, skipped=skipped)
         else:

@@ -26,6 +26,8 @@ DEFAULT_TYPES = ("knob", "finger_pull", "two_point")
 DEFAULT_PRESETS = ("smooth", "normal", "high")
 DEFAULT_KINDS = ("drawer",)
 """The paper's case study opens drawers."""
+ALL_SPLIT = "all"
+"""The split name that means every handle of the catalog (``split=None``)."""
 DRAW_STREAM = 0x5EED_D4A1
 """Second word of the draw's seed sequence, keeping it apart from the episode's own ``default_rng(seed)``."""
 
@@ -72,6 +74,17 @@ class Draw:
     presets: tuple[str, ...] = DEFAULT_PRESETS
     kinds: tuple[str, ...] = DEFAULT_KINDS
 
+    @classmethod
+    def parse(cls, split: str, types: str | None = None, presets: str | None = None,
+              kinds: str | None = None) -> Draw:
+        """A draw from command-line text: a split name (:data:`ALL_SPLIT` for every handle) and comma-separated
+        handle types, presets and front kinds (None: the defaults; a list with no name fails :meth:`check`)."""
+        def names(text: str | None, default: tuple[str, ...]) -> tuple[str, ...]:
+            return default if text is None else tuple(t.strip() for t in text.split(",") if t.strip())
+
+        return cls(None if split == ALL_SPLIT else split, names(types, DEFAULT_TYPES),
+                   names(presets, DEFAULT_PRESETS), names(kinds, DEFAULT_KINDS))
+
     @property
     def cells(self) -> list[tuple[str, str]]:
         """(handle type, preset) of each cell, in seed order."""
@@ -83,7 +96,9 @@ class Draw:
             from rik.registry.splits import split_handles
 
             split_handles(catalog, self.split)
-        types = {"knob", "finger_pull", "two_point"}
+        from rik.schemas.handles import HandleType
+
+        types = {t.value for t in HandleType}
         for t in self.handle_types:
             if t not in types:
                 raise RikError(f"unknown handle type '{t}' (types: {', '.join(sorted(types))})")

@@ -95,10 +95,12 @@ class RikEnvConfig(EnvConfig):
 
 def env_kwargs(cfg: RikEnvConfig) -> dict:
     """The keyword arguments of ``rik.sim.env.OpenFrontEnv`` for a config."""
+    from rik.sim.draw import Draw
+
+    draw = Draw.parse(cfg.split, cfg.handle_types, cfg.presets, cfg.kinds)
     cameras = _names(cfg.cameras)
-    return {"variant": None, "split": None if cfg.split == "all" else cfg.split,
-            "handle_types": _names(cfg.handle_types), "presets": _names(cfg.presets), "kinds": _names(cfg.kinds),
-            "action_mode": "absolute", "streams": _names(cfg.streams) if cameras else (),
+    return {"variant": None, "split": draw.split, "handle_types": draw.handle_types, "presets": draw.presets,
+            "kinds": draw.kinds, "action_mode": "absolute", "streams": _names(cfg.streams) if cameras else (),
             "cameras": cameras or ("front",), "image_size": (cfg.observation_height, cfg.observation_width),
             "spp": cfg.spp, "episode_length": cfg.episode_length, "variants_dir": cfg.variants_dir,
             "render_mode": cfg.render_mode}
