@@ -320,31 +320,10 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
 # ---- base units from a GLB with named nodes ---------------------------------------------------------------------
 def read_mapping(path: Path) -> BaseUnitMapping:
     """The mapping file of a base-unit import, validated; errors name the file, line and field."""
-    from pydantic import ValidationError
-
-    from rik.errors import CatalogError
-    from rik.registry.entries import describe_error
-    from rik.registry.sources import line_of
+    from rik.registry.entries import read_yaml_model
     from rik.schemas.imports import BaseUnitMapping
 
-    shown = display_path(path)
-    try:
-        import yaml
-
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise RikError(f"{shown}: cannot read the mapping file ({exc.strerror})") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise CatalogError(shown, None, None, f"malformed YAML: {getattr(exc, 'problem', exc)}",
-                           mark.line + 1 if mark else None) from None
-    try:
-        return BaseUnitMapping.model_validate(data if data is not None else {})
-    except ValidationError as exc:
-        first = exc.errors(include_url=False)[0]
-        field = ".".join(str(p) for p in first["loc"])
-        raise CatalogError(shown, None, field or None, describe_error(BaseUnitMapping, first),
-                           line_of(path, tuple(first["loc"]))) from None
+    return read_yaml_model(path, BaseUnitMapping, "mapping file")
 
 
 def node_meshes(path: Path, nodes: dict[str, str], mapping_file: Path) -> dict[str, trimesh.Trimesh]:

@@ -6,7 +6,7 @@ import sys
 
 import typer
 
-from rik.cli import assets, catalog, export, policy, render, rerender, sim, sysid, variants
+from rik.cli import assets, catalog, dataset, export, policy, render, rerender, sim, sysid, variants
 from rik.cli.common import CatalogOption, overlays
 from rik.errors import RikError
 
@@ -43,6 +43,7 @@ app.add_typer(catalog.app, name="catalog")
 app.add_typer(assets.app, name="assets")
 app.add_typer(variants.app, name="variants")
 app.add_typer(sysid.app, name="sysid")
+app.add_typer(dataset.app, name="dataset")
 for _command in (sim.record, sim.teleop, sim.replay, sim.bench, rerender.render, rerender.rerender,
                  render.visual_gap, export.export_lerobot):
     app.command()(_command)

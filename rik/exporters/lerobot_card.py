@@ -109,15 +109,18 @@ def card_fields(root: Path) -> dict[str, str]:
     return json.loads((Path(root) / "meta" / CARD_FIELDS).read_text(encoding="utf-8"))
 
 
-def write_card(catalog: Catalog, root: Path, spec: ExportSpec, fps: int, checks: dict[str, Any]) -> Path:
-    """Write ``README.md`` (lerobot's dataset card, filled in) and the card's fields into the dataset."""
+def write_card(catalog: Catalog, root: Path, spec: ExportSpec, fps: int, checks: dict[str, Any],
+               extra: str = "") -> Path:
+    """Write ``README.md`` (lerobot's dataset card, filled in) and the card's fields into the dataset; ``extra``
+    (markdown) is added to the description (how a built dataset was made: :mod:`rik.dataset.build`)."""
     from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
     from lerobot.datasets.utils import create_lerobot_dataset_card
 
     from rik.paths import write_atomic
 
     info = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))
-    fields = {"dataset_description": _description(catalog, spec, fps, checks, info),
+    description = _description(catalog, spec, fps, checks, info) + (f"\n{extra}\n" if extra else "")
+    fields = {"dataset_description": description,
               "paper": "Real-IKEA (see CITATION below)", "citation_bibtex": CITATION}
     write_atomic(root / "meta" / CARD_FIELDS, json.dumps(fields, indent=1) + "\n")
     meta = LeRobotDatasetMetadata(spec.repo_id, root=root)

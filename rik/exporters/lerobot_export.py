@@ -165,10 +165,14 @@ def _shards(items: list[Path], size: int) -> list[list[Path]]:
 
 
 def quiet_encoders() -> None:
-    """Keep FFmpeg's per-video notes and SVT-AV1's banner off the terminal (in this process: lerobot restores
-    FFmpeg's own printing after each video, so the level is set where the encoding happens)."""
+    """Keep FFmpeg's per-video notes, SVT-AV1's banner and Hugging Face datasets' progress bars off the
+    terminal (in this process: lerobot restores FFmpeg's own printing after each video, so the level is set where the
+    encoding happens)."""
     os.environ.setdefault("SVT_LOG", "1")
     import av.logging
+    import datasets
+
+    datasets.disable_progress_bars()  # lerobot's loads and merges would draw "Map: ..." bars of their own
 
     av.logging.set_level(av.logging.ERROR)
     av.logging.set_libav_level(av.logging.ERROR)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel, ValidationError
@@ -77,3 +78,35 @@ def _model_of(annotation: object) -> type[BaseModel] | None:
         if found is not None:
             return found
     return None
+
+
+def read_yaml_model[M: BaseModel](path: Path, model: type[M], what: str) -> M:
+    """The YAML file at ``path`` validated as ``model``; a file that cannot be read, malformed YAML or a field
+    that breaks the schema raises one :class:`rik.errors.RikError` line naming the file, line and field
+    (``what`` names the file's role: "mapping file", "dataset spec")."""
+    import yaml
+
+    from rik.errors import CatalogError, RikError
+    from rik.registry.sources import _safe_loader, display_path, line_of
+
+    shown = display_path(path)
+    try:
+        data = yaml.load(path.read_text(encoding="utf-8"), Loader=_safe_loader())
+    except OSError as exc:
+        raise RikError(f"{shown}: cannot read the {what} ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise RikError(f"{shown}: the {what} is not UTF-8 text") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        raise CatalogError(shown, None, None, f"malformed YAML: {getattr(exc, 'problem', exc)}",
+                           mark.line + 1 if mark else None) from None
+    if data is not None and not isinstance(data, dict):
+        raise CatalogError(shown, None, None, f"the {what} must be a mapping of fields, not a "
+                           f"{type(data).__name__}", 1)
+    try:
+        return model.model_validate(data if data is not None else {})
+    except ValidationError as exc:
+        first = exc.errors(include_url=False)[0]
+        field = ".".join(str(p) for p in first["loc"])
+        raise CatalogError(shown, None, field or None, describe_error(model, first),
+                           line_of(path, tuple(first["loc"]))) from None

@@ -9,7 +9,7 @@ the gripper command (0 open, 0.5 closed without force, 1 closed with the full gr
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -277,16 +277,21 @@ STRATEGIES: dict[str, Strategy] = {s.name: s for s in (
 )}
 
 
-def make_operator(name: str) -> ScriptedGrasp:
-    """A fresh scripted operator by strategy name."""
+def make_operator(name: str, params: Mapping[str, float | int] | None = None) -> ScriptedGrasp:
+    """A fresh scripted operator by strategy name, with ``params`` (``jitter``, m; ``regrasps``) set on it."""
     try:
-        return STRATEGIES[name].make()
+        operator = STRATEGIES[name].make()
     except KeyError:
         import difflib
 
         close = difflib.get_close_matches(name, STRATEGIES, n=1)
         hint = f"; did you mean '{close[0]}'?" if close else ""
         raise RikError(f"unknown strategy '{name}' (strategies: {', '.join(STRATEGIES)}){hint}") from None
+    for key, value in (params or {}).items():
+        if key not in ("jitter", "regrasps"):
+            raise RikError(f"strategy {name}: unknown parameter '{key}' (parameters: jitter, regrasps)")
+        setattr(operator, key, value)
+    return operator
 
 
 @dataclass

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -72,16 +72,19 @@ def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, 
 
 
 def record_one(directory: Path, strategy: str, seed: int, out: Path, *, front: str | None = None,
-               gripper: GripperSpec = HAND_E, max_seconds: float = MAX_SECONDS) -> Any:
-    """Record one episode of ``strategy`` with ``seed`` on the built variant at ``directory`` into ``out``, as
-    :func:`record` does for each of its seeds; returns its meta."""
+               gripper: GripperSpec = HAND_E, max_seconds: float = MAX_SECONDS,
+               params: Mapping[str, float | int] | None = None, label: str | None = None) -> Any:
+    """Record one episode of ``strategy`` (with its ``params``) with ``seed`` on the built variant at ``directory``
+    into ``out``, as :func:`record` does for each of its seeds; returns its meta. ``label`` names the operator in
+    the episode's id and meta (default: the strategy)."""
     scene = build_scene(directory, front, gripper)
     rng = np.random.default_rng(seed)
     randomise_start(scene, rng)
-    operator = make_operator(strategy)
+    operator = make_operator(strategy, params)
     recorder = run_operator(scene, operator, rng, max_seconds, EpisodeRecorder(scene))
-    return write_episode(recorder, out, episode=episode_id(scene.info["id"], scene.front.id, strategy, seed),
-                         operator=strategy, operator_kind="strategy", seed=seed, log=tuple(operator.log))
+    name = label or strategy
+    return write_episode(recorder, out, episode=episode_id(scene.info["id"], scene.front.id, name, seed),
+                         operator=name, operator_kind="strategy", seed=seed, log=tuple(operator.log))
 
 
 def _record_drawn(catalog: Catalog, seed: str, *, draw: Draw, strategy: str, out: Path, dirs: dict[str, Path],

@@ -1,0 +1,447 @@
+"""``rik dataset build``: run a plan's units (record -> render -> export shard) on an engine, then merge the shards
+with lerobot's ``aggregate_datasets`` and publish the dataset at ``out`` by renaming it into place.
+
+The work folder (default ``<out>.work``) holds ``episodes/``, ``renders/``, ``shards/`` and ``units/``: one marker
+per finished unit, ``units/<stage>/<key>.json``, written atomically after the unit's output is in place. Keys are
+content hashes (:mod:`rik.dataset.plan`), so a rerun of the same spec, after a crash or a ``kill -9``, does only the
+units without a marker, and another spec that shares episodes reuses them. A unit that fails is retried up to
+``retries`` times, then recorded in ``units/failed/<key>.json`` with its message; the others go on. The dataset is
+published only when every unit succeeded.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rik.dataset.engines import Done, Engine, Job
+from rik.dataset.plan import EpisodeUnit, Plan, RenderUnit, ShardUnit, export_settings
+from rik.errors import RikError
+from rik.paths import write_atomic
+
+if TYPE_CHECKING:
+    from rik.exporters.lerobot_export import ExportSpec
+    from rik.registry.catalog import Catalog
+
+DATASET_META = "rik_dataset.json"
+"""``meta/rik_dataset.json``: the spec, its hash, versions, variant hashes, counts, outcomes and file checksums;
+identical for identical builds."""
+BUILD_META = "rik_build.json"
+"""``meta/rik_build.json``: the build's statistics (engine, seconds per stage, units run and reused, failures);
+these vary from one build to the next."""
+STAGES = ("record", "render", "shard")
+DEFAULT_RETRIES = 2
+
+
+@dataclass
+class Failure:
+    stage: str
+    key: str
+    what: str
+    """The unit, as a person reads it (episode id, stream, shard number)."""
+    message: str
+    attempts: int
+
+
+@dataclass
+class BuildResult:
+    out: Path
+    work: Path
+    spec_hash: str
+    up_to_date: bool = False
+    """The dataset at ``out`` was already built from this spec: nothing was run."""
+    ran: dict[str, int] = field(default_factory=lambda: dict.fromkeys(STAGES, 0))
+    reused: dict[str, int] = field(default_factory=lambda: dict.fromkeys(STAGES, 0))
+    seconds: dict[str, float] = field(default_factory=lambda: dict.fromkeys(STAGES, 0.0))
+    """Time spent inside the units of each stage, summed over workers, s."""
+    frames: dict[str, int] = field(default_factory=lambda: dict.fromkeys(STAGES, 0))
+    wall_seconds: float = 0.0
+    failures: list[Failure] = field(default_factory=list)
+    episodes: int = 0
+    dataset_frames: int = 0
+    outcomes: dict[str, int] = field(default_factory=dict)
+
+
+def default_work(out: Path) -> Path:
+    return Path(out).with_name(f"{Path(out).name}.work")
+
+
+def read_dataset_meta(root: Path) -> dict[str, Any] | None:
+    """``meta/rik_dataset.json`` of a built dataset, or None when ``root`` holds none (or it is unreadable)."""
+    try:
+        data = json.loads((Path(root) / "meta" / DATASET_META).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+# ---- the units, as they run in a worker -------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Folders:
+    """Absolute folders every unit reads and writes (the same on every node of a cluster)."""
+
+    work: Path
+    variants: Path
+
+    @property
+    def episodes(self) -> Path:
+        return self.work / "episodes"
+
+    @property
+    def renders(self) -> Path:
+        return self.work / "renders"
+
+    @property
+    def shards(self) -> Path:
+        return self.work / "shards"
+
+    def marker(self, stage: str, key: str) -> Path:
+        return self.work / "units" / stage / f"{key}.json"
+
+    def failed(self, key: str) -> Path:
+        return self.work / "units" / "failed" / f"{key}.json"
+
+
+def _mark(folders: Folders, stage: str, key: str, record: dict[str, Any]) -> dict[str, Any]:
+    path = folders.marker(stage, key)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_atomic(path, json.dumps({"stage": stage, "key": key, **record}, indent=1) + "\n")
+    return record
+
+
+def read_marker(folders: Folders, stage: str, key: str) -> dict[str, Any] | None:
+    """The record of a finished unit whose output is still in place, else None."""
+    try:
+        data = json.loads(folders.marker(stage, key).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    output = data.get("output")
+    return data if isinstance(output, str) and (folders.work / output).exists() else None
+
+
+def run_record(catalog: Catalog, arg: tuple[Folders, EpisodeUnit, float]) -> dict[str, Any]:
+    """Record one episode (a job); returns its marker record."""
+    from rik.paths import inside
+    from rik.sim.record import record_one
+
+    folders, unit, max_seconds = arg
+    t0 = time.perf_counter()
+    meta = record_one(inside(folders.variants, unit.variant, what="variant id"), unit.operator.strategy, unit.seed,
+                      folders.episodes, front=unit.front, max_seconds=max_seconds, params=unit.operator.params,
+                      label=unit.operator.label)
+    return _mark(folders, "record", unit.key, {
+        "output": f"episodes/{meta.id}", "episode": meta.id, "outcome": meta.outcome, "steps": meta.steps,
+        "states_sha256": meta.states_sha256, "seconds": time.perf_counter() - t0})
+
+
+def run_render(catalog: Catalog, arg: tuple[Folders, RenderUnit, Any, tuple[str, ...]]) -> dict[str, Any]:
+    """Render one stream of one episode (a job); returns its marker record."""
+    from rik.render.episodes import render_episode
+
+    folders, unit, stream_spec, cameras = arg
+    t0 = time.perf_counter()
+    r = render_episode(catalog, folders.episodes / unit.episode.episode_id, stream_spec, renders=folders.renders,
+                       variants=folders.variants, cameras=cameras or None)
+    return _mark(folders, "render", unit.key, {
+        "output": str(r.directory.relative_to(folders.work)), "frames": r.frames * len(r.cameras),
+        "cameras": list(r.cameras), "seconds": time.perf_counter() - t0})
+
+
+def run_shard(catalog: Catalog, arg: tuple[Folders, ShardUnit, ExportSpec, dict[str, str]]) -> dict[str, Any]:
+    """Write one shard dataset (a job); returns its marker record."""
+    from rik.exporters.lerobot_export import write_shard
+    from rik.exporters.lerobot_frames import EpisodeSource
+    from rik.render.streams import read_manifest
+    from rik.sim.episode import read_meta
+
+    folders, unit, spec, stream_dirs = arg
+    t0 = time.perf_counter()
+    sources = []
+    for e in unit.episodes:
+        streams = {s: folders.work / stream_dirs[f"{e.key}/{s}"] for s in spec.streams}
+        sources.append(EpisodeSource(folders.episodes / e.episode_id, streams))
+    cameras = list(spec.cameras)
+    if not cameras and spec.streams:
+        first = next(iter(sources[0].streams.values()))
+        cameras = list((read_manifest(first) or {}).get("cameras", []))
+    fps = spec.fps or read_meta(sources[0].directory).fps
+    root = folders.shards / unit.key[:32]
+    frames = write_shard(catalog, root, f"{spec.repo_id}-shard-{unit.index:04d}", sources, cameras, spec, fps,
+                         folders.variants)
+    return _mark(folders, "shard", unit.key, {"output": str(root.relative_to(folders.work)), "frames": frames,
+                                              "fps": fps, "seconds": time.perf_counter() - t0})
+
+
+def export_spec(plan: Plan) -> ExportSpec:
+    from rik.exporters.lerobot_export import ExportSpec
+
+    s = plan.spec
+    w, h = s.size
+    return ExportSpec(s.repo_id, streams=s.streams, cameras=s.cameras, width=w, height=h, fps=s.fps, codec=s.codec,
+                      spp=s.render.spp, denoise=s.render.denoise, variant=s.render.variant,
+                      shard_episodes=s.shard_episodes)
+
+
+# ---- the scheduler ----------------------------------------------------------------------------------------------
+class _Schedule:
+    """Which units are done, running or failed, and what becomes ready when one finishes."""
+
+    def __init__(self, plan: Plan, folders: Folders, engine: Engine, retries: int, result: BuildResult,
+                 progress: Callable[[str, int, int], None] | None):
+        self.plan, self.folders, self.engine, self.retries = plan, folders, engine, retries
+        self.result, self.progress = result, progress
+        self.done: dict[str, dict[str, Any]] = {}
+        self.attempts: dict[str, int] = {}
+        self.failed: set[str] = set()
+        self.renders_of: dict[str, list[RenderUnit]] = {}
+        for r in plan.renders:
+            self.renders_of.setdefault(r.episode.key, []).append(r)
+        self.shard_of = {e.key: s for s in plan.shards for e in s.episodes}
+        self.totals = {"record": len(plan.episodes), "render": len(plan.renders), "shard": len(plan.shards)}
+        self.counts = dict.fromkeys(STAGES, 0)
+        self.xspec = export_spec(plan)
+
+    def _tick(self, stage: str) -> None:
+        self.counts[stage] += 1
+        if self.progress:
+            self.progress(stage, self.counts[stage], self.totals[stage])
+
+    def _job(self, stage: str, unit: Any) -> Job:
+        f = self.folders
+        if stage == "record":
+            return Job(unit.key, stage, run_record, (f, unit, self.plan.spec.max_seconds))
+        if stage == "render":
+            return Job(unit.key, stage, run_render, (f, unit, self.plan.stream_spec(unit.stream),
+                                                     self.plan.spec.cameras), renders=True)
+        streams = {f"{e.key}/{r.stream}": self.done[r.key]["output"] for e in unit.episodes
+                   for r in self.renders_of.get(e.key, [])}
+        return Job(unit.key, stage, run_shard, (f, unit, self.xspec, streams))
+
+    def _finish(self, stage: str, unit: Any, record: dict[str, Any], reused: bool) -> None:
+        self.done[unit.key] = record
+        (self.result.reused if reused else self.result.ran)[stage] += 1
+        if not reused:
+            self.result.seconds[stage] += float(record.get("seconds", 0.0))
+            self.result.frames[stage] += int(record.get("frames", record.get("steps", 0)))
+        self._tick(stage)
+        if stage == "record":
+            for r in self.renders_of.get(unit.key, []):
+                self._offer("render", r)
+            self._offer_shard(self.shard_of[unit.key])
+        elif stage == "render":
+            self._offer_shard(self.shard_of[unit.episode.key])
+
+    def _offer_shard(self, shard: ShardUnit) -> None:
+        needed = [e.key for e in shard.episodes] + [r.key for e in shard.episodes
+                                                     for r in self.renders_of.get(e.key, [])]
+        if all(k in self.done for k in needed):
+            self._offer("shard", shard)
+
+    def _offer(self, stage: str, unit: Any) -> None:
+        """Take a unit whose inputs are done: reuse its marker, or run it."""
+        if unit.key in self.done or unit.key in self.attempts:
+            return
+        record = read_marker(self.folders, stage, unit.key)
+        if record is not None:
+            self._finish(stage, unit, record, reused=True)
+            return
+        self.attempts[unit.key] = 1
+        self.folders.failed(unit.key).unlink(missing_ok=True)
+        self.engine.submit(self._job(stage, unit))
+
+    def run(self) -> None:
+        for e in self.plan.episodes:
+            self._offer("record", e)
+        units: dict[str, Any] = {u.key: u for u in [*self.plan.episodes, *self.plan.renders, *self.plan.shards]}
+        while self.engine.pending():
+            for done in self.engine.wait():
+                self._handle(done, units[done.job.key])
+
+    def _handle(self, done: Done, unit: Any) -> None:
+        stage = done.job.stage
+        if done.error is None:
+            self._finish(stage, unit, done.value, reused=False)
+            return
+        n = self.attempts[unit.key]
+        if n <= self.retries:
+            self.attempts[unit.key] = n + 1
+            self.engine.submit(done.job)
+            return
+        what = describe(stage, unit)
+        failure = Failure(stage, unit.key, what, done.error, n)
+        self.result.failures.append(failure)
+        self.failed.add(unit.key)
+        path = self.folders.failed(unit.key)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_atomic(path, json.dumps(failure.__dict__, indent=1) + "\n")
+
+
+def describe(stage: str, unit: Any) -> str:
+    """How a person reads a unit: the episode id, the episode's stream, or the shard's number and size."""
+    if stage == "record":
+        return f"episode {unit.episode_id}"
+    if stage == "render":
+        return f"{unit.stream} frames of {unit.episode.episode_id}"
+    return f"shard {unit.index} ({len(unit.episodes)} episodes)"
+
+
+# ---- the build --------------------------------------------------------------------------------------------------
+def build_dataset(catalog: Catalog, plan: Plan, out: Path, engine: Engine, *, work: Path | None = None,
+                  variants: Path = Path("variants"), retries: int = DEFAULT_RETRIES,
+                  progress: Callable[[str, int, int], None] | None = None, register: bool = True) -> BuildResult:
+    """Build the dataset of ``plan`` at ``out`` on ``engine`` (see the module docstring). ``progress(stage, done,
+    total)`` reports stages ``record``, ``render``, ``shard`` and ``merge``. Returns what ran, what was reused and
+    what failed; the dataset is published only without failures."""
+    from rik.locks import exclusive
+
+    out = Path(out).absolute()
+    work = Path(work).absolute() if work else default_work(out)
+    result = BuildResult(out, work, plan.spec_hash)
+    if _up_to_date(out, plan, result):
+        return result
+    with exclusive(work, "rik dataset build"):
+        if _up_to_date(out, plan, result):  # another build finished it while we waited for nothing
+            return result
+        t0 = time.perf_counter()
+        folders = Folders(work, Path(variants).absolute())
+        work.mkdir(parents=True, exist_ok=True)
+        write_atomic(work / f"spec-{plan.spec_hash[:16]}.json",
+                     json.dumps({"source": plan.source, "spec_hash": plan.spec_hash,
+                                 "spec": plan.spec.model_dump(mode="json")}, indent=1) + "\n")
+        schedule = _Schedule(plan, folders, engine, retries, result, progress)
+        try:
+            schedule.run()
+        finally:
+            engine.close()
+        result.wall_seconds = time.perf_counter() - t0
+        if result.failures:
+            return result
+        outcomes: dict[str, int] = {}
+        for e in plan.episodes:
+            o = schedule.done[e.key]["outcome"]
+            outcomes[o] = outcomes.get(o, 0) + 1
+        result.outcomes = dict(sorted(outcomes.items()))
+        if progress:
+            progress("merge", 0, 1)
+        t1 = time.perf_counter()
+        _merge(catalog, plan, folders, schedule, out, result)
+        result.seconds["merge"] = time.perf_counter() - t1
+        result.wall_seconds = time.perf_counter() - t0
+        _write_build_meta(out, result, engine)
+        if progress:
+            progress("merge", 1, 1)
+    if register:
+        from rik.dataset.registry import register_dataset
+
+        register_dataset(out)
+    return result
+
+
+def _up_to_date(out: Path, plan: Plan, result: BuildResult) -> bool:
+    """Whether ``out`` already holds this spec's dataset (then nothing runs); another dataset there is an error."""
+    if not out.exists():
+        return False
+    meta = read_dataset_meta(out)
+    if meta is None:
+        raise RikError(f"{out}: exists and is not a dataset built by rik dataset build (no meta/{DATASET_META}); "
+                       "choose another --out")
+    if meta.get("spec_hash") != plan.spec_hash:
+        raise RikError(f"{out}: holds the dataset of another spec (spec hash {str(meta.get('spec_hash'))[:12]}, "
+                       f"this spec's is {plan.spec_hash[:12]}); choose another --out")
+    result.up_to_date = True
+    result.episodes = int(meta.get("counts", {}).get("episodes", 0))
+    result.dataset_frames = int(meta.get("counts", {}).get("frames", 0))
+    result.outcomes = dict(meta.get("outcomes", {}))
+    return True
+
+
+def file_checksums(root: Path) -> dict[str, str]:
+    """sha256 of every file of a dataset but rik's two metadata files (the record of a build), by relative path."""
+    import hashlib
+
+    sums = {}
+    for path in sorted(p for p in root.rglob("*") if p.is_file()):
+        rel = path.relative_to(root).as_posix()
+        if rel in (f"meta/{DATASET_META}", f"meta/{BUILD_META}"):
+            continue
+        digest = hashlib.sha256()
+        with path.open("rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+        sums[rel] = digest.hexdigest()
+    return sums
+
+
+def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, out: Path,
+           result: BuildResult) -> None:
+    """Aggregate the shards (in plan order), check the result, write the card and rik's metadata, publish."""
+    from rik.dataset.spec import library_versions
+    from rik.exporters.lerobot_card import write_card
+    from rik.exporters.lerobot_check import check_dataset
+    from rik.exporters.lerobot_export import _aggregate, _order_stats, quiet_encoders
+
+    merged = folders.work / f"merged-{plan.spec_hash[:16]}"
+    if merged.exists():
+        shutil.rmtree(merged)
+    roots = [folders.work / schedule.done[s.key]["output"] / "ds" for s in plan.shards]
+    quiet_encoders()
+    with quiet_tqdm():
+        _aggregate(plan.spec.repo_id, roots, merged)
+    _order_stats(merged)
+    checks = check_dataset(merged, plan.spec.repo_id, len(plan.episodes))
+    fps = int(checks["fps"])
+    write_card(catalog, merged, schedule.xspec, fps, checks, extra=_card_text(plan))
+    result.episodes, result.dataset_frames = int(checks["episodes"]), int(checks["frames"])
+    data = {"format": 1, "spec_hash": plan.spec_hash, "source": plan.source,
+            "spec": plan.spec.model_dump(mode="json"), "versions": library_versions("mujoco", "lerobot", "mitsuba"),
+            "collision": plan.collision, "variants": plan.variants, "rejected_variants": plan.rejected,
+            "counts": {**plan.summary(), "frames": result.dataset_frames, "fps": fps},
+            "outcomes": result.outcomes, "export": export_settings(plan.spec),
+            "files": file_checksums(merged)}
+    write_atomic(merged / "meta" / DATASET_META, json.dumps(data, indent=1) + "\n")
+    try:
+        if out.exists():
+            raise FileExistsError
+        os.rename(merged, out)
+    except OSError:
+        raise RikError(f"{out}: was created by something else while the build ran, so the finished dataset was not "
+                       f"moved there (it is kept in {merged}); move {out} away and build again") from None
+
+
+@contextmanager
+def quiet_tqdm() -> Iterator[None]:
+    """No tqdm bars in the block (lerobot's merge draws its own over rik's progress bars)."""
+    old = os.environ.get("TQDM_DISABLE")
+    os.environ["TQDM_DISABLE"] = "1"
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop("TQDM_DISABLE", None)
+        else:
+            os.environ["TQDM_DISABLE"] = old
+
+
+def _card_text(plan: Plan) -> str:
+    s = plan.spec
+    ops = ", ".join(f"`{o.label}`" + (f" ({o.strategy}, {o.params})" if o.params else "") for o in s.operators)
+    return (f"**Built from a spec** with `rik dataset build` (spec hash `{plan.spec_hash[:16]}`, in "
+            f"`meta/{DATASET_META}` with the variants' content hashes and every file's sha256): "
+            f"{len(plan.variants)} variants x {len(s.operators)} operators ({ops}) x {s.episodes_per_variant} "
+            f"episodes from seed {s.seed}; `rik dataset verify DIR` re-checks it.")
+
+
+def _write_build_meta(out: Path, result: BuildResult, engine: Engine) -> None:
+    hours = result.wall_seconds / 3600
+    stats = {"engine": engine.name, "workers": engine.workers, "wall_seconds": round(result.wall_seconds, 3),
+             "ran": result.ran, "reused": result.reused,
+             "seconds": {k: round(v, 3) for k, v in result.seconds.items()}, "frames_rendered": result.frames,
+             "episodes_per_hour": round(result.ran["record"] / hours, 1) if hours and result.ran["record"] else None}
+    write_atomic(out / "meta" / BUILD_META, json.dumps(stats, indent=1) + "\n")

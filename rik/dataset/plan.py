@@ -1,0 +1,223 @@
+"""A spec expanded against the catalog: the variants it selects, its episodes, renders and shards, each a unit of
+work with a deterministic key (the spec entry, the seed, the variant's content hash, code and library versions)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rik.errors import RikError
+from rik.paths import json_sha256
+from rik.schemas.dataset import DatasetSpec, OperatorSpec
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+    from rik.render.streams import StreamSpec
+
+SAMPLE_STREAM = 0xDA7A_5E7
+"""Second word of the seed sequence that draws ``variants.sample`` (apart from the episodes' own seeds)."""
+GRIPPER = "hand-e"
+
+
+@dataclass(frozen=True)
+class EpisodeUnit:
+    """One episode to record: an operator on a variant's front with a seed; ``key`` decides its output."""
+
+    index: int
+    variant: str
+    front: str
+    operator: OperatorSpec
+    seed: int
+    key: str
+
+    @property
+    def episode_id(self) -> str:
+        from rik.sim.episode import episode_id
+
+        return episode_id(self.variant, self.front, self.operator.label, self.seed)
+
+
+@dataclass(frozen=True)
+class RenderUnit:
+    """One image stream of one episode."""
+
+    episode: EpisodeUnit
+    stream: str
+    key: str
+
+
+@dataclass(frozen=True)
+class ShardUnit:
+    """A group of episodes written as one LeRobot dataset, merged with the others at the end."""
+
+    index: int
+    episodes: tuple[EpisodeUnit, ...]
+    key: str
+
+
+@dataclass
+class Plan:
+    """What a spec makes, in order."""
+
+    spec: DatasetSpec
+    spec_hash: str
+    source: str
+    """The spec's file, as messages name it."""
+    variants: dict[str, str]
+    """Variant id -> its content hash (the combinator's spec hash, with the collision mode)."""
+    rejected: dict[str, str]
+    """Selected pairings whose variant fails a check -> the reason; left out."""
+    collision: str
+    episodes: list[EpisodeUnit] = field(default_factory=list)
+    renders: list[RenderUnit] = field(default_factory=list)
+    shards: list[ShardUnit] = field(default_factory=list)
+
+    @property
+    def streams(self) -> tuple[str, ...]:
+        return self.spec.streams
+
+    def stream_spec(self, stream: str) -> StreamSpec:
+        from rik.render.streams import StreamSpec
+
+        w, h = self.spec.size
+        r = self.spec.render
+        return StreamSpec(stream, w, h, spp=r.spp, denoise=r.denoise, variant=r.variant)  # type: ignore[arg-type]
+
+    def summary(self) -> dict[str, Any]:
+        """Counts, as ``rik dataset plan`` prints them and meta/rik_dataset.json keeps them."""
+        return {"variants": len(self.variants), "rejected_variants": len(self.rejected),
+                "operators": [o.label for o in self.spec.operators], "episodes": len(self.episodes),
+                "renders": len(self.renders), "shards": len(self.shards)}
+
+
+def _field_error(source: str, field_name: str, exc: RikError) -> RikError:
+    return RikError(f"{source}, field '{field_name}': {exc}")
+
+
+def select_variants(catalog: Catalog, spec: DatasetSpec, source: str) -> list[str]:
+    """The variant ids the spec's ``variants`` selects, in catalog order (before any checks run)."""
+    from rik.combinator import ids as variant_ids
+
+    sel = spec.variants
+    if sel.ids:
+        chosen = []
+        for i, text in enumerate(sel.ids):
+            try:
+                chosen.append(variant_ids.parse_variant_id(catalog, text).id)
+            except RikError as exc:
+                raise _field_error(source, f"variants.ids.{i}", exc) from None
+    else:
+        split = None if sel.split == "all" else sel.split
+        kinds = sorted({f.kind for u in catalog.base_units.values() for f in u.fronts})
+        checks: list[tuple[str, Sequence[str], Any]] = [
+            ("base_units", sel.base_units, catalog.base_unit), ("handles", sel.handles, catalog.handle),
+            ("presets", sel.presets, catalog.preset)]
+        for name, values, lookup in checks:
+            for i, value in enumerate(values):
+                try:
+                    lookup(value)
+                except RikError as exc:
+                    raise _field_error(source, f"variants.{name}.{i}", exc) from None
+        for i, kind in enumerate(sel.kinds):
+            if kind not in kinds:
+                raise RikError(f"{source}, field 'variants.kinds.{i}': unknown front kind '{kind}' (kinds: "
+                               f"{', '.join(kinds)})")
+        try:
+            keys = variant_ids.select_variants(catalog, bases=sel.base_units, handle_types=sel.handle_types,
+                                               handles=sel.handles, presets=sel.presets, split=split)
+        except RikError as exc:
+            raise _field_error(source, "variants.split", exc) from None
+        chosen = [k.id for k in keys if catalog.base_units[k.base].fronts[0].kind in sel.kinds]
+    chosen = list(dict.fromkeys(chosen))
+    if sel.sample is not None and sel.sample < len(chosen):
+        import numpy as np
+
+        rng = np.random.default_rng([spec.seed, SAMPLE_STREAM])
+        keep = sorted(rng.choice(len(chosen), size=sel.sample, replace=False).tolist())
+        chosen = [chosen[i] for i in keep]
+    if not chosen:
+        raise RikError(f"{source}, field 'variants': the selection keeps no variant; widen its filters "
+                       "(rik catalog list shows what the catalog holds)")
+    return chosen
+
+
+def check_operators(spec: DatasetSpec, source: str) -> None:
+    """Every operator names a known strategy (with valid parameters)."""
+    from rik.sim.operators import make_operator
+
+    for i, op in enumerate(spec.operators):
+        try:
+            make_operator(op.strategy, op.params)
+        except RikError as exc:
+            raise _field_error(source, f"operators.{i}.strategy", exc) from None
+
+
+def check_cameras(spec: DatasetSpec, source: str) -> None:
+    """The spec's cameras exist in rik's scenes."""
+    from rik.sim.observation import CAMERAS
+
+    for i, cam in enumerate(spec.cameras):
+        if cam not in CAMERAS:
+            raise RikError(f"{source}, field 'cameras.{i}': no camera '{cam}' in rik's scenes (cameras: "
+                           f"{', '.join(CAMERAS)})")
+
+
+def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", variants_dir: Path = Path("variants"),
+              workers: int = 1, overlays: Sequence[Path] = ()) -> Plan:
+    """Expand ``spec``: select its variants, build the ones missing into ``variants_dir`` (their checks decide
+    which can be simulated), and lay out its units. Bad input raises one line naming ``source`` and the field."""
+    from rik.combinator.build import rejected_variants, resolve_collision, spec_hash
+    from rik.combinator.ids import parse_variant_id
+    from rik.dataset.spec import library_versions
+    from rik.dataset.spec import spec_hash as hash_of_spec
+
+    check_operators(spec, source)
+    check_cameras(spec, source)
+    chosen = select_variants(catalog, spec, source)
+    collision = resolve_collision(variants_dir)
+    rejected = {r.id: f"check {r.failed_check} failed: {r.reason}"
+                for r in rejected_variants(catalog, chosen, variants_dir, workers=workers,
+                                           overlays=overlays).values()}
+    kept = [v for v in chosen if v not in rejected]
+    if not kept:
+        first = next(iter(rejected.items()))
+        raise RikError(f"{source}, field 'variants': every selected variant fails its checks (the first, "
+                       f"{first[0]}: {first[1]})")
+    keys = {v: parse_variant_id(catalog, v) for v in kept}
+    plan = Plan(spec, hash_of_spec(spec), source, {v: spec_hash(catalog, k, collision) for v, k in keys.items()},
+                rejected, collision)
+    record_versions = library_versions("mujoco")
+    for v in kept:
+        front = catalog.base_units[keys[v].base].fronts[0].id
+        for op in spec.operators:
+            for k in range(spec.episodes_per_variant):
+                seed = spec.seed + k
+                key = json_sha256({"stage": "record", "variant": v, "variant_hash": plan.variants[v],
+                                   "front": front, "strategy": op.strategy, "params": op.params, "label": op.label,
+                                   "seed": seed, "max_seconds": spec.max_seconds, "gripper": GRIPPER,
+                                   "versions": record_versions})
+                plan.episodes.append(EpisodeUnit(len(plan.episodes), v, front, op, seed, key))
+    render_versions = library_versions("mujoco", "mitsuba")
+    for e in plan.episodes:
+        for s in spec.streams:
+            key = json_sha256({"stage": "render", "record": e.key, "stream": plan.stream_spec(s).key,
+                               "cameras": list(spec.cameras), "versions": render_versions})
+            plan.renders.append(RenderUnit(e, s, key))
+    export_versions = library_versions("lerobot", "av")
+    size = spec.shard_episodes
+    for i in range(0, len(plan.episodes), size):
+        chunk = tuple(plan.episodes[i:i + size])
+        key = json_sha256({"stage": "shard", "episodes": [e.key for e in chunk],
+                           "renders": [r.key for r in plan.renders if r.episode in chunk],
+                           "export": export_settings(spec), "versions": export_versions})
+        plan.shards.append(ShardUnit(len(plan.shards), chunk, key))
+    return plan
+
+
+def export_settings(spec: DatasetSpec) -> dict[str, Any]:
+    """What decides the bytes of a shard besides its episodes and their frames."""
+    w, h = spec.size
+    return {"repo_id": spec.repo_id, "streams": list(spec.streams), "cameras": list(spec.cameras), "width": w,
+            "height": h, "fps": spec.fps, "codec": spec.codec, "render": spec.render.model_dump(mode="json")}

@@ -1,0 +1,124 @@
+"""A dataset spec (``rik dataset plan/build SPEC``): which variants, operators and episodes, and how they are
+rendered and exported. Only the schema lives here; expanding it against the catalog is :mod:`rik.dataset.plan`."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from rik.schemas.common import CatalogId, Frozen, SimpleId
+
+SPEC_FORMAT = 1
+STRATEGY_PARAMS = ("jitter", "regrasps")
+"""Parameters of a scripted strategy a spec may set (:func:`rik.sim.operators.make_operator`)."""
+
+
+class VariantSelection(Frozen):
+    """Which variants: explicit ``ids``, or every base unit x handle x preset pairing the filters keep (an empty
+    filter keeps all). Pairings whose variant fails its checks are left out and listed by ``rik dataset plan``."""
+
+    ids: tuple[str, ...] = ()
+    """Explicit variant ids (e.g. ``drawer-chest-60__two_point-bow-128__normal``); not combined with filters."""
+    split: str = "all"
+    """Catalog split of the handles: train, val, test, or all (``rik catalog splits``)."""
+    kinds: tuple[SimpleId, ...] = ("drawer",)
+    """Front kinds of the base units (drawer, door)."""
+    base_units: tuple[CatalogId, ...] = ()
+    handle_types: tuple[Literal["knob", "finger_pull", "two_point"], ...] = ()
+    handles: tuple[CatalogId, ...] = ()
+    presets: tuple[SimpleId, ...] = ()
+    sample: int | None = Field(default=None, ge=1)
+    """Keep this many of the selected variants, drawn with the spec's seed (None: all)."""
+
+    @model_validator(mode="after")
+    def _ids_alone(self) -> VariantSelection:
+        if self.ids and (self.base_units or self.handle_types or self.handles or self.presets or self.split != "all"):
+            raise ValueError("give either explicit 'ids' or filters (split, base_units, handle_types, handles, "
+                             "presets), not both")
+        return self
+
+
+class OperatorSpec(Frozen):
+    """One operator that makes episodes: a scripted strategy with its parameters (policies later)."""
+
+    strategy: str
+    """A scripted strategy (``rik record --help`` lists them)."""
+    name: Annotated[str, Field(pattern=r"^[a-z0-9][a-z0-9_\-]*$", max_length=60)] | None = None
+    """Label of the operator in episode ids and the dataset (default: the strategy's name); needed when two
+    operators run one strategy with different parameters."""
+    jitter: float | None = Field(default=None, ge=0, le=0.02, allow_inf_nan=False)
+    """Standard deviation of the random offset of the grasp point, m (None: the strategy's own)."""
+    regrasps: int | None = Field(default=None, ge=0, le=20)
+    """Re-grasps a closed-loop strategy may try (None: the strategy's own)."""
+
+    @property
+    def label(self) -> str:
+        return self.name or self.strategy
+
+    @property
+    def params(self) -> dict[str, float | int]:
+        """The parameters set, by name."""
+        return {k: v for k in STRATEGY_PARAMS if (v := getattr(self, k)) is not None}
+
+
+class RenderSettings(Frozen):
+    """The re-render's quality (Mitsuba; the ``rerendered`` stream only)."""
+
+    spp: int = Field(default=16, ge=1, le=4096)
+    """Samples per pixel."""
+    denoise: bool = True
+    variant: str = "auto"
+    """Mitsuba variant; ``auto`` picks the fastest that works on the machine (``cuda_ad_rgb`` with a GPU)."""
+
+
+class DatasetSpec(Frozen):
+    """A dataset as a reproducible spec. Every field has a default but ``repo_id`` and ``operators``."""
+
+    format: int = Field(default=SPEC_FORMAT, ge=1, le=SPEC_FORMAT)
+    repo_id: Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]*/[A-Za-z0-9][A-Za-z0-9_.\-]*$")]
+    """LeRobot repo id, OWNER/NAME (e.g. ``local/rik-drawers``)."""
+    description: str = ""
+    variants: VariantSelection = VariantSelection()
+    operators: tuple[OperatorSpec, ...] = Field(min_length=1)
+    episodes_per_variant: int = Field(default=1, ge=1, le=100_000)
+    """Episodes of each operator on each variant."""
+    seed: int = Field(default=0, ge=0, le=2**62)
+    """Seed of the first episode of each variant and operator (then +1 each); also draws ``variants.sample``."""
+    max_seconds: float = Field(default=30.0, gt=0, le=600, allow_inf_nan=False)
+    """Longest episode, simulated s."""
+    streams: tuple[Literal["sim", "rerendered"], ...] = ("sim",)
+    """Image streams: ``sim`` (MuJoCo), ``rerendered`` (Mitsuba); empty: a state-only dataset."""
+    cameras: tuple[str, ...] = ()
+    """Cameras of the scene to export (empty: all)."""
+    resolution: int | tuple[int, int] = 128
+    """Image size, px: one number (square) or [width, height]."""
+    render: RenderSettings = RenderSettings()
+    fps: int | None = Field(default=None, ge=1, le=1000)
+    """Dataset frame rate, Hz (None: the recording's, 20 Hz)."""
+    codec: Literal["libsvtav1", "h264", "hevc"] = "libsvtav1"
+    shard_episodes: int = Field(default=16, ge=1, le=10_000)
+    """Episodes per shard: each shard is a LeRobot dataset of its own, merged at the end."""
+
+    @field_validator("resolution")
+    @classmethod
+    def _size(cls, v: int | tuple[int, int]) -> int | tuple[int, int]:
+        for n in (v,) if isinstance(v, int) else v:
+            if not 16 <= n <= 4096:
+                raise ValueError(f"image sides must lie in 16 .. 4096 px, got {n}")
+        return v
+
+    @model_validator(mode="after")
+    def _labels_unique(self) -> DatasetSpec:
+        labels = [o.label for o in self.operators]
+        for label in labels:
+            if labels.count(label) > 1:
+                raise ValueError(f"two operators are labelled '{label}'; give each a distinct 'name'")
+        if not self.streams and self.cameras:
+            raise ValueError("a state-only dataset (streams: []) has no cameras; drop 'cameras'")
+        return self
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height), px."""
+        return (self.resolution, self.resolution) if isinstance(self.resolution, int) else self.resolution
