@@ -259,7 +259,8 @@ class _Schedule:
     def run(self) -> None:
         for e in self.plan.episodes:
             self._offer("record", e)
-        units: dict[str, Any] = {u.key: u for u in [*self.plan.episodes, *self.plan.renders, *self.plan.shards]}
+        everything: list[Any] = [*self.plan.episodes, *self.plan.renders, *self.plan.shards]
+        units = {u.key: u for u in everything}
         while self.engine.pending():
             for done in self.engine.wait():
                 self._handle(done, units[done.job.key])
