@@ -123,6 +123,9 @@ def build_command(spec: SpecArg,
                   variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
     """Build SPEC into --out: record -> render -> export per episode, in shards merged at the end. A rerun does only
     what is missing (after a crash, a kill, or failures)."""
+    import os
+
+    os.environ.setdefault("TQDM_DISABLE", "1")  # read when tqdm is imported: lerobot's merge would draw its own bars
     from rik.dataset.build import build_dataset, default_work
     from rik.dataset.engines import check_ray, local_engine
 

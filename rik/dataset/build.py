@@ -15,8 +15,7 @@ import json
 import os
 import shutil
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -393,8 +392,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
         shutil.rmtree(merged)
     roots = [folders.work / schedule.done[s.key]["output"] / "ds" for s in plan.shards]
     quiet_encoders()
-    with quiet_tqdm():
-        _aggregate(plan.spec.repo_id, roots, merged)
+    _aggregate(plan.spec.repo_id, roots, merged)
     _order_stats(merged)
     checks = check_dataset(merged, plan.spec.repo_id, len(plan.episodes))
     fps = int(checks["fps"])
@@ -414,20 +412,6 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
     except OSError:
         raise RikError(f"{out}: was created by something else while the build ran, so the finished dataset was not "
                        f"moved there (it is kept in {merged}); move {out} away and build again") from None
-
-
-@contextmanager
-def quiet_tqdm() -> Iterator[None]:
-    """No tqdm bars in the block (lerobot's merge draws its own over rik's progress bars)."""
-    old = os.environ.get("TQDM_DISABLE")
-    os.environ["TQDM_DISABLE"] = "1"
-    try:
-        yield
-    finally:
-        if old is None:
-            os.environ.pop("TQDM_DISABLE", None)
-        else:
-            os.environ["TQDM_DISABLE"] = old
 
 
 def _card_text(plan: Plan) -> str:

@@ -236,7 +236,13 @@ class RayEngine:
         check_ray()
         os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
         os.environ.setdefault("RAY_AUTH_MODE", "disabled")
+        os.environ.setdefault("RAY_ENABLE_UV_RUN_RUNTIME_ENV", "0")
         import ray
+        from ray._private import ray_constants
+
+        # Under `uv run` Ray would otherwise ship the working folder to every worker and rerun uv there; rik's
+        # nodes run the environment they were started from, and share files through the file system.
+        ray_constants.RAY_ENABLE_UV_RUN_RUNTIME_ENV = os.environ["RAY_ENABLE_UV_RUN_RUNTIME_ENV"] not in ("0", "")
 
         self.ray = ray
         self.started_here = False
