@@ -1,0 +1,112 @@
+"""``rik dataset build`` on a Ray cluster: two worker nodes on loopback (``ray.cluster_utils.Cluster``, one cluster
+for the session), one killed mid-build; the dataset must equal the one built on local processes, and the teardown
+must leave no Ray process behind."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from rik.registry.load import load_catalog
+
+CAT = load_catalog()
+SPEC = """repo_id: local/rik-ray
+variants:
+  ids: [drawer-chest-80__two_point-bow-128__normal, drawer-chest-80__knob-mushroom-30__normal]
+operators:
+  - strategy: contact_rich
+episodes_per_variant: 2
+max_seconds: 0.6
+streams: [sim]
+cameras: [front]
+resolution: 64
+shard_episodes: 2
+"""
+RAY_PROGRAMS = ("raylet", "gcs_server", "ray::", "dashboard", "runtime_env_agent", "default_worker.py")
+
+
+def _ray_processes() -> set[int]:
+    """Pids of this machine's processes that belong to Ray (by their command line)."""
+    found = set()
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        if any(p in cmd for p in RAY_PROGRAMS):
+            found.add(int(entry.name))
+    return found
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A head without CPUs and two worker nodes of one CPU each; shut down, and checked gone, at the end."""
+    os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
+    os.environ.setdefault("RAY_AUTH_MODE", "disabled")
+    from ray.cluster_utils import Cluster
+
+    before = _ray_processes()
+    c = Cluster(initialize_head=True, head_node_args={"num_cpus": 0, "include_dashboard": False})
+    nodes = [c.add_node(num_cpus=1) for _ in range(2)]
+    c.wait_for_nodes()
+    yield c, nodes
+    import ray
+
+    if ray.is_initialized():
+        ray.shutdown()
+    c.shutdown()
+    deadline = time.monotonic() + 30
+    while (left := _ray_processes() - before) and time.monotonic() < deadline:
+        time.sleep(0.5)
+    assert not left, f"Ray processes left behind after the cluster's shutdown: {sorted(left)}"
+
+
+def _dataset_sums(root: Path) -> dict[str, str]:
+    return {p.relative_to(root).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(root.rglob("*")) if p.is_file() and p.name != "rik_build.json"}
+
+
+def _plan(tmp: Path, variants: Path):
+    from rik.dataset.plan import make_plan
+    from rik.dataset.spec import load_spec
+
+    spec_file = tmp / "spec.yaml"
+    spec_file.write_text(SPEC)
+    return make_plan(CAT, load_spec(spec_file), source="spec.yaml", variants_dir=variants)
+
+
+def test_ray_build_survives_a_lost_node_and_equals_the_local_build(cluster, tmp_path: Path) -> None:
+    from rik.dataset.build import build_dataset
+    from rik.dataset.engines import InlineEngine, RayEngine
+
+    c, nodes = cluster
+    variants = tmp_path / "variants"
+    plan = _plan(tmp_path, variants)
+    local = build_dataset(CAT, plan, tmp_path / "local", InlineEngine(CAT), variants=variants, register=False)
+    assert not local.failures and local.episodes == 4
+
+    killed: list[str] = []
+
+    def progress(stage: str, done: int, total: int) -> None:
+        if stage == "record" and done == 1 and not killed:  # a node dies while the other units are in flight
+            c.remove_node(nodes[0], allow_graceful=False)
+            killed.append(stage)
+
+    engine = RayEngine(c.address, render_actors=2)  # the render actors of a GPU cluster, here on CPU
+    assert engine.workers == 2 and len(engine.actors) == 2
+    on_ray = build_dataset(CAT, plan, tmp_path / "ray", engine, variants=variants, progress=progress,
+                           register=False)
+    assert killed, "the build finished before a node could be killed"
+    assert not on_ray.failures, on_ray.failures
+    assert on_ray.ran == {"record": 4, "render": 4, "shard": 2}
+    assert _dataset_sums(tmp_path / "ray") == _dataset_sums(tmp_path / "local")
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    ds = LeRobotDataset("local/rik-ray", root=tmp_path / "ray", video_backend="pyav")
+    assert ds.meta.total_episodes == 4 and "observation.images.front" in ds.meta.features
