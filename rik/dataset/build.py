@@ -122,7 +122,23 @@ def read_marker(folders: Folders, stage: str, key: str) -> dict[str, Any] | None
     except (OSError, ValueError):
         return None
     output = data.get("output")
-    return data if isinstance(output, str) and (folders.work / output).exists() else None
+    if not isinstance(output, str) or not (folders.work / output).exists():
+        return None
+    if stage == "record" and not _states_intact(folders.work / output, data.get("states_sha256")):
+        return None  # an episode changed or truncated since it was recorded is recorded again
+    return data
+
+
+def _states_intact(episode: Path, sha256: object) -> bool:
+    """Whether the episode's ``states.parquet`` still has the sha256 its marker recorded."""
+    import hashlib
+
+    from rik.sim.episode import STATES
+
+    try:
+        return hashlib.sha256((episode / STATES).read_bytes()).hexdigest() == sha256
+    except OSError:
+        return False
 
 
 def run_record(catalog: Catalog, arg: tuple[Folders, EpisodeUnit, float]) -> dict[str, Any]:
