@@ -92,14 +92,17 @@ def test_ray_build_survives_a_lost_node_and_equals_the_local_build(cluster, tmp_
     assert not local.failures and local.episodes == 4
 
     killed: list[str] = []
+    engine = RayEngine(c.address, render_actors=2)  # the render actors of a GPU cluster, here on CPU
+    assert engine.workers == 2 and len(engine.actors) == 2
+    import ray
+
+    homes = set(ray.get([a.node.remote() for a in engine.actors]))
+    victim = next((n for n in nodes if n.node_id in homes), nodes[0])  # a worker node that hosts a render actor
 
     def progress(stage: str, done: int, total: int) -> None:
         if stage == "record" and done == 1 and not killed:  # a node dies while the other units are in flight
-            c.remove_node(nodes[0], allow_graceful=False)
-            killed.append(stage)
-
-    engine = RayEngine(c.address, render_actors=2)  # the render actors of a GPU cluster, here on CPU
-    assert engine.workers == 2 and len(engine.actors) == 2
+            c.remove_node(victim, allow_graceful=False)
+            killed.append(victim.node_id)
     on_ray = build_dataset(CAT, plan, tmp_path / "ray", engine, variants=variants, progress=progress,
                            register=False)
     assert killed, "the build finished before a node could be killed"

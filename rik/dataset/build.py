@@ -15,6 +15,7 @@ import json
 import os
 import shutil
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -221,6 +222,8 @@ class _Schedule:
         self.shard_of = {e.key: s for s in plan.shards for e in s.episodes}
         self.totals = {"record": len(plan.episodes), "render": len(plan.renders), "shard": len(plan.shards)}
         self.counts = dict.fromkeys(STAGES, 0)
+        self.ready: deque[Job] = deque()
+        self.window = 2 * engine.workers + len(getattr(engine, "actors", ()))
         self.xspec = export_spec(plan)
 
     def _tick(self, stage: str) -> None:
@@ -269,16 +272,27 @@ class _Schedule:
             return
         self.attempts[unit.key] = 1
         self.folders.failed(unit.key).unlink(missing_ok=True)
-        self.engine.submit(self._job(stage, unit))
+        job = self._job(stage, unit)
+        if stage == "record":
+            self.ready.append(job)
+        else:  # an episode's renders and a shard go before new episodes: finished shards early, little work on disk
+            self.ready.appendleft(job)
+
+    def _fill(self) -> None:
+        """Keep the engine's queue short (twice its workers): the rest waits here, in order."""
+        while self.ready and self.engine.pending() < self.window:
+            self.engine.submit(self.ready.popleft())
 
     def run(self) -> None:
-        for e in self.plan.episodes:
-            self._offer("record", e)
         everything: list[Any] = [*self.plan.episodes, *self.plan.renders, *self.plan.shards]
         units = {u.key: u for u in everything}
+        for e in self.plan.episodes:
+            self._offer("record", e)
+        self._fill()
         while self.engine.pending():
             for done in self.engine.wait():
                 self._handle(done, units[done.job.key])
+            self._fill()
 
     def _handle(self, done: Done, unit: Any) -> None:
         stage = done.job.stage
@@ -288,7 +302,7 @@ class _Schedule:
         n = self.attempts[unit.key]
         if n <= self.retries:
             self.attempts[unit.key] = n + 1
-            self.engine.submit(done.job)
+            self.ready.appendleft(done.job)
             return
         what = describe(stage, unit)
         failure = Failure(stage, unit.key, what, done.error, n)

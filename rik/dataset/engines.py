@@ -8,8 +8,9 @@ seconds), never frames: on Ray the object store is small in containers.
 Ray (``RayEngine``) is imported only when asked for. CPU stages run as Ray tasks; render jobs (``Job.renders``)
 run on long-lived actors when the cluster has GPUs, or when asked (``render_actors``): an actor keeps its process,
 its imports (seconds each) and Dr.Jit's in-memory kernel cache from one episode to the next, where a GPU task would
-get a fresh process per call. MuJoCo's GL context is still made per episode (0.06-0.14 s on llvmpipe, measured). One renderer per actor, at most :data:`RENDERERS_PER_GPU` per GPU (MuJoCo's EGL hangs
-with many concurrent renderers on one GPU, mujoco#3444).
+get a fresh process per call. MuJoCo's GL context is still made per episode (0.06-0.14 s on llvmpipe, measured).
+One renderer per actor, at most :data:`RENDERERS_PER_GPU` per GPU (MuJoCo's EGL hangs with many concurrent
+renderers on one GPU, mujoco#3444).
 """
 
 from __future__ import annotations
@@ -28,6 +29,8 @@ if TYPE_CHECKING:
 
 RENDERERS_PER_GPU = 4
 """Render actors that share one GPU (each holds one renderer)."""
+ACTOR_LOSSES = 3
+"""Times a render job whose actor was lost is sent again (as a task) before it counts as failed."""
 RAY_CONNECT_TIMEOUT_S = 30
 """How long ``--ray ADDRESS`` waits for the cluster to answer, s."""
 
@@ -209,6 +212,12 @@ class _RenderActor:
     def run(self, fn: Callable[[Catalog, Any], Any], arg: Any) -> tuple[Any, str | None]:
         return _ray_job(self.overlays, fn, arg)
 
+    def node(self) -> str:
+        """The id of the Ray node this actor lives on."""
+        import ray
+
+        return str(ray.get_runtime_context().get_node_id())
+
 
 def ray_available() -> bool:
     """Whether the ``ray`` extra is installed (without importing it)."""
@@ -257,13 +266,15 @@ class RayEngine:
         self.actors: list[Any] = []
         count = render_actors if render_actors is not None else gpus * RENDERERS_PER_GPU
         if count:
-            options: dict[str, Any] = {"num_cpus": 0, "max_restarts": -1, "max_task_retries": max_retries}
+            options: dict[str, Any] = {"num_cpus": 0, "max_restarts": -1, "max_task_retries": max_retries,
+                                       "scheduling_strategy": "SPREAD"}  # over nodes (and GPUs)
             if gpus:
                 options["num_gpus"] = 1.0 / RENDERERS_PER_GPU
             actor = ray.remote(**options)(_RenderActor)
             self.actors = [actor.remote(self.overlays) for _ in range(count)]
         self.calls: dict[Any, Job] = {}
         self.next_actor = 0
+        self.actor_losses: dict[str, int] = {}
 
     def _connect(self, address: str) -> None:
         ray = self.ray
@@ -304,15 +315,27 @@ class RayEngine:
         return len(self.calls)
 
     def wait(self) -> list[Done]:
-        ready, _ = self.ray.wait(list(self.calls), num_returns=1)
-        out = []
-        for ref in ready:
-            job = self.calls.pop(ref)
-            try:
-                value, error = self.ray.get(ref)
-            except Exception as exc:  # the task's worker or node was lost beyond Ray's own retries
-                value, error = None, f"lost on the Ray cluster: {error_line(exc)}"
-            out.append(Done(job, value, error))
+        """The finished calls; a render call whose actor was lost with its node (or is restarting) is sent again
+        as a task, up to :data:`ACTOR_LOSSES` times, without counting as an attempt of the unit."""
+        from ray.exceptions import RayActorError
+
+        out: list[Done] = []
+        while not out and self.calls:
+            ready, _ = self.ray.wait(list(self.calls), num_returns=1)
+            for ref in ready:
+                job = self.calls.pop(ref)
+                try:
+                    value, error = self.ray.get(ref)
+                except RayActorError as exc:
+                    lost = self.actor_losses.get(job.key, 0) + 1
+                    self.actor_losses[job.key] = lost
+                    if lost <= ACTOR_LOSSES:
+                        self.calls[self.task.remote(self.overlays, job.fn, job.arg)] = job
+                        continue
+                    value, error = None, f"lost on the Ray cluster (its render actor): {error_line(exc)}"
+                except Exception as exc:  # the task's worker or node was lost beyond Ray's own retries
+                    value, error = None, f"lost on the Ray cluster: {error_line(exc)}"
+                out.append(Done(job, value, error))
         return out
 
     def close(self) -> None:
