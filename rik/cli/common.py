@@ -10,8 +10,10 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from rich.console import Console
-    from rich.progress import Progress
+    from rich.progress import Progress, TaskID
 
 CatalogOption = Annotated[
     list[Path] | None,
@@ -84,3 +86,21 @@ def progress_bar() -> Progress:
     return WipedOnError(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                         TextColumn("{task.fields[last]}"), console=Console(stderr=True, highlight=False, emoji=False),
                         transient=False)
+
+
+def quiet_writers() -> None:
+    """Silence what lerobot's stack prints per episode (tqdm bars of datasets and aggregation; FFmpeg and SVT-AV1
+    are quieted by the writer itself): rik shows its own progress. Read when tqdm is first imported."""
+    os.environ.setdefault("TQDM_DISABLE", "1")
+
+
+def stage_progress(bar: Progress) -> Callable[[str, int, int], None]:
+    """A ``progress(stage, done, total)`` callback that keeps one task of ``bar`` per stage."""
+    tasks: dict[str, TaskID] = {}
+
+    def report(stage: str, done: int, total: int) -> None:
+        if stage not in tasks:
+            tasks[stage] = bar.add_task(stage, total=total, last="")
+        bar.update(tasks[stage], completed=done, total=total)
+
+    return report

@@ -7,7 +7,16 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rik.cli.common import DEFAULT_WORKERS, CatalogOption, console, overlays, print_json, progress_bar
+from rik.cli.common import (
+    DEFAULT_WORKERS,
+    CatalogOption,
+    console,
+    overlays,
+    print_json,
+    progress_bar,
+    quiet_writers,
+    stage_progress,
+)
 from rik.errors import RikError
 
 if TYPE_CHECKING:
@@ -123,9 +132,7 @@ def build_command(spec: SpecArg,
                   variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
     """Build SPEC into --out: record -> render -> export per episode, in shards merged at the end. A rerun does only
     what is missing (after a crash, a kill, or failures)."""
-    import os
-
-    os.environ.setdefault("TQDM_DISABLE", "1")  # read when tqdm is imported: lerobot's merge would draw its own bars
+    quiet_writers()
     from rik.dataset.build import build_dataset, default_work
     from rik.dataset.engines import check_ray, local_engine
 
@@ -143,15 +150,8 @@ def build_command(spec: SpecArg,
         engine = local_engine(cat, workers, overlays(catalog))
     print(f"  engine: {engine.name}, {engine.workers} workers; work folder {work or default_work(out)}")
     with progress_bar() as bar:
-        tasks: dict[str, Any] = {}
-
-        def progress(stage: str, done: int, total: int) -> None:
-            if stage not in tasks:
-                tasks[stage] = bar.add_task(stage, total=total, last="")
-            bar.update(tasks[stage], completed=done, total=total)
-
         result = build_dataset(cat, plan, out, engine, work=work, variants=variants, retries=retries,
-                               progress=progress)
+                               progress=stage_progress(bar))
     if result.up_to_date:
         print(f"{out}: already built from this spec; nothing to do ({result.episodes} episodes)")
         return

@@ -3,24 +3,25 @@ streams. Only parsing and printing here; :mod:`rik.exporters.lerobot_export` doe
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rik.cli.common import CatalogOption, WorkersOpt, console, overlays, progress_bar
+from rik.cli.common import (
+    CatalogOption,
+    WorkersOpt,
+    console,
+    overlays,
+    progress_bar,
+    quiet_writers,
+    stage_progress,
+)
 from rik.cli.rerender import CamerasOpt, EpisodesArg, ResOpt
 from rik.cli.sim import VariantsOpt
 
 if TYPE_CHECKING:
-    from rich.progress import TaskID
-
-
-def quiet_writers() -> None:
-    """Silence what lerobot's stack prints per episode (tqdm bars of datasets and aggregation; FFmpeg and SVT-AV1
-    are quieted by the writer itself): rik shows its own progress."""
-    os.environ.setdefault("TQDM_DISABLE", "1")
+    pass
 
 
 def export_lerobot(
@@ -65,12 +66,7 @@ def export_lerobot(
                       fps, codec, spp, denoise, variant, shard_episodes)
     cat = load_catalog(overlays(catalog))
     with progress_bar() as progress:
-        tasks: dict[str, TaskID] = {}
-
-        def report(stage: str, done: int, total: int) -> None:
-            if stage not in tasks:
-                tasks[stage] = progress.add_task(stage, total=total, last="")
-            progress.update(tasks[stage], completed=done, total=total)
+        report = stage_progress(progress)
 
         result = run(cat, episodes, out, spec, renders=renders, variants=variants, resume=resume, workers=workers,
                      overlays=overlays(catalog), progress=report)

@@ -12,7 +12,6 @@ published only when every unit succeeded.
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import time
 from collections import deque
@@ -415,7 +414,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
     from rik.dataset.spec import library_versions
     from rik.exporters.lerobot_card import write_card
     from rik.exporters.lerobot_check import check_dataset
-    from rik.exporters.lerobot_export import _aggregate, _order_stats, quiet_encoders
+    from rik.exporters.lerobot_export import _aggregate, _order_stats, publish, quiet_encoders
 
     merged = folders.work / f"merged-{plan.spec_hash[:16]}"
     if merged.exists():
@@ -435,13 +434,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
             "outcomes": result.outcomes, "export": export_settings(plan.spec),
             "files": file_checksums(merged)}
     write_atomic(merged / "meta" / DATASET_META, json.dumps(data, indent=1) + "\n")
-    try:
-        if out.exists():
-            raise FileExistsError
-        os.rename(merged, out)
-    except OSError:
-        raise RikError(f"{out}: was created by something else while the build ran, so the finished dataset was not "
-                       f"moved there (it is kept in {merged}); move {out} away and build again") from None
+    publish(merged, out, what="the build", rerun="build again")
 
 
 def _card_text(plan: Plan) -> str:

@@ -350,7 +350,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
 
     checks = check_dataset(merged, spec.repo_id, len(dirs))
     write_card(catalog, merged, spec, fps, checks)
-    _publish(merged, out)
+    publish(merged, out)
     shutil.rmtree(partial_dir, ignore_errors=True)
     return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
                         sorted(features(cams, spec.streams, spec.width, spec.height)), len(jobs), skipped, checks)
@@ -368,17 +368,16 @@ def _order_stats(root: Path) -> None:
     write_atomic(stats_file, json.dumps(ordered, indent=4, ensure_ascii=False))  # lerobot's own layout
 
 
-def _publish(merged: Path, out: Path) -> None:
+def publish(merged: Path, out: Path, what: str = "the export", rerun: str = "run again with --resume") -> None:
     """Rename the finished dataset to ``out``, which must still be free: a folder made there by something else
-    while the export ran is never replaced, and the finished dataset stays where it is for ``--resume``."""
+    while ``what`` ran is never replaced, and the finished dataset stays where it is (``rerun``: how to go on)."""
     try:
         if out.exists():
             raise FileExistsError
         os.rename(merged, out)
     except OSError:
-        raise RikError(f"{out}: was created by something else while the export ran, so the finished dataset was "
-                       f"not moved there (it is kept in {merged}); move {out} away and run again with --resume"
-                       ) from None
+        raise RikError(f"{out}: was created by something else while {what} ran, so the finished dataset was not "
+                       f"moved there (it is kept in {merged}); move {out} away and {rerun}") from None
 
 
 def _shard_by_name(jobs: dict[str, tuple], catalog: Catalog, name: str) -> int:
