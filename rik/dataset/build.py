@@ -418,16 +418,21 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
 
 @contextmanager
 def quiet_tqdm() -> Iterator[None]:
-    """No tqdm bars in the block (lerobot's merge draws its own over rik's progress bars)."""
-    old = os.environ.get("TQDM_DISABLE")
-    os.environ["TQDM_DISABLE"] = "1"
+    """No tqdm bars in the block (lerobot's merge draws its own over rik's progress bars). tqdm reads
+    ``TQDM_DISABLE`` only when it is first imported, so the block sets ``disable`` in tqdm's constructor itself."""
+    from tqdm import std
+
+    own = std.tqdm.__dict__["__init__"]
+
+    def init(self: Any, *args: Any, **kwargs: Any) -> None:
+        kwargs["disable"] = True
+        own.__get__(self, type(self))(*args, **kwargs)
+
+    std.tqdm.__init__ = init  # type: ignore[method-assign]
     try:
         yield
     finally:
-        if old is None:
-            os.environ.pop("TQDM_DISABLE", None)
-        else:
-            os.environ["TQDM_DISABLE"] = old
+        std.tqdm.__init__ = own  # type: ignore[method-assign]
 
 
 def _card_text(plan: Plan) -> str:
