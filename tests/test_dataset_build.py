@@ -164,7 +164,7 @@ def test_kill_and_resume(rik, built, spec_file, variants, tmp_path) -> None:
         except ProcessLookupError:
             pass
     assert not out.exists()
-    r = rik("dataset", "build", str(spec_file), "--out", str(out), "-j", "2", "--variants", str(variants))
+    r = rik("dataset", "build", str(spec_file), "--out", str(out), "-j", "1", "--variants", str(variants))
     assert r.code == 0, r
     line = next(x for x in r.out.splitlines() if x.startswith("ran record"))
     reused = int(line.split("(")[1].split()[0])
@@ -307,3 +307,20 @@ def test_ray_address_that_does_not_answer(tmp_path, spec_file) -> None:
         "rik: error: --ray 127.0.0.1:1: no Ray cluster answered within 3 s; start one (`ray start --head`) or give "
         "the head's address as HOST:PORT"], r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == written  # no out, out.work or variants
+
+
+def test_quiet_tqdm_silences_a_tqdm_imported_before() -> None:
+    import io
+
+    import tqdm
+
+    from rik.dataset.build import quiet_tqdm
+
+    buf = io.StringIO()
+    with quiet_tqdm():
+        for _ in tqdm.tqdm(range(3), desc="hidden", file=buf):
+            pass
+    assert buf.getvalue() == ""
+    for _ in tqdm.tqdm(range(3), desc="shown", file=buf):
+        pass
+    assert "shown" in buf.getvalue()
