@@ -262,7 +262,7 @@ def test_bad_spec(rik, tmp_path, case: str) -> None:
     out = tmp_path / "out"
     r = rik("dataset", "build", str(spec), "--out", str(out), "--variants", str(tmp_path / "variants"))
     assert r.code == 2, r
-    assert "Traceback" not in r.err
+    assert "Traceback" not in r.err and r.out == ""
     line = _one_line(r.err)
     for part in parts:
         assert part in line, (part, line)
@@ -328,3 +328,34 @@ def test_quiet_tqdm_silences_a_tqdm_imported_before() -> None:
     for _ in tqdm.tqdm(range(3), desc="shown", file=buf):
         pass
     assert "shown" in buf.getvalue()
+
+
+@pytest.mark.parametrize("command", ["show", "verify"])
+def test_show_and_verify_of_a_folder_that_is_no_dataset(rik, tmp_path, command: str) -> None:
+    (tmp_path / "meta").mkdir()
+    r = rik("dataset", command, str(tmp_path))
+    assert r.code == 2, r
+    assert _one_line(r.err) == (f"rik: error: {tmp_path}: not a dataset built by rik dataset build (no readable "
+                                "meta/rik_dataset.json)")
+
+
+def test_out_taken_by_something_else(rik, built, spec_file, variants, tmp_path) -> None:
+    taken = tmp_path / "taken"
+    taken.mkdir()
+    (taken / "notes.txt").write_text("mine")
+    r = rik("dataset", "build", str(spec_file), "--out", str(taken), "-j", "1", "--variants", str(variants))
+    assert r.code == 2, r
+    assert _one_line(r.err) == (f"rik: error: {taken}: exists and is not a dataset built by rik dataset build (no "
+                                "meta/rik_dataset.json); choose another --out")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]  # no taken.work
+
+    other = tmp_path / "other.yaml"
+    other.write_text(SPEC + "seed: 5\n")
+    out, _ = built
+    before = files_state(out)
+    r = rik("dataset", "build", str(other), "--out", str(out), "-j", "1", "--variants", str(variants))
+    assert r.code == 2, r
+    line = _one_line(r.err)
+    assert line.startswith(f"rik: error: {out}: holds the dataset of another spec (spec hash ") and \
+        line.endswith("); choose another --out"), line
+    assert files_state(out) == before
