@@ -420,7 +420,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
 def quiet_tqdm() -> Iterator[None]:
     """No tqdm bars in the block (lerobot's merge draws its own over rik's progress bars). tqdm reads
     ``TQDM_DISABLE`` only when it is first imported, so the block sets ``disable`` in tqdm's constructor itself."""
-    from tqdm import std
+    from tqdm import std  # type: ignore[import-untyped]
 
     own = std.tqdm.__dict__["__init__"]
 
@@ -428,11 +428,11 @@ def quiet_tqdm() -> Iterator[None]:
         kwargs["disable"] = True
         own.__get__(self, type(self))(*args, **kwargs)
 
-    std.tqdm.__init__ = init  # type: ignore[method-assign]
+    std.tqdm.__init__ = init
     try:
         yield
     finally:
-        std.tqdm.__init__ = own  # type: ignore[method-assign]
+        std.tqdm.__init__ = own
 
 
 def _card_text(plan: Plan) -> str:
