@@ -140,13 +140,19 @@ def build_command(spec: SpecArg,
         check_ray()  # before any work: a missing extra is found at once
     if render_actors is not None and ray is None:
         raise RikError("--render-actors: render actors are Ray's; give --ray too")
-    cat, plan = _plan(spec, variants, workers, catalog)
-    _print_plan(plan)
-    if ray is not None:
+    engine: Any = None
+    if ray is not None:  # before the plan, which may build variants: a cluster that does not answer writes nothing
         from rik.dataset.engines import RayEngine
 
-        engine: Any = RayEngine(ray, overlays(catalog), render_actors=render_actors)
-    else:
+        engine = RayEngine(ray, overlays(catalog), render_actors=render_actors)
+    try:
+        cat, plan = _plan(spec, variants, workers, catalog)
+    except BaseException:
+        if engine is not None:
+            engine.close()
+        raise
+    _print_plan(plan)
+    if engine is None:
         engine = local_engine(cat, workers, overlays(catalog))
     print(f"  engine: {engine.name}, {engine.workers} workers; work folder {work or default_work(out)}")
     with progress_bar() as bar:
@@ -232,5 +238,6 @@ def verify_command(root: Annotated[Path, typer.Argument(help="A built dataset's 
     if not r.ok:
         for p in r.problems[:20]:
             print(f"  {p}")
-        raise RikError(f"{root}: {len(r.problems)} problems, listed above")
+        n = len(r.problems)
+        raise RikError(f"{root}: {n} problem{'s' if n != 1 else ''}, listed above")
     print(f"{root}: ok: {r.files} files match their sha256; {r.episodes} episodes, {r.frames} frames load")

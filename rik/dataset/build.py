@@ -334,9 +334,11 @@ def build_dataset(catalog: Catalog, plan: Plan, out: Path, engine: Engine, *, wo
     work = Path(work).absolute() if work else default_work(out)
     result = BuildResult(out, work, plan.spec_hash)
     if _up_to_date(out, plan, result):
+        engine.close()  # (a Ray cluster started for the build stops here too)
         return result
     with exclusive(work, "rik dataset build"):
         if _up_to_date(out, plan, result):  # another build finished it while we waited for nothing
+            engine.close()
             return result
         t0 = time.perf_counter()
         folders = Folders(work, Path(variants).absolute())

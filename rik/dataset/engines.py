@@ -32,7 +32,22 @@ RENDERERS_PER_GPU = 4
 ACTOR_LOSSES = 3
 """Times a render job whose actor was lost is sent again (as a task) before it counts as failed."""
 RAY_CONNECT_TIMEOUT_S = 30
-"""How long ``--ray ADDRESS`` waits for the cluster to answer, s."""
+"""How long ``--ray ADDRESS`` waits for the cluster to answer, s (the environment variable
+``RIK_RAY_CONNECT_TIMEOUT`` overrides it)."""
+
+
+def ray_connect_timeout() -> float:
+    """How long ``--ray ADDRESS`` waits for the cluster to answer, s: ``RIK_RAY_CONNECT_TIMEOUT`` or the default."""
+    text = os.environ.get("RIK_RAY_CONNECT_TIMEOUT", "").strip()
+    if not text:
+        return RAY_CONNECT_TIMEOUT_S
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0 < value < float("inf"):
+        raise RikError(f"RIK_RAY_CONNECT_TIMEOUT: a number of seconds above 0 (got {text!r})")
+    return value
 
 
 @dataclass(frozen=True)
@@ -295,9 +310,10 @@ class RayEngine:
 
         thread = threading.Thread(target=connect, daemon=True)
         thread.start()
-        thread.join(RAY_CONNECT_TIMEOUT_S)
+        timeout = ray_connect_timeout()
+        thread.join(timeout)
         if not result:
-            raise RikError(f"--ray {address}: no Ray cluster answered within {RAY_CONNECT_TIMEOUT_S} s; start one "
+            raise RikError(f"--ray {address}: no Ray cluster answered within {timeout:g} s; start one "
                            "(`ray start --head`) or give the head's address as HOST:PORT")
         if result[0] is not None:
             raise RikError(f"--ray {address}: cannot connect to a Ray cluster: {error_line(result[0])}")

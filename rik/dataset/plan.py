@@ -110,6 +110,16 @@ def select_variants(catalog: Catalog, spec: DatasetSpec, source: str) -> list[st
                 raise _field_error(source, f"variants.ids.{i}", exc) from None
     else:
         split = None if sel.split == "all" else sel.split
+        if split is not None:
+            from rik.registry.splits import SPLITS
+
+            if split not in SPLITS:
+                import difflib
+
+                close = difflib.get_close_matches(split, [*SPLITS, "all"], n=1, cutoff=0.6)
+                hint = f"; did you mean '{close[0]}'?" if close else ""
+                raise RikError(f"{source}, field 'variants.split': unknown split '{split}' (splits: "
+                               f"{', '.join(SPLITS)}, or all for every handle){hint}")
         kinds = sorted({f.kind for u in catalog.base_units.values() for f in u.fronts})
         checks: list[tuple[str, Sequence[str], Any]] = [
             ("base_units", sel.base_units, catalog.base_unit), ("handles", sel.handles, catalog.handle),
