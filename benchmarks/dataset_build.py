@@ -31,7 +31,8 @@ file but ``meta/rik_build.json``). The machine's load average before and after i
 cores skews every number. Ray is always shut down at the end.
 
 Run: ``uv run python benchmarks/dataset_build.py [--variants 4] [--episodes 2] [--size 64] [--max-seconds 2]
-[--skip-ray]`` (about 3 to 4 minutes on 2 cores with the defaults, ~30 s of it starting Ray).
+[--skip-ray]`` (5 to 8 minutes on 2 cores shared with other work, with the defaults; ~20 s of it starting
+Ray).
 """
 
 from __future__ import annotations
