@@ -16,6 +16,7 @@ streaming encoder (drops frames under load), no ``vcodec="auto"`` (picks NVENC w
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import shutil
 from collections.abc import Callable, Sequence
@@ -214,7 +215,10 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
                 ds.add_frame({**frame, "task": task})
             extra.clear()
             extra.update(episode_metadata(meta))
-            ds.save_episode()  # lerobot encodes each camera in a forked process (measured faster for h264)
+            # lerobot encodes each camera in a process of its own: cheap where processes fork (measured faster for
+            # h264), but in a spawned worker (rik dataset build -j N) each would be a fresh interpreter importing
+            # lerobot again, per episode; there the worker encodes itself (the workers already run side by side).
+            ds.save_episode(parallel_encoding=multiprocessing.get_start_method() == "fork")
             frames_total += count
     finally:
         ds.finalize()
