@@ -87,7 +87,7 @@ def plan_command(spec: SpecArg, sample: Annotated[int, typer.Option("--sample", 
                  workers: WorkersOpt = DEFAULT_WORKERS, variants: VariantsOpt = Path("variants"),
                  catalog: CatalogOption = None) -> None:
     """Print what SPEC makes (variants, episodes, shards) and what it costs, per stage, from a short timed sample:
-    episodes and frames per core-hour, core-hours, wall time on --workers cores, and disk."""
+    episodes and frames per worker-hour, worker-hours, wall time on --workers workers, and disk."""
     from rich.table import Table
 
     cat, plan = _plan(spec, variants, workers, catalog)
@@ -99,14 +99,15 @@ def plan_command(spec: SpecArg, sample: Annotated[int, typer.Option("--sample", 
     with progress_bar() as bar:
         bar.add_task(f"timing {min(sample, len(plan.episodes))} sample episodes", total=None, last="")
         est = estimate(cat, plan, sample=sample, variants=variants)
-    table = Table(title=f"estimate from {est.sample} sampled episodes (one core each)")
-    for col in ("stage", "s / episode", "episodes / core-h", "frames / core-h", "core-hours", "disk"):
+    table = Table(title=f"estimate from {est.sample} sampled episodes, timed in one worker after a warm-up "
+                        "(MuJoCo's llvmpipe and Mitsuba's LLVM back end use several threads of it)")
+    for col in ("stage", "s / episode", "episodes / worker-h", "frames / worker-h", "worker-hours", "disk"):
         table.add_column(col, justify="left" if col == "stage" else "right")
     for c in est.stages:
-        frames = f"{c.frames_per_core_hour:,.0f}" if c.frames_per_episode else "-"
-        table.add_row(c.stage, f"{c.seconds_per_episode:.2f}", f"{c.episodes_per_core_hour:,.0f}", frames,
-                      f"{c.core_hours:.3g}", _human_bytes(c.total_bytes))
-    table.add_row("total", "", "", "", f"{est.core_hours:.3g}", _human_bytes(est.total_bytes))
+        frames = f"{c.frames_per_worker_hour:,.0f}" if c.frames_per_episode else "-"
+        table.add_row(c.stage, f"{c.seconds_per_episode:.2f}", f"{c.episodes_per_worker_hour:,.0f}", frames,
+                      f"{c.worker_hours:.3g}", _human_bytes(c.total_bytes))
+    table.add_row("total", "", "", "", f"{est.worker_hours:.3g}", _human_bytes(est.total_bytes))
     console().print(table)
     print(f"wall time: about {_hours(est.wall_hours(workers))} on {workers} local workers; renders (PNG frames) are "
           "work files, the export row is the dataset itself")
