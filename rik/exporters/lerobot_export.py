@@ -170,10 +170,13 @@ def quiet_encoders() -> None:
     terminal (in this process: lerobot restores FFmpeg's own printing after each video, so the level is set where the
     encoding happens)."""
     os.environ.setdefault("SVT_LOG", "1")
-    import av.logging
-    import datasets
+    import importlib
 
-    datasets.disable_progress_bars()  # lerobot's loads and merges would draw "Map: ..." bars of their own
+    import av.logging
+
+    # lerobot's loads and merges would draw "Map: ..." bars of their own. By name: a `datasets/` folder in the
+    # working directory (rik demo writes one) would otherwise stand for Hugging Face's package in mypy's eyes.
+    importlib.import_module("datasets").disable_progress_bars()
 
     av.logging.set_level(av.logging.ERROR)
     av.logging.set_libav_level(av.logging.ERROR)
