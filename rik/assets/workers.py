@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from concurrent.futures import ProcessPoolExecutor
+
     from rik.registry.catalog import Catalog
 
 _CATALOG: Catalog | None = None
@@ -72,17 +74,25 @@ def _call[T](fn: Callable[[Catalog, str], T], item: str) -> tuple[str, T]:
     return item, fn(_CATALOG, item)
 
 
+def worker_pool(workers: int, overlays: Sequence[Path] = ()) -> ProcessPoolExecutor:
+    """``workers`` spawned processes that each load the catalog from ``overlays`` once and exit with this process
+    (:func:`exit_with_parent`); calls run there with the catalog in :data:`_CATALOG`."""
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
+
+    return ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_load,
+                               initargs=(list(overlays), os.getpid()))
+
+
 def map_ids[T](fn: Callable[[Catalog, str], T], catalog: Catalog, ids: Sequence[str], *, workers: int = 1,
                overlays: Sequence[Path] = ()) -> Iterator[tuple[str, T]]:
     """``(id, fn(catalog, id))`` for every id, as each finishes. With ``workers`` > 1 and more than one id the
     calls run in that many spawned processes (``fn`` must be picklable: a module-level function, or a
     ``functools.partial`` of one), which load the catalog from ``overlays`` themselves; otherwise here, in order."""
     if workers > 1 and len(ids) > 1:
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-        from multiprocessing import get_context
+        from concurrent.futures import as_completed
 
-        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_load,
-                                 initargs=(list(overlays), os.getpid())) as pool:
+        with worker_pool(workers, overlays) as pool:
             for future in as_completed([pool.submit(_call, fn, i) for i in ids]):
                 yield future.result()
     else:

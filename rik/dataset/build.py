@@ -131,12 +131,11 @@ def read_marker(folders: Folders, stage: str, key: str) -> dict[str, Any] | None
 
 def _states_intact(episode: Path, sha256: object) -> bool:
     """Whether the episode's ``states.parquet`` still has the sha256 its marker recorded."""
-    import hashlib
-
+    from rik.assets.cache import file_sha256
     from rik.sim.episode import STATES
 
     try:
-        return hashlib.sha256((episode / STATES).read_bytes()).hexdigest() == sha256
+        return file_sha256(episode / STATES) == sha256
     except OSError:
         return False
 
@@ -214,7 +213,6 @@ class _Schedule:
         self.result, self.progress = result, progress
         self.done: dict[str, dict[str, Any]] = {}
         self.attempts: dict[str, int] = {}
-        self.failed: set[str] = set()
         self.renders_of: dict[str, list[RenderUnit]] = {}
         for r in plan.renders:
             self.renders_of.setdefault(r.episode.key, []).append(r)
@@ -306,7 +304,6 @@ class _Schedule:
         what = describe(stage, unit)
         failure = Failure(stage, unit.key, what, done.error, n)
         self.result.failures.append(failure)
-        self.failed.add(unit.key)
         path = self.folders.failed(unit.key)
         path.parent.mkdir(parents=True, exist_ok=True)
         write_atomic(path, json.dumps(failure.__dict__, indent=1) + "\n")
@@ -395,19 +392,11 @@ def _up_to_date(out: Path, plan: Plan, result: BuildResult) -> bool:
 
 def file_checksums(root: Path) -> dict[str, str]:
     """sha256 of every file of a dataset but rik's two metadata files (the record of a build), by relative path."""
-    import hashlib
+    from rik.assets.cache import file_sha256
 
-    sums = {}
-    for path in sorted(p for p in root.rglob("*") if p.is_file()):
-        rel = path.relative_to(root).as_posix()
-        if rel in (f"meta/{DATASET_META}", f"meta/{BUILD_META}"):
-            continue
-        digest = hashlib.sha256()
-        with path.open("rb") as fh:
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                digest.update(block)
-        sums[rel] = digest.hexdigest()
-    return sums
+    skip = (f"meta/{DATASET_META}", f"meta/{BUILD_META}")
+    return {rel: file_sha256(path) for path in sorted(p for p in root.rglob("*") if p.is_file())
+            if (rel := path.relative_to(root).as_posix()) not in skip}
 
 
 def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, out: Path,

@@ -149,13 +149,9 @@ class ProcessEngine:
         self.pool = self._pool()
 
     def _pool(self) -> Any:
-        from concurrent.futures import ProcessPoolExecutor
-        from multiprocessing import get_context
+        from rik.assets.workers import worker_pool
 
-        from rik.assets.workers import _load
-
-        return ProcessPoolExecutor(max_workers=self.workers, mp_context=get_context("spawn"), initializer=_load,
-                                   initargs=(self.overlays, os.getpid()))
+        return worker_pool(self.workers, self.overlays)
 
     def submit(self, job: Job) -> None:
         self.futures[self.pool.submit(_worker_job, job.fn, job.arg)] = job

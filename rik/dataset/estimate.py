@@ -62,10 +62,6 @@ class Estimate:
         return self.worker_hours / max(1, workers)
 
 
-def _size(path: Path) -> int:
-    return sum(p.stat().st_size for p in path.rglob("*") if p.is_file()) if path.exists() else 0
-
-
 def sample_units(plan: Plan, count: int) -> list[int]:
     """Indices of ``count`` episodes spread evenly over the plan (the first, the last and between)."""
     n = len(plan.episodes)
@@ -89,6 +85,7 @@ def _time_stages(catalog: Catalog, plan: Plan, picked: list[EpisodeUnit], tmp: P
                  ) -> list[StageCost]:
     """Record, render and export ``picked`` in ``tmp``: each stage's cost per episode, scaled to the plan."""
     from rik.dataset.build import Folders, export_spec, run_record, run_render, run_shard
+    from rik.dataset.registry import folder_size
 
     n = len(plan.episodes)
     folders = Folders(tmp, Path(variants).absolute())
@@ -97,22 +94,22 @@ def _time_stages(catalog: Catalog, plan: Plan, picked: list[EpisodeUnit], tmp: P
     for e in picked:
         steps += int(run_record(catalog, (folders, e, plan.spec.max_seconds))["steps"]) + 1
     stages = [StageCost("record", (time.perf_counter() - t0) / len(picked), steps / len(picked),
-                        _size(folders.episodes) / len(picked), n)]
+                        folder_size(folders.episodes) / len(picked), n)]
     outputs: dict[str, str] = {}
     for stream in plan.streams:
         t0 = time.perf_counter()
         frames = 0
-        before = _size(folders.renders)
+        before = folder_size(folders.renders)
         for e in picked:
             unit = RenderUnit(e, stream, f"{e.key}-{stream}")
             record = run_render(catalog, (folders, unit, plan.stream_spec(stream), plan.spec.cameras))
             frames += int(record["frames"])
             outputs[f"{e.key}/{stream}"] = record["output"]
         stages.append(StageCost(f"render:{stream}", (time.perf_counter() - t0) / len(picked),
-                                frames / len(picked), (_size(folders.renders) - before) / len(picked), n))
+                                frames / len(picked), (folder_size(folders.renders) - before) / len(picked), n))
     t0 = time.perf_counter()
     shard = ShardUnit(0, tuple(picked), "estimate")
     run_shard(catalog, (folders, shard, export_spec(plan), outputs))
     stages.append(StageCost("export", (time.perf_counter() - t0) / len(picked), 0.0,
-                            _size(folders.shards) / len(picked), n))
+                            folder_size(folders.shards) / len(picked), n))
     return stages

@@ -26,7 +26,7 @@ def _read() -> list[dict[str, Any]]:
 
 
 def folder_size(root: Path) -> int:
-    """Bytes of the files below ``root``."""
+    """Bytes of the files below ``root`` (0 when it does not exist)."""
     return sum(p.stat().st_size for p in Path(root).rglob("*") if p.is_file())
 
 
