@@ -356,3 +356,19 @@ def test_check_names_the_state_layout(dataset: Path) -> None:
            "action": {"dtype": "float32", "shape": [7], "names": None}}
     assert state_layout(old) == 1 and describe_layout(1).startswith("1 (one 14-number observation.state")
     assert state_layout({"observation.state": {"names": ["a"]}}) is None
+
+
+def test_export_does_not_import_or_register_the_env(work: Path, tmp_path: Path) -> None:
+    """Exporting reads observations through rik.sim.observation: it does not import rik.sim.env, which would register
+    rik/OpenFront-v0 with gymnasium as a side effect. (gymnasium itself is loaded all the same: lerobot's dataset
+    module imports it.) A fresh interpreter, as a user has."""
+    code = ("import sys; from pathlib import Path; from rik.registry import load_catalog; "
+            "from rik.exporters.lerobot_export import ExportSpec, export_lerobot; "
+            f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(tmp_path / 'ds')!r}), "
+            f"ExportSpec({REPO!r}, streams=(), shard_episodes=2), renders=Path({str(tmp_path / 'r')!r}), "
+            f"variants=Path({str(work / 'variants')!r})); "
+            "import gymnasium; print('rik.sim.env' in sys.modules, 'rik/OpenFront-v0' in gymnasium.registry)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "False False"
+    assert (tmp_path / "ds" / "meta" / "info.json").is_file()

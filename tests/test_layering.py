@@ -15,10 +15,13 @@ FORBIDDEN = {
     "rik.joints": ("rik.sim", "rik.combinator", "rik.sysid"),
     "rik.combinator": ("rik.sim",),
     "rik.sysid.foreign": ("rik.joints", "rik.sim", "rik.combinator", "rik.sysid.effects", "rik.sysid.generate"),
+    **{m: ("rik.sim.env",) for m in ("rik.exporters", "rik.dataset", "rik.render", "rik.web", "rik.sim.operators",
+                                     "rik.sim.record", "rik.sim.episode", "rik.sim.teleop")},
 }
 """Package or module → packages and modules it must not import (joint effects sit below the combinator, the
 simulator and sysid; the combinator below the simulator; the foreign generator writes its laws independently of
-rik's)."""
+rik's; the gymnasium environment sits above the recorder, the operators, the exporters and the web app: they take
+observations from :mod:`rik.sim.observation`, so that none of them imports gymnasium's registration of the env)."""
 
 
 def _module(path: Path) -> str:
@@ -92,6 +95,15 @@ def test_joint_effects_are_in_no_package_cycle() -> None:
     edges = _graph()
     assert "rik.joints" in edges  # the package exists and imports something (rik.schemas)
     assert "rik.joints" not in _reaches(edges, "rik.joints")
+
+
+def test_the_environment_is_in_no_module_cycle_of_the_simulator() -> None:
+    """rik.sim.env imports the recorder; nothing the recorder imports may import the env back (the cycle env ->
+    record -> operators -> env is cut)."""
+    modules = {_module(p): p for p in sorted((PACKAGE / "sim").glob("*.py"))}
+    edges = {m: {n for n in _imports(p) if n in modules and n != m} for m, p in modules.items()}
+    assert "rik.sim.record" in edges["rik.sim.env"]
+    assert "rik.sim.env" not in _reaches(edges, "rik.sim.env")
 
 
 def test_the_rules_see_imports_in_functions_and_type_checking_blocks(tmp_path: Path) -> None:

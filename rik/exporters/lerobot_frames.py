@@ -104,8 +104,8 @@ def episode_frames(catalog: Catalog, source: EpisodeSource, cameras: Sequence[st
                    variants: Path) -> tuple[EpisodeMeta, str, Iterator[dict[str, np.ndarray]], int]:
     """(meta, task, frame dicts for ``add_frame`` without the task, frame count) of one episode."""
     from rik.render.streams import read_frame
-    from rik.sim.env import state_observation
     from rik.sim.episode import read_episode, states
+    from rik.sim.observation import state_observation
     from rik.sim.replay import episode_scene
 
     meta, table = read_episode(source.directory)

@@ -8,7 +8,7 @@
   ``environment_state`` = the front's state (:mod:`rik.sim.observation`), float32; with image streams also
   ``pixels`` = ``{camera: uint8 HxWx3}`` (``front``, ``wrist``; ``front_rerendered`` for Mitsuba's stream);
 - **action** (``action_mode``): ``delta``, 7 numbers in [-1, 1] (the last in [0, 1]): a target-pose change scaled by
-  :data:`MAX_DELTA` (m and rad per control step) and the gripper command (0 open, 1 closed with full force); or
+  :data:`rik.sim.observation.MAX_DELTA` (m and rad per control step) and the gripper command (0 open, 1 closed with full force); or
   ``absolute``, the target pose itself (x, y, z m; pitch, yaw, roll rad) and the gripper command, as rik's
   episodes and LeRobot exports record them;
 - **reward**: the gain in opening (fraction of the range) per step; **terminated** when the front is open to
@@ -30,7 +30,14 @@ import gymnasium as gym
 import numpy as np
 
 from rik.errors import RikError
-from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, ROBOT_STATE_NAMES, environment_state, image_name, robot_state
+from rik.sim.observation import (
+    CAMERAS,
+    ENV_STATE_NAMES,
+    ROBOT_STATE_NAMES,
+    delta_to_absolute,
+    image_name,
+    state_observation,
+)
 from rik.sim.outcome import SUCCESS_OPENING, classify
 from rik.sim.scene import CONTROL_FPS, SimScene
 
@@ -38,27 +45,12 @@ if TYPE_CHECKING:
     from rik.render.renderers import FrameRenderer
 
 ENV_ID = "rik/OpenFront-v0"
-MAX_DELTA = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1])
-"""Largest change of the target pose per control step: m for x, y, z; rad for pitch, yaw, roll."""
 DEFAULT_VARIANT = "drawer-chest-80__two_point-bow-128__normal"
 EPISODE_LENGTH = 400
 """Control steps of an episode before it is truncated: 20 s at 20 Hz; scripted demonstrations take up to 232."""
 ACTION_MODES = ("delta", "absolute")
 SCENE_CACHE = 16
 """Compiled scenes kept per environment (a split draws many variants)."""
-
-
-def delta_to_absolute(target: np.ndarray, action: np.ndarray) -> np.ndarray:
-    """An absolute action (target pose + gripper command) from the previous target and a ``delta`` action."""
-    a = np.asarray(action, np.float64)
-    return np.concatenate([np.asarray(target, np.float64) + np.clip(a[:6], -1, 1) * MAX_DELTA,
-                           [float(np.clip(a[6], 0.0, 1.0))]])
-
-
-def state_observation(scene: SimScene) -> dict[str, Any]:
-    """The state part of an observation: ``agent_pos`` and ``environment_state``, float32."""
-    return {"agent_pos": robot_state(scene).astype(np.float32),
-            "environment_state": environment_state(scene).astype(np.float32)}
 
 
 class OpenFrontEnv(gym.Env):

@@ -14,7 +14,7 @@ Images are uint8 HxWx3 of the :data:`CAMERAS`. Units are SI: m, rad, m/s or rad/
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -35,6 +35,8 @@ CAMERAS = ("front", "wrist")
 """The scene's cameras: ``front`` looks at the base unit, ``wrist`` rides on the gripper."""
 STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
 """Image stream -> suffix of its camera names: ``front`` is MuJoCo's image, ``front_rerendered`` Mitsuba's."""
+MAX_DELTA = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1])
+"""Largest change of the target pose per control step: m for x, y, z; rad for pitch, yaw, roll."""
 TYPE_WORDS = {"two_point": "handle", "knob": "knob", "finger_pull": "finger pull"}
 
 
@@ -67,3 +69,16 @@ def environment_state(scene: SimScene) -> np.ndarray:
         quat = -quat
     return np.concatenate([[q, qd, scene.opening()], scene.grasp_point(), quat,
                            scene.pull_direction()]).astype(np.float64)
+
+
+def delta_to_absolute(target: np.ndarray, action: np.ndarray) -> np.ndarray:
+    """An absolute action (target pose + gripper command) from the previous target and a ``delta`` action."""
+    a = np.asarray(action, np.float64)
+    return np.concatenate([np.asarray(target, np.float64) + np.clip(a[:6], -1, 1) * MAX_DELTA,
+                           [float(np.clip(a[6], 0.0, 1.0))]])
+
+
+def state_observation(scene: SimScene) -> dict[str, Any]:
+    """The state part of an observation: ``agent_pos`` and ``environment_state``, float32."""
+    return {"agent_pos": robot_state(scene).astype(np.float32),
+            "environment_state": environment_state(scene).astype(np.float32)}

@@ -308,7 +308,7 @@ class PolicyOperator:
         self._target = scene.pose()
 
     def act(self, scene: SimScene) -> np.ndarray:
-        from rik.sim.env import delta_to_absolute, state_observation
+        from rik.sim.observation import delta_to_absolute, state_observation
 
         action = np.asarray(self.policy(state_observation(scene)), np.float64)
         absolute = delta_to_absolute(self._target, action)
