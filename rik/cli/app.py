@@ -6,7 +6,7 @@ import sys
 
 import typer
 
-from rik.cli import assets, catalog, dataset, export, policy, render, rerender, sim, sysid, variants
+from rik.cli import assets, catalog, dataset, export, policy, render, rerender, serve, sim, sysid, variants
 from rik.cli.common import CatalogOption, overlays
 from rik.errors import RikError
 
@@ -48,6 +48,7 @@ for _command in (sim.record, sim.teleop, sim.replay, sim.bench, rerender.render,
                  render.visual_gap, export.export_lerobot):
     app.command()(_command)
 app.command("eval")(policy.eval_policy)
+app.command("serve")(serve.serve)
 
 
 @app.command()

@@ -94,20 +94,47 @@ def record(variant: Annotated[str | None, typer.Argument(
 
 
 def teleop(variant: VariantArg,
-           device: Annotated[str, typer.Option("--device", "-d", help="keyboard or spacemouse.")] = "keyboard",
+           device: Annotated[str, typer.Option("--device", "-d", help="keyboard or spacemouse (the viewer window).")]
+           = "keyboard",
+           web: Annotated[bool, typer.Option("--web", help="Serve the browser teleop station instead of opening a "
+                                             "window (keyboard, gamepad; works headless, e.g. over an SSH "
+                                             "tunnel).")] = False,
+           port: Annotated[int, typer.Option("--port", help="Port of the station with --web (0: a free one).")]
+           = 8765,
+           host: Annotated[str, typer.Option("--host", help="Address the station listens on with --web (default: "
+                                             "this machine only).")] = "127.0.0.1",
            front: FrontOpt = None, out: EpisodesOutOpt = Path("episodes"), variants: VariantsOpt = Path("variants"),
-           seed: Annotated[int, typer.Option("--seed", help="Recorded as the episode's seed.")] = 0,
+           seed: Annotated[int, typer.Option("--seed", help="First episode's seed; each episode takes the next seed "
+                                             "with no episode in --out, so nothing is overwritten.")] = 0,
+           max_seconds: Annotated[float | None, typer.Option("--max-seconds", help="Time limit of an episode, "
+                                                             "simulated s (default: none).")] = None,
            catalog: CatalogOption = None) -> None:
-    """Teleoperate a variant in MuJoCo's viewer (keymap: docs/simulation.md) and record the episode."""
+    """Teleoperate a variant and record episodes: in a window (keymap on screen and in docs/teleop.md) or, with
+    --web, in the browser."""
     from rik.registry.load import load_catalog
+
+    con = console()
+    cat = load_catalog(overlays(catalog))
+    if web:
+        from rik.web.app import AppConfig, serve_station
+
+        if device != "keyboard":
+            raise RikError(f"--device {device}: the browser station takes the browser's keyboard and gamepads; "
+                           "--device is for the viewer window")
+        config = AppConfig(cat, variants=variants, episodes=out, overlays=tuple(overlays(catalog)),
+                           max_seconds=max_seconds, seed=seed, front=front)
+        serve_station(config, variant, host=host, port=port,
+                      on_ready=lambda url: con.print(f"teleop station: [bold]{url}[/] (Ctrl+C to stop; from another "
+                                                     f"machine: ssh -L {url.rsplit(':', 1)[1].split('/')[0]}:"
+                                                     f"localhost:{url.rsplit(':', 1)[1].split('/')[0]} THIS_HOST)"))
+        return
     from rik.sim.teleop import teleoperate
 
-    meta = teleoperate(load_catalog(overlays(catalog)), variant, device, out=out, variants=variants, front=front,
-                       seed=seed)
-    con = console()
-    if meta is None:
-        con.print("episode discarded; nothing written")
-    else:
+    saved = teleoperate(cat, variant, device, out=out, variants=variants, front=front, seed=seed,
+                        max_seconds=max_seconds, on_message=con.print)
+    if not saved:
+        con.print("no episode saved")
+    for meta in saved:
         con.print(f"{out / meta.id}: {meta.outcome} (opened {meta.final_opening:.0%}, {meta.steps} steps)")
 
 

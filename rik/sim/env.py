@@ -8,7 +8,8 @@
   ``environment_state`` = the front's state (:mod:`rik.sim.observation`), float32; with image streams also
   ``pixels`` = ``{camera: uint8 HxWx3}`` (``front``, ``wrist``; ``front_rerendered`` for Mitsuba's stream);
 - **action** (``action_mode``): ``delta``, 7 numbers in [-1, 1] (the last in [0, 1]): a target-pose change scaled by
-  :data:`rik.sim.observation.MAX_DELTA` (m and rad per control step) and the gripper command (0 open, 1 closed with full force); or
+  :data:`rik.sim.observation.MAX_DELTA` (m and rad per control step) and the gripper command (0 open, 1 closed
+  with full force); or
   ``absolute``, the target pose itself (x, y, z m; pitch, yaw, roll rad) and the gripper command, as rik's
   episodes and LeRobot exports record them;
 - **reward**: the gain in opening (fraction of the range) per step; **terminated** when the front is open to

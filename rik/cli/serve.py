@@ -1,0 +1,39 @@
+"""``rik serve``: the web app (catalog pages and the browser teleop station). Only parsing and printing here;
+:mod:`rik.web` does the work."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from rik.cli.common import CatalogOption, console, overlays
+
+
+def serve(port: Annotated[int, typer.Option("--port", help="Port to listen on (0: a free one).")] = 8765,
+          host: Annotated[str, typer.Option("--host", help="Address to listen on (default: this machine only; "
+                                            "reach it from elsewhere through an SSH tunnel).")] = "127.0.0.1",
+          out: Annotated[Path, typer.Option("--out", "-o", help="Directory the station writes episodes to.")]
+          = Path("episodes"),
+          variants: Annotated[Path, typer.Option("--variants", help="Directory of built variants.")]
+          = Path("variants"),
+          max_seconds: Annotated[float | None, typer.Option("--max-seconds", help="Time limit of a teleoperated "
+                                                            "episode, simulated s (default: none).")] = None,
+          catalog: CatalogOption = None) -> None:
+    """Serve the web app: browse the catalog (thumbnails, filters, fidelity) and teleoperate any pairing in the
+    browser (keyboard, gamepad), recording episodes into --out."""
+    from rik.registry.load import load_catalog
+    from rik.web.app import AppConfig
+    from rik.web.app import serve as serve_app
+
+    con = console()
+    config = AppConfig(load_catalog(overlays(catalog)), variants=variants, episodes=out,
+                       overlays=tuple(overlays(catalog)), max_seconds=max_seconds)
+
+    def ready(url: str) -> None:
+        p = url.rsplit(":", 1)[1].split("/")[0]
+        con.print(f"rik serve: [bold]{url}[/] (Ctrl+C to stop; from another machine: ssh -L {p}:localhost:{p} "
+                  "THIS_HOST, then open the same address there)")
+
+    serve_app(config, host=host, port=port, on_ready=ready)

@@ -1,0 +1,209 @@
+"""A teleoperation session: the state that every teleop front-end shares (the viewer window, the browser
+station). Devices set a velocity command and a grip; :meth:`TeleopSession.tick` advances one control step.
+
+- the gripper starts at rest in front of the operated handle (:func:`rik.sim.scene.start_pose`), in view of the
+  front camera, and recording starts with the operator's first input (no idle frames before it);
+- the target moves at the commanded velocity per *control step* and never runs more than
+  :data:`rik.sim.teleop_keys.LEAD` ahead of the gripper, so a slow frame or a blocked gripper never turns into
+  a jump;
+- every episode gets its own id: the seed advances to the next one with no episode (nor draft) in ``out``, so
+  nothing is ever overwritten; saving writes ``out/<id>``, discarding writes nothing, and a draft (a connection
+  lost mid-episode) goes to ``out/.drafts/<id>``, which ``rik export-lerobot`` and ``rik replay out/`` skip;
+- an optional time limit (simulated s) stops the episode, which the operator then saves or discards.
+"""
+
+from __future__ import annotations
+
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from rik.sim.teleop_keys import ANGULAR_SPEED, LEAD, LINEAR_SPEED
+
+if TYPE_CHECKING:
+    from rik.schemas.episodes import EpisodeMeta
+    from rik.sim.episode import EpisodeRecorder
+    from rik.sim.scene import SimScene
+
+DRAFTS = ".drafts"
+"""Folder of draft episodes inside the episodes folder (hidden: exports and ``rik replay DIR`` skip it)."""
+MAX_FREE_SEEDS = 100_000
+"""How many seeds past the requested one are searched for a free episode id."""
+
+
+@dataclass(frozen=True)
+class Saved:
+    """What :meth:`TeleopSession.save` wrote."""
+
+    path: Path
+    meta: EpisodeMeta
+
+
+class TeleopSession:
+    """One operator on one variant's scene, episode after episode (see the module docstring)."""
+
+    def __init__(self, scene: SimScene, out: Path, *, operator: str = "keyboard", seed: int = 0,
+                 max_seconds: float | None = None) -> None:
+        from rik.sim.record import check_seeds
+
+        check_seeds(seed, 1)
+        if max_seconds is not None and not max_seconds > 0:
+            from rik.errors import RikError
+
+            raise RikError(f"--max-seconds {max_seconds}: a time limit must be positive (or none at all)")
+        self.scene = scene
+        self.out = Path(out)
+        self.operator = operator
+        self.max_seconds = max_seconds
+        self.seed = seed
+        self.command = np.zeros(6)
+        """Velocity command in [-1, 1] per axis (x, y, z, pitch, yaw, roll)."""
+        self.grip = 0.0
+        """Gripper command: 0 open, 1 closed with full force."""
+        self.last_saved: Saved | None = None
+        self.message = ""
+        """The last thing worth telling the operator (saved, discarded, draft kept)."""
+        self._start()
+
+    # ---- episodes ---------------------------------------------------------------------------------------------
+    @property
+    def episode(self) -> str:
+        from rik.sim.episode import episode_id
+
+        return episode_id(self.scene.info["id"], self.scene.front.id, self.operator, self.seed)
+
+    def _taken(self, seed: int) -> bool:
+        from rik.sim.episode import episode_id
+
+        name = episode_id(self.scene.info["id"], self.scene.front.id, self.operator, seed)
+        return (self.out / name).exists() or (self.out / DRAFTS / name).exists()
+
+    def _start(self) -> None:
+        """A new episode: the next free seed, the scene at its start pose, nothing recorded."""
+        from rik.errors import RikError
+        from rik.sim.episode import EpisodeRecorder
+        from rik.sim.record import check_seeds
+
+        for seed in range(self.seed, self.seed + MAX_FREE_SEEDS):
+            if not self._taken(seed):
+                break
+        else:
+            raise RikError(f"{self.out}: no free episode id among {MAX_FREE_SEEDS} seeds from {self.seed}")
+        check_seeds(seed, 1)
+        self.seed = seed
+        self.scene.reset()
+        self.recorder: EpisodeRecorder = EpisodeRecorder(self.scene)
+        self.target = np.concatenate([self.scene.pose(), [0.0]])
+        self.command = np.zeros(6)
+        self.grip = 0.0
+
+    @property
+    def recording(self) -> bool:
+        return self.recorder.steps > 0
+
+    @property
+    def time_up(self) -> bool:
+        return self.max_seconds is not None and self.recorder.steps >= round(self.max_seconds * self.scene.control_fps)
+
+    def save(self) -> Saved | None:
+        """Write the episode to ``out/<id>`` and start the next one; None (and nothing written) when nothing was
+        recorded yet."""
+        from rik.sim.episode import write_episode
+
+        if not self.recording:
+            self.message = "nothing recorded yet: move first"
+            return None
+        meta = write_episode(self.recorder, self.out, episode=self.episode, operator=self.operator,
+                             operator_kind="device", seed=self.seed)
+        shutil.rmtree(self.out / DRAFTS / meta.id, ignore_errors=True)
+        self.last_saved = Saved(self.out / meta.id, meta)
+        self.message = f"saved {meta.id}: {meta.outcome}, opened {meta.final_opening:.0%}, {meta.steps} steps"
+        self.seed += 1
+        self._start()
+        return self.last_saved
+
+    def discard(self) -> None:
+        """Drop the episode (and its draft, if one was kept) and start again from the start pose."""
+        shutil.rmtree(self.out / DRAFTS / self.episode, ignore_errors=True)
+        self.message = f"discarded {self.recorder.steps} steps" if self.recording else "back at the start pose"
+        self._start()
+
+    def keep_draft(self) -> Path | None:
+        """Write the episode so far to ``out/.drafts/<id>`` (replaced by each later draft, removed on save or
+        discard); the session goes on. None when nothing was recorded."""
+        from rik.sim.episode import write_episode
+
+        if not self.recording:
+            return None
+        write_episode(self.recorder, self.out / DRAFTS, episode=self.episode, operator=self.operator,
+                      operator_kind="device", seed=self.seed)
+        path = self.out / DRAFTS / self.episode
+        self.message = f"draft kept: {path} ({self.recorder.steps / self.scene.control_fps:.1f} s)"
+        return path
+
+    # ---- control ----------------------------------------------------------------------------------------------
+    def set_input(self, command: np.ndarray | list[float], grip: float | None = None) -> None:
+        """The device's velocity command (6 numbers in [-1, 1]) and, when given, the grip (0 open .. 1 closed)."""
+        c = np.nan_to_num(np.asarray(command, np.float64).reshape(6), nan=0.0)
+        self.command = np.clip(c, -1.0, 1.0)
+        if grip is not None:
+            self.grip = float(np.clip(np.nan_to_num(grip), 0.0, 1.0))
+
+    def toggle_grip(self) -> None:
+        self.grip = 0.0 if self.grip >= 0.5 else 1.0
+
+    def tick(self) -> bool:
+        """One control step when the operator has moved (or moves now) and the time limit is not reached: the
+        target advances by the velocity command, held within :data:`LEAD` of the gripper, and the step is
+        recorded. Returns whether the scene stepped."""
+        if self.time_up:
+            return False
+        if not self.recording and not np.any(self.command) and self.grip == self.target[6]:
+            return False  # waiting for the first input: nothing recorded
+        dt = 1.0 / self.scene.control_fps
+        speed = np.array([LINEAR_SPEED] * 3 + [ANGULAR_SPEED] * 3)
+        pose = self.scene.pose()
+        target = self.target[:6] + self.command * speed * dt
+        lead = target[:3] - pose[:3]
+        norm = float(np.linalg.norm(lead))
+        if norm > LEAD[0]:
+            target[:3] = pose[:3] + lead * (LEAD[0] / norm)
+        target[3:] = pose[3:] + np.clip(target[3:] - pose[3:], -LEAD[1], LEAD[1])
+        self.target = np.concatenate([target, [self.grip]])
+        self.recorder.step(self.target.copy())
+        return True
+
+    # ---- what the operator sees -------------------------------------------------------------------------------
+    def status(self) -> dict[str, Any]:
+        """The live status: episode id, state, time (s) and time left, opening (fraction), grip, where the handle is
+        from the pads' centre (m: ahead, left, up as the operator faces the front)."""
+        from rik.sim.outcome import classify
+
+        s = self.scene
+        fps = s.control_fps
+        elapsed = self.recorder.steps / fps
+        offset = s.grasp_point() - s.tcp()
+        state = "time up" if self.time_up else "recording" if self.recording else "waiting for input"
+        return {
+            "episode": self.episode, "variant": s.info["id"], "front": s.front.id, "seed": self.seed,
+            "state": state, "steps": self.recorder.steps, "time": round(elapsed, 2),
+            "time_left": None if self.max_seconds is None else round(max(0.0, self.max_seconds - elapsed), 2),
+            "opening": round(s.opening(), 4), "max_opening": round(self.recorder.max_opening, 4),
+            "outcome": classify(s.opening()), "grip": "closed" if self.grip >= 0.5 else "open",
+            "grip_command": round(self.grip, 3),
+            "handle": {"ahead": round(float(-offset[1]), 4), "left": round(float(offset[0]), 4),
+                       "up": round(float(offset[2]), 4)},
+            "contacts": int(s.contact_summary()["contacts"]), "message": self.message,
+            "last_saved": None if self.last_saved is None else self.last_saved.meta.id,
+        }
+
+    def status_line(self) -> str:
+        """The status in one line for a terminal."""
+        st = self.status()
+        h = st["handle"]
+        left = "no limit" if st["time_left"] is None else f"{st['time_left']:.0f} s left"
+        return (f"{st['episode']} | {st['state']} | {st['time']:.1f} s ({left}) | open {st['opening']:.0%} | grip "
+                f"{st['grip']} | handle {h['ahead']:+.3f} ahead {h['left']:+.3f} left {h['up']:+.3f} up m")

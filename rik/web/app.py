@@ -1,0 +1,112 @@
+"""The web app: one FastAPI application with the catalog (``/catalog``) and the teleop station (``/teleop``),
+served by uvicorn on a socket bound before anything else starts, so that a port in use fails at once."""
+
+from __future__ import annotations
+
+import errno
+import socket
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rik.errors import RikError
+
+if TYPE_CHECKING:
+    from fastapi import FastAPI
+
+    from rik.registry.catalog import Catalog
+
+STATIC = Path(__file__).parent / "static"
+"""Pages, scripts and styles of the app (no build step: plain HTML, CSS and JavaScript)."""
+DEFAULT_PORT = 8765
+DEFAULT_HOST = "127.0.0.1"
+
+
+@dataclass
+class AppConfig:
+    """What the app serves: the catalog, where variants are built and episodes written, and teleop settings."""
+
+    catalog: Catalog
+    variants: Path = Path("variants")
+    episodes: Path = Path("episodes")
+    overlays: tuple[Path, ...] = ()
+    max_seconds: float | None = None
+    """Time limit of a teleoperated episode, simulated s (None: no limit)."""
+    seed: int = 0
+    """First seed of teleoperated episodes; each new episode takes the next free one."""
+    front: str | None = None
+    """Front to operate (None: each variant's first)."""
+    extra: dict[str, object] = field(default_factory=dict)
+
+
+def bind_socket(host: str, port: int) -> socket.socket:
+    """A listening TCP socket on ``host:port`` (``port`` 0: a free one), or a one-line error when it is taken."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+    except OSError as exc:
+        sock.close()
+        if exc.errno == errno.EADDRINUSE:
+            raise RikError(f"--port {port}: port {port} on {host} is in use (another rik serve?); choose another "
+                           "with --port, or --port 0 for a free one") from None
+        raise RikError(f"--host {host} --port {port}: cannot listen there: {exc.strerror or exc}") from None
+    sock.listen(64)
+    sock.set_inheritable(True)
+    return sock
+
+
+def serve_station(config: AppConfig, variant: str, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
+                  on_ready: object = None) -> None:
+    """``rik teleop VARIANT --web``: build the variant first (an unknown or rejected one fails here, before any
+    port is taken), then serve the app with the station of ``variant`` as the printed address."""
+    from urllib.parse import quote
+
+    from rik.sim.record import variant_dir
+
+    variant_dir(config.catalog, variant, config.variants)
+    serve(config, host=host, port=port, path=f"/teleop/{quote(variant)}", on_ready=on_ready)
+
+
+def create_app(config: AppConfig) -> FastAPI:
+    """The application: the catalog's and the teleop station's routes, and the static files."""
+    from fastapi import FastAPI
+    from fastapi.responses import RedirectResponse
+    from fastapi.staticfiles import StaticFiles
+
+    from rik import __version__
+    from rik.web import catalog as catalog_routes
+    from rik.web import teleop as teleop_routes
+
+    app = FastAPI(title="rik", version=__version__, docs_url="/api/docs", redoc_url=None)
+    app.state.config = config
+    app.include_router(catalog_routes.router)
+    app.include_router(teleop_routes.router)
+    teleop_routes.install(app)
+    app.mount("/static", StaticFiles(directory=STATIC), name="static")
+
+    @app.get("/", include_in_schema=False)
+    def index() -> RedirectResponse:
+        return RedirectResponse("/catalog")
+
+    return app
+
+
+def serve(config: AppConfig, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, path: str = "/",
+          on_ready: object = None) -> None:
+    """Serve the app until interrupted (Ctrl+C). The socket is bound first (a port in use fails here); the URL
+    of ``path`` is printed through ``on_ready(url)`` once it listens."""
+    import uvicorn
+
+    sock = bind_socket(host, port)
+    bound = sock.getsockname()[1]
+    app = create_app(config)
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", ws="websockets-sansio", lifespan="on"))
+    if callable(on_ready):
+        shown = "localhost" if host in ("127.0.0.1", "::1", "localhost") else host
+        on_ready(f"http://{shown}:{bound}{path}")
+    try:
+        server.run(sockets=[sock])
+    finally:
+        sock.close()
