@@ -37,3 +37,4 @@ def serve(port: Annotated[int, typer.Option("--port", help="Port to listen on (0
                   "THIS_HOST, then open the same address there)")
 
     serve_app(config, host=host, port=port, on_ready=ready)
+    con.print("rik serve: stopped")

@@ -95,8 +95,8 @@ def create_app(config: AppConfig) -> FastAPI:
 
 def serve(config: AppConfig, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, path: str = "/",
           on_ready: object = None) -> None:
-    """Serve the app until interrupted (Ctrl+C). The socket is bound first (a port in use fails here); the URL
-    of ``path`` is printed through ``on_ready(url)`` once it listens."""
+    """Serve the app until interrupted (Ctrl+C, a normal stop: the function returns). The socket is bound first (a
+    port in use fails here); the URL of ``path`` is given to ``on_ready(url)`` once it listens."""
     import uvicorn
 
     sock = bind_socket(host, port)
@@ -108,5 +108,7 @@ def serve(config: AppConfig, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PO
         on_ready(f"http://{shown}:{bound}{path}")
     try:
         server.run(sockets=[sock])
+    except KeyboardInterrupt:  # Ctrl+C is how a server is stopped: uvicorn has shut down, re-raising the signal
+        pass
     finally:
         sock.close()

@@ -1,0 +1,136 @@
+"""The teleop session that the viewer window and the browser station share: recording starts with the operator's
+first input, a held key moves the target at a bounded speed and never far ahead of the gripper, every episode gets
+a new id (nothing is overwritten), drafts and discards, the time limit, and bad input."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rik.errors import RikError
+from rik.registry import load_catalog
+from rik.sim.episode import read_meta
+from rik.sim.record import variant_dir
+from rik.sim.replay import verify_episode
+from rik.sim.scene import build_scene
+from rik.sim.teleop_keys import LEAD, LINEAR_SPEED, MOTION_KEYS, keymap_rows, velocity
+from rik.sim.teleop_session import DRAFTS, TeleopSession
+
+CAT = load_catalog()
+BOW = "drawer-chest-80__two_point-bow-128__normal"
+
+
+@pytest.fixture(scope="module")
+def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("variants")
+    variant_dir(CAT, BOW, out)
+    return out
+
+
+def _session(variants: Path, out: Path, **kw) -> TeleopSession:
+    return TeleopSession(build_scene(variants / BOW), out, **kw)
+
+
+def _open_the_drawer(s: TeleopSession) -> None:
+    """What a person does: roll the fingers across the bar, move in to the handle, close, pull back."""
+    s.set_input([0, 0, 0, 0, 0, 1])
+    while s.scene.pose()[5] < np.pi / 2 - 0.02:
+        assert s.tick()
+    s.set_input([0, -1, 0, 0, 0, 0])
+    while s.status()["handle"]["ahead"] > 0.0:
+        assert s.tick() and s.recorder.steps < 400
+    s.set_input(np.zeros(6), grip=1.0)
+    for _ in range(20):
+        s.tick()
+    s.set_input([0, 1, 0, 0, 0, 0])
+    while s.scene.opening() < 0.9:
+        assert s.tick() and s.recorder.steps < 800
+
+
+def test_keymap_is_one_table_of_held_keys() -> None:
+    assert len({k.code for k in MOTION_KEYS}) == len(MOTION_KEYS) == 12
+    assert np.array_equal(velocity({"KeyW"}), [0, -1, 0, 0, 0, 0])  # towards the furniture: -y
+    assert np.array_equal(velocity({"KeyW", "KeyS"}), np.zeros(6))  # opposite keys cancel
+    assert np.allclose(velocity({"KeyA", "KeyR"}, fine=True), [0.25, 0, 0.25, 0, 0, 0])
+    assert ("W / S", "towards the furniture / away from the furniture") in keymap_rows()
+
+
+def test_a_person_opens_the_drawer_and_the_episode_replays_exactly(variants: Path, tmp_path: Path) -> None:
+    s = _session(variants, tmp_path)
+    start = s.status()
+    assert start["state"] == "waiting for input" and start["handle"]["ahead"] == pytest.approx(0.25, abs=1e-3)
+    for _ in range(10):
+        assert not s.tick()  # no input yet: nothing is recorded
+    assert s.recorder.steps == 0
+    _open_the_drawer(s)
+    saved = s.save()
+    assert saved is not None and saved.meta.outcome == "S" and saved.meta.final_opening >= 0.9
+    assert verify_episode(CAT, saved.path, variants).exact
+    assert s.status()["state"] == "waiting for input" and s.seed == 1  # the next episode is ready
+
+
+def test_a_held_key_moves_the_target_at_most_its_speed_and_never_far_ahead(variants: Path, tmp_path: Path) -> None:
+    """A slow frame never turns into a jump: the target moves per control step, and a gripper blocked by the front
+    does not let the target run away (reversing would take as long as the push)."""
+    s = _session(variants, tmp_path)
+    s.set_input([0, -1, 0, 0, 0, 0])
+    targets = []
+    for _ in range(120):  # 6 s towards the front: the gripper hits the bar after ~2 s
+        pose = s.scene.pose()
+        s.tick()
+        targets.append(s.target[:3].copy())
+        assert np.linalg.norm(s.target[:3] - pose[:3]) <= LEAD[0] + 1e-9
+    steps = np.linalg.norm(np.diff(targets, axis=0), axis=1)
+    assert steps.max() <= LINEAR_SPEED / s.scene.control_fps + 1e-9
+
+
+def test_every_episode_gets_a_new_id_and_nothing_is_overwritten(variants: Path, tmp_path: Path) -> None:
+    first = _session(variants, tmp_path, seed=3)
+    first.set_input([0, -1, 0, 0, 0, 0])
+    for _ in range(5):
+        first.tick()
+    a = first.save()
+    assert a is not None and a.meta.seed == 3
+    before = (a.path / "meta.json").read_bytes()
+    second = _session(variants, tmp_path, seed=3)  # a new session on the same folder and seed
+    assert second.seed == 4 and second.episode.endswith("__s0004")
+    second.set_input([0, 1, 0, 0, 0, 0])
+    second.tick()
+    b = second.save()
+    assert b is not None and b.path != a.path and (a.path / "meta.json").read_bytes() == before
+
+
+def test_discard_writes_nothing_and_a_draft_is_kept_until_saved(variants: Path, tmp_path: Path) -> None:
+    s = _session(variants, tmp_path)
+    assert s.keep_draft() is None  # nothing recorded yet
+    s.set_input([0, -1, 0, 0, 0, 0])
+    for _ in range(5):
+        s.tick()
+    s.discard()
+    assert not any(tmp_path.iterdir()) and s.recorder.steps == 0 and s.seed == 0
+    s.set_input([0, -1, 0, 0, 0, 0])
+    for _ in range(8):
+        s.tick()
+    draft = s.keep_draft()
+    assert draft == tmp_path / DRAFTS / s.episode and read_meta(draft).steps == 8
+    for _ in range(4):
+        s.tick()
+    saved = s.save()
+    assert saved is not None and saved.meta.steps == 12 and not draft.exists()
+    assert verify_episode(CAT, saved.path, variants).exact
+
+
+def test_the_time_limit_stops_the_episode_and_bad_input_is_refused(variants: Path, tmp_path: Path) -> None:
+    s = _session(variants, tmp_path, max_seconds=0.5)
+    s.set_input([np.nan, -1, 0, 0, 0, 5.0], grip=np.nan)  # NaN and out-of-range input is cleaned, not stepped
+    assert np.array_equal(s.command, [0, -1, 0, 0, 0, 1]) and s.grip == 0.0
+    while s.tick():
+        pass
+    st = s.status()
+    assert st["state"] == "time up" and st["steps"] == 10 and st["time_left"] == 0.0
+    with pytest.raises(RikError, match="--max-seconds -1: a time limit must be positive"):
+        _session(variants, tmp_path, max_seconds=-1)
+    with pytest.raises(RikError, match="--seed -2: seeds must lie in 0"):
+        _session(variants, tmp_path, seed=-2)
