@@ -143,10 +143,12 @@ function showDetail(...children) {
   $("#detail-body").replaceChildren(...children);
   $("#detail").hidden = false;
   $("#detail").scrollTop = 0;
+  document.body.classList.add("with-detail");
 }
 
 function closeDetail(push) {
   $("#detail").hidden = true;
+  document.body.classList.remove("with-detail");
   for (const c of document.querySelectorAll(".card.selected")) c.classList.remove("selected");
   if (push) history.pushState({}, "", "/catalog" + (activeTab() === "bases" ? "#bases" : ""));
 }
@@ -229,6 +231,7 @@ async function route() {
   try {
     if (!match) {
       $("#detail").hidden = true;
+      document.body.classList.remove("with-detail");
       showTab(location.hash === "#bases" ? "bases" : "handles");
     } else {
       const id = match[2].split("/").map(decodeURIComponent).join("/");
