@@ -22,7 +22,8 @@ TYPE_TITLES = {"knob": "Knobs", "two_point": "Two-point handles", "finger_pull":
 PICTURES_DIR = Path("docs/catalog")
 
 
-def _csv_rows(path: Path) -> dict[str, dict[str, str]]:
+def csv_rows(path: Path) -> dict[str, dict[str, str]]:
+    """Rows of a per-handle CSV (fidelity.csv, mesh_stats.csv) by handle id; {} when the file is absent."""
     if not path.is_file():
         return {}
     with path.open(newline="") as fh:
@@ -102,8 +103,8 @@ def render_catalog_md(index: CatalogIndex, root: Path) -> str:
         "",
     ]
     handle_cols = [c for c in COLUMNS["handles"] if c[0] not in ("type",)]
-    fidelity = _csv_rows(root / PICTURES_DIR / "fidelity.csv")
-    mesh_stats = _csv_rows(root / PICTURES_DIR / "mesh_stats.csv")
+    fidelity = csv_rows(root / PICTURES_DIR / "fidelity.csv")
+    mesh_stats = csv_rows(root / PICTURES_DIR / "mesh_stats.csv")
     out += _fidelity_summary(fidelity)
     for handle_type in HANDLE_TYPES:
         rows = [h for h in index.entries("handles") if h["type"] == handle_type]

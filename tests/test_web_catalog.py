@@ -1,0 +1,170 @@
+"""The catalog in the web app: its JSON API (TestClient) and the page in a real Chromium (Playwright): every handle
+listed with a loaded picture, filters by type, size and finish, one handle's dimensions, heatmap and mesh
+statistics, and a pairing button linking to the teleop station of a valid variant."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+from web_fixtures import browser, served
+
+from rik.combinator.ids import parse_variant_id, variant_id
+from rik.registry.doc import csv_rows
+from rik.registry.index import build_index
+from rik.registry.load import load_catalog
+from rik.registry.stats import catalog_stats
+from rik.web.app import AppConfig, create_app
+from rik.web.catalog_view import REPO_ROOT
+
+DEMO_HANDLE, DEMO_BASE = "two_point/bow-128", "drawer/chest-80"
+OVERLAY_HANDLE = """\
+handles:
+  - id: knob/mushroom-40
+    design: knob/mushroom
+    size: "40"
+    finish: metal/brushed-steel
+    geometry: {length: 0.04, width: 0.04, projection: 0.032, grip_diameter: 0.04, clearance: {depth: 0.017, width: 0.04}}
+    mount: {kind: single_screw, screw: M4}
+    mass: 0.07
+    licence: CC-BY-4.0
+"""
+
+
+@pytest.fixture(scope="module")
+def catalog():
+    return load_catalog([])
+
+
+@pytest.fixture(scope="module")
+def client(catalog):
+    from fastapi.testclient import TestClient
+
+    with TestClient(create_app(AppConfig(catalog))) as c:
+        yield c
+
+
+def test_api_lists_handles_bases_presets_with_numbers(client, catalog) -> None:
+    body = client.get("/api/catalog/handles").json()
+    assert body["count"] == len(catalog.handles) == len(body["handles"])
+    row = next(h for h in body["handles"] if h["id"] == DEMO_HANDLE)
+    assert row["dimensions_mm"]["length"] == pytest.approx(catalog.handles[DEMO_HANDLE].geometry.length * 1000)
+    assert row["type"] == "two_point" and row["finish"] == catalog.handles[DEMO_HANDLE].finish
+    mesh = csv_rows(REPO_ROOT / "docs/catalog/mesh_stats.csv")[DEMO_HANDLE]
+    assert row["mesh"]["vertices"] == int(mesh["vertices"]) and row["fidelity"]["hulls"] == int(mesh["hulls"])
+    assert row["pictures"] == {"thumbnail": True, "fidelity": True}
+    assert client.get("/api/catalog/bases").json()["count"] == len(catalog.base_units)
+    assert [p["id"] for p in client.get("/api/catalog/presets").json()["presets"]] == list(catalog.presets)
+    pairings = client.get(f"/api/catalog/handles/{DEMO_HANDLE}").json()["pairings"]
+    chest = next(p for p in pairings if p["id"] == DEMO_BASE)
+    assert chest["variants"]["normal"] == "drawer-chest-80__two_point-bow-128__normal"
+    for pairing in pairings:  # every offered pairing is a valid variant id of this catalog
+        for vid in pairing["variants"].values():
+            assert parse_variant_id(catalog, vid).handle == DEMO_HANDLE
+    fitting = client.get(f"/api/catalog/bases/{DEMO_BASE}").json()["pairings"]
+    assert sum(len(p["variants"]) for p in fitting) == len(fitting) * len(catalog.presets)
+    picture = client.get(f"/catalog/img/{DEMO_HANDLE}/thumbnail.png")
+    assert picture.status_code == 200 and picture.headers["content-type"] == "image/png"
+    assert client.get(f"/catalog/img/{DEMO_BASE}/front.svg").headers["content-type"].startswith("image/svg+xml")
+
+
+@pytest.mark.parametrize(("url", "message"), [
+    ("/api/catalog/handles/two_point/bow-12", "no handle 'two_point/bow-12' in the catalog; did you mean "
+                                              "'two_point/bow-128'"),
+    ("/api/catalog/bases/drawer/chest-90", "no base unit 'drawer/chest-90' in the catalog"),
+    ("/catalog/handle/knob/nope", "no handle 'knob/nope' in the catalog"),
+    ("/catalog/img/knob/nope/thumbnail.png", "no handle 'knob/nope' in the catalog"),
+    ("/catalog/img/knob/ball-25/mesh.png", "handle 'knob/ball-25' has no picture 'mesh.png'; valid: thumbnail.png"),
+    ("/catalog/img/drawer/chest-80/thumbnail.png", "base unit 'drawer/chest-80' has no picture 'thumbnail.png'"),
+])
+def test_unknown_ids_are_a_404_with_one_line(client, url: str, message: str) -> None:
+    response = client.get(url)
+    assert response.status_code == 404
+    detail = response.json()["detail"]
+    assert detail.startswith(message) and "\n" not in detail
+
+
+def test_user_handle_without_pictures_gets_a_placeholder(tmp_path: Path) -> None:
+    from fastapi.testclient import TestClient
+
+    overlay = tmp_path / "mine.yaml"
+    overlay.write_text(textwrap.dedent(OVERLAY_HANDLE))
+    with TestClient(create_app(AppConfig(load_catalog([overlay])))) as client:
+        row = client.get("/api/catalog/handles/knob/mushroom-40").json()
+        assert row["origin"] == "overlay" and row["pictures"] == {"thumbnail": False, "fidelity": False}
+        assert row["mesh"] is None and row["fidelity"] is None
+        for name in ("thumbnail", "fidelity"):
+            response = client.get(f"/catalog/img/knob/mushroom-40/{name}.png")
+            assert response.status_code == 200 and response.headers["x-rik-placeholder"] == "1"
+            assert response.headers["content-type"].startswith("image/svg+xml") and f"no {name} picture" in \
+                response.text
+
+
+def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
+    index = build_index(catalog)
+    total = len(catalog.handles)
+    knobs = catalog_stats(index)["by_type"]["knob"]["handles"]
+    large = len(index.select("handles", min_length=0.150))
+    finish = catalog.handles[DEMO_HANDLE].finish
+    same_finish = sum(h.finish == finish for h in catalog.handles.values())
+    vertices = csv_rows(REPO_ROOT / "docs/catalog/mesh_stats.csv")[DEMO_HANDLE]["vertices"]
+
+    def count_is(page, n: int) -> None:
+        page.wait_for_function("t => document.querySelector('#count').textContent === t", arg=f"{n} of {total} handles",
+                               timeout=10_000)
+        assert page.locator("#handle-grid .card:visible").count() == n
+
+    with served(AppConfig(catalog)) as url, browser() as chromium:
+        page = chromium.new_page(viewport={"width": 1400, "height": 900})
+        errors: list[str] = []
+        page.on("pageerror", lambda exc: errors.append(str(exc)))
+        page.goto(f"{url}/catalog")
+        count_is(page, total)
+        assert page.locator("#handle-grid .card img").count() == total
+        page.wait_for_function("() => [...document.querySelectorAll('#handle-grid img')]"
+                               ".every(i => i.complete && i.naturalWidth > 0)", timeout=20_000)
+        page.select_option("#f-type", "knob")
+        count_is(page, knobs)
+        assert {page.locator("#handle-grid .card:visible").nth(i).get_attribute("data-id").split("/")[0]
+                for i in range(knobs)} == {"knob"}
+        page.click("#f-reset")
+        page.select_option("#f-size", "150-")
+        count_is(page, large)
+        page.fill("#f-min", "")
+        page.fill("#f-max", "")
+        page.select_option("#f-finish", finish)
+        count_is(page, same_finish)
+        page.fill("#f-text", "bow-128")
+        count_is(page, 1)
+
+        page.click(f"#handle-grid .card[data-id='{DEMO_HANDLE}']")
+        page.wait_for_selector("#detail-title", state="visible")
+        assert page.text_content("#detail-title") == DEMO_HANDLE
+        assert page.url.endswith(f"/catalog/handle/{DEMO_HANDLE}")
+        dimensions = page.text_content("#dimensions")
+        assert "length mm140" in dimensions and "clearance mm (depth x width)20 x 116" in dimensions
+        page.wait_for_function("() => document.querySelector('#fidelity-img').naturalWidth > 0", timeout=10_000)
+        assert "CoACD (3 hulls)" in page.text_content("#fidelity")
+        assert f"vertices{vertices}" in page.text_content("#mesh-stats")
+        page.select_option("#pair-other", label=f"{DEMO_BASE} ({catalog.base_units[DEMO_BASE].name})")
+        page.select_option("#pair-preset", "normal")
+        href = page.get_attribute("#teleop-link", "href")
+        assert href == "/teleop/" + variant_id(DEMO_BASE, DEMO_HANDLE, "normal")
+        assert parse_variant_id(catalog, href.removeprefix("/teleop/")).base == DEMO_BASE
+        page.click("#f-reset")
+        count_is(page, total)
+        page.screenshot(path=str(tmp_path / "catalog.png"))
+
+        page.click("#tabs button[data-tab=bases]")
+        assert page.locator("#base-grid .card:visible").count() == len(catalog.base_units)
+        page.wait_for_function("() => [...document.querySelectorAll('#base-grid img')]"
+                               ".every(i => i.complete && i.naturalWidth > 0)", timeout=10_000)
+        page.click(f"#base-grid .card[data-id='{DEMO_BASE}']")
+        page.wait_for_selector("#pair-other optgroup", state="attached")
+        assert page.get_attribute("#teleop-link", "href").startswith("/teleop/drawer-chest-80__")
+
+        page.goto(f"{url}/catalog/handle/knob/ball-25")  # an entry's own address opens its panel
+        page.wait_for_function("() => document.querySelector('#detail-title')?.textContent === 'knob/ball-25'",
+                               timeout=10_000)
+        assert errors == []
