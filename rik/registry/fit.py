@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rik.schemas import Front, Handle
+from rik.schemas import BaseUnit, Front, Handle
 
 #: Rotations (degrees about the site's z axis) a handle may be mounted at: along the site's x, or across it.
 ROTATIONS = (0, 90)
@@ -24,3 +24,8 @@ def fits(handle: Handle, front: Front, rotation: int) -> bool:
 def fitting_rotations(handle: Handle, front: Front) -> tuple[int, ...]:
     """Rotations (of :data:`ROTATIONS`) at which the handle fits the front."""
     return tuple(r for r in ROTATIONS if fits(handle, front, r))
+
+
+def fits_base_unit(handle: Handle, base: BaseUnit) -> bool:
+    """True when the handle fits every front of the base unit (at some rotation each): the pairing is a variant."""
+    return all(fitting_rotations(handle, f) for f in base.fronts)

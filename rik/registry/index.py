@@ -116,7 +116,7 @@ def catalog_index(overlays: Iterable[Path] | None = None, use_cache: bool = True
 
 def build_index(catalog: Catalog, key: str = "") -> CatalogIndex:
     """The plain-data index of a validated catalog."""
-    from rik.registry.fit import fitting_rotations
+    from rik.registry.fit import fits_base_unit
 
     sections: dict[str, list[dict[str, Any]]] = {}
     for section in SECTIONS:
@@ -135,8 +135,7 @@ def build_index(catalog: Catalog, key: str = "") -> CatalogIndex:
         row["split"] = catalog.splits[row["id"]]
     for row in sections["base_units"]:
         row["joint_types"] = [j.value for j in catalog.joint_types(catalog.base_units[row["id"]])]
-    fit = sum(all(fitting_rotations(h, f) for f in b.fronts)
-              for b in catalog.base_units.values() for h in catalog.handles.values())
+    fit = sum(fits_base_unit(h, b) for b in catalog.base_units.values() for h in catalog.handles.values())
     pairings = {"total": len(catalog.base_units) * len(catalog.handles), "fit": fit}
     return CatalogIndex(key, sections, pairings, catalog.splits_version)
 

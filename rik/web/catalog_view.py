@@ -43,7 +43,7 @@ class CatalogView:
     bases: dict[str, Row]
     presets: list[Row]
     fits: dict[str, list[str]]
-    """Handle id -> ids of the base units it fits (every front, :func:`rik.registry.fit.fitting_rotations`)."""
+    """Handle id -> ids of the base units it fits (every front, :func:`rik.registry.fit.fits_base_unit`)."""
     root: Path
 
     def picture(self, entry_id: str, name: str) -> Path | None:
@@ -69,14 +69,14 @@ class CatalogView:
 
 def build_view(catalog: Catalog, root: Path = REPO_ROOT) -> CatalogView:
     """The view of ``catalog``; ``root`` is the directory holding ``docs/catalog`` (pictures and numbers)."""
-    from rik.registry.fit import fitting_rotations
+    from rik.registry.fit import fits_base_unit
 
     index = build_index(catalog)
     designs = {d["id"]: d for d in index.entries("designs")}
     finishes = {f["id"]: f for f in index.entries("finishes")}
     fidelity = csv_rows(root / PICTURES_DIR / "fidelity.csv")
     mesh = csv_rows(root / PICTURES_DIR / "mesh_stats.csv")
-    fits = {h.id: [b.id for b in catalog.base_units.values() if all(fitting_rotations(h, f) for f in b.fronts)]
+    fits = {h.id: [b.id for b in catalog.base_units.values() if fits_base_unit(h, b)]
             for h in catalog.handles.values()}
     view = CatalogView(index, {}, {}, index.entries("presets"), fits, root)
     for entry in index.entries("handles"):
