@@ -1,0 +1,211 @@
+"""Teleop streaming speed: frames per second the browser station streams, and input-to-frame latency (an input
+until the first streamed frame that shows its motion), at 320x240 and 640x480, against MuJoCo's offscreen render
+time for the same frame (the floor: the station cannot stream faster than it renders). Side by side in one run.
+
+- **floor**: ``mujoco.Renderer`` of the demo variant's scene, the ``front`` camera at the size, rendered as the
+  station renders (shadows and reflections off; also timed with them on, as the scene's own settings have it) and,
+  separately, JPEG-encoded with Pillow at the station's
+  quality: ms per frame, and the frames per second that render alone would allow;
+- **station**: the real ``rik teleop VARIANT --web --port 0`` in its own process, a websocket client in this one
+  (the ``websockets`` package, as a browser's page would talk to it). The client takes control, asks for the size,
+  holds an input for ``--seconds`` and counts the ``front`` frames that arrive (streamed fps; the station sends
+  ``front`` and ``wrist`` each control step, so twice as many images); then ``--taps`` times: waits still, sends
+  one input with a new sequence number and measures the time until the first frame whose header says that input
+  was applied and whose step advanced (input-to-frame latency, ms: median and 90th percentile).
+
+Target: at least 15 frames/s at 320x240 on this machine's 2 CPU cores (MuJoCo on llvmpipe through EGL).
+
+Run: ``uv run python benchmarks/teleop_latency.py [--seconds 8] [--taps 15]`` (about 2 minutes with the variant
+built; building it first takes up to a minute). ``--floor-only --model FILE.mjb`` measures the floor alone from a
+saved model with only mujoco, numpy and Pillow installed (how the GPU figures in docs/benchmarks.md were taken on
+a machine without rik).
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import os
+import re
+import statistics
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+VARIANT = "drawer-chest-80__two_point-bow-128__normal"
+SIZES = ((320, 240), (640, 480))
+JPEG_QUALITY = 80
+
+
+def floor(model_path: Path | None, sizes: tuple[tuple[int, int], ...], frames: int = 60) -> list[dict[str, float]]:
+    """Offscreen render and JPEG encode time per frame (ms) of the ``front`` camera at each size."""
+    import mujoco
+    import numpy as np
+    from PIL import Image
+
+    if model_path is not None:
+        model = mujoco.MjModel.from_binary_path(str(model_path))
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+    else:
+        model, data = demo_scene()
+    rows = []
+    for w, h in sizes:
+        renderer = mujoco.Renderer(model, h, w)
+        out = np.empty((h, w, 3), np.uint8)
+        times, encode, shadowed = [], [], []
+        for i in range(frames + 5):
+            t0 = time.perf_counter()
+            renderer.update_scene(data, "front")
+            renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+            renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+            renderer.render(out=out)
+            t1 = time.perf_counter()
+            buf = io.BytesIO()
+            Image.fromarray(out).save(buf, "JPEG", quality=JPEG_QUALITY)
+            t2 = time.perf_counter()
+            if i % 4 == 0:  # every 4th frame also with shadows and reflections, as the scene's own settings say
+                renderer.update_scene(data, "front")
+                renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 1
+                renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 1
+                renderer.render(out=out)
+                shadowed.append(time.perf_counter() - t2)
+            if i >= 5:  # warm-up frames
+                times.append(t1 - t0)
+                encode.append(t2 - t1)
+        renderer.close()
+        render_ms, encode_ms = 1e3 * statistics.median(times), 1e3 * statistics.median(encode)
+        rows.append({"width": w, "height": h, "render_ms": render_ms, "encode_ms": encode_ms,
+                     "floor_fps": 1e3 / render_ms, "shadows_ms": 1e3 * statistics.median(shadowed[2:])})
+    return rows
+
+
+def demo_scene():
+    """The demo variant's scene (built into a temporary folder if needed), as the station builds it."""
+    from rik.registry import load_catalog
+    from rik.sim.record import variant_dir
+    from rik.sim.scene import build_scene
+
+    scene = build_scene(variant_dir(load_catalog(), VARIANT, Path(os.environ.get("RIK_BENCH_VARIANTS", "variants"))))
+    return scene.model, scene.data
+
+
+def frame_header(message: bytes) -> dict:
+    """The JSON header of a binary frame (4-byte big-endian length, header, JPEG)."""
+    (n,) = struct.unpack(">I", message[:4])
+    return json.loads(message[4:4 + n])
+
+
+def station(url: str, size: tuple[int, int], seconds: float, taps: int) -> dict[str, float]:
+    """Streamed fps of the ``front`` camera while an input is held, and input-to-frame latency (ms)."""
+    from websockets.sync.client import connect
+
+    ws_url = url.replace("http://", "ws://").rstrip("/") + "/ws"
+    with connect(ws_url, max_size=None, open_timeout=120) as ws:
+        ws.send(json.dumps({"type": "size", "width": size[0], "height": size[1]}))
+        seq = 0
+
+        def send(axes: list[float]) -> int:
+            nonlocal seq
+            seq += 1
+            ws.send(json.dumps({"type": "input", "seq": seq, "axes": axes, "grip": None, "fine": False}))
+            return seq
+
+        def front_frames(until: float):
+            while time.perf_counter() < until:
+                try:
+                    message = ws.recv(timeout=max(0.01, until - time.perf_counter()))
+                except TimeoutError:
+                    return
+                if isinstance(message, bytes):
+                    header = frame_header(message)
+                    if header["camera"] == "front":
+                        yield time.perf_counter(), header
+
+        # settle: wait until frames at the asked size arrive
+        list(front_frames(time.perf_counter() + 3.0))
+        # streamed fps while an input is held (re-sent at 30 Hz as the page does)
+        count, start, direction = 0, time.perf_counter(), 1.0
+        end = start + seconds
+        next_send = start
+        while time.perf_counter() < end:
+            if time.perf_counter() >= next_send:
+                send([0.0, 0.0, 0.0, 0.0, 0.0, 0.3 * direction])  # roll slowly: stays clear of the furniture
+                next_send += 1 / 30
+            for _ in front_frames(min(end, next_send)):
+                count += 1
+        fps = count / seconds
+        # latency: still, then one input; first front frame that applied it and stepped
+        latencies = []
+        for k in range(taps):
+            send([0.0] * 6)
+            list(front_frames(time.perf_counter() + 0.6))
+            last_step = None
+            sent_at = time.perf_counter()
+            s = send([0.0, 0.0, 0.0, 0.0, 0.0, 0.5 if k % 2 else -0.5])
+            for t, header in front_frames(sent_at + 5.0):
+                if last_step is None:
+                    last_step = header["step"] - 1 if header["seq"] >= s else header["step"]
+                if header["seq"] >= s and header["step"] > last_step:
+                    latencies.append(1e3 * (t - sent_at))
+                    break
+        send([0.0] * 6)
+    latencies.sort()
+    return {"fps": fps, "latency_median_ms": statistics.median(latencies) if latencies else float("nan"),
+            "latency_p90_ms": latencies[int(0.9 * (len(latencies) - 1))] if latencies else float("nan"),
+            "taps": len(latencies)}
+
+
+def start_station(work: Path) -> tuple[subprocess.Popen, str]:
+    proc = subprocess.Popen([sys.executable, "-m", "rik", "teleop", VARIANT, "--web", "--port", "0", "--out",
+                             str(work / "episodes"), "--variants", os.environ.get("RIK_BENCH_VARIANTS", "variants")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "COLUMNS": "200"})
+    assert proc.stdout is not None
+    line = proc.stdout.readline()
+    found = re.search(r"(http://localhost:\d+/\S+)", line)
+    if not found:
+        proc.kill()
+        raise SystemExit(f"the station did not start: {line}{proc.stderr.read() if proc.stderr else ''}")
+    return proc, found.group(1).replace("localhost", "127.0.0.1")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seconds", type=float, default=8.0, help="how long an input is held for the fps count")
+    parser.add_argument("--taps", type=int, default=15, help="inputs timed for the latency")
+    parser.add_argument("--floor-only", action="store_true", help="measure the render floor alone")
+    parser.add_argument("--model", type=Path, help="with --floor-only: a saved model (.mjb) instead of the demo")
+    args = parser.parse_args()
+    print(f"machine: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}, "
+          f"MUJOCO_GL={os.environ.get('MUJOCO_GL', '(unset)')}")
+    floors = floor(args.model, SIZES)
+    if args.floor_only:
+        for f in floors:
+            print(f"{f['width']}x{f['height']}: render {f['render_ms']:.1f} ms ({f['floor_fps']:.0f} fps floor), "
+                  f"JPEG {f['encode_ms']:.1f} ms; with shadows and reflections {f['shadows_ms']:.1f} ms")
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        proc, url = start_station(Path(tmp))
+        try:
+            rows = [(f, station(url, (f["width"], f["height"]), args.seconds, args.taps)) for f in floors]
+        finally:
+            proc.terminate()
+            proc.wait(timeout=60)
+    print(f"{'size':>8} {'render ms':>10} {'floor fps':>10} {'JPEG ms':>8} {'streamed fps':>13} "
+          f"{'fps/floor':>10} {'latency ms (median, p90)':>26}")
+    for f, s in rows:
+        print(f"{f['width']}x{f['height']:<4} {f['render_ms']:>10.1f} {f['floor_fps']:>10.1f} {f['encode_ms']:>8.1f} "
+              f"{s['fps']:>13.1f} {s['fps'] / f['floor_fps']:>10.2f} "
+              f"{s['latency_median_ms']:>12.0f}, {s['latency_p90_ms']:.0f} ({s['taps']} taps)")
+    ok = rows[0][1]["fps"] >= 15.0
+    print(f"target: >= 15 frames/s at 320x240: {'met' if ok else 'NOT met'} ({rows[0][1]['fps']:.1f}); "
+          f"load average now {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
