@@ -120,6 +120,9 @@ class Station:
             self.clients.append(client)
             if self.controller is None:
                 self.controller = client
+                for c in self.clients:
+                    if c is not client:
+                        c.notice = WATCHING
             else:
                 client.notice = WATCHING
 
