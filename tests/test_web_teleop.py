@@ -102,6 +102,12 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
         drive.wait("d.lastSaved !== ''")
         saved = page.evaluate(f"{STATION}.lastSaved")
         assert "saved" in page.inner_text("#banner")
+        page.click("#btn-replay")  # the saved episode plays back in the stream, then the stream is live again
+        drive.wait("d.replaying === 'true'")
+        drive.wait("d.replaying === 'false'")
+        assert f"replayed {saved}; back to live" in page.inner_text("#banner")
+        page.select_option("#size", "640x480")
+        page.wait_for_function("document.getElementById('cam-front').naturalWidth === 640", timeout=WAIT_MS)
     episode = episodes / saved
     assert (episode / "meta.json").is_file() and (episode / "states.parquet").is_file()
     from rik.sim.episode import read_meta
@@ -152,3 +158,13 @@ def test_unknown_variant_gets_a_404_page_with_the_message(variants: Path, tmp_pa
         response = page.goto(f"{url}/teleop/drawer-chest-80__two_point-bow-999__normal")
         assert response is not None and response.status == 404
         assert "rik: error: no handle 'two_point-bow-999' in the catalog" in page.inner_text("#error")
+
+
+def test_shutting_the_server_down_mid_episode_keeps_a_draft(variants: Path, tmp_path: Path) -> None:
+    episodes = tmp_path / "episodes"
+    with served(config(variants, episodes)) as url, browser() as b:
+        page = open_station(b, url)
+        Driver(page).hold("w", "Number(d.steps) >= 5")
+        episode = page.evaluate(f"{STATION}.episode")
+    assert (episodes / ".drafts" / episode / "meta.json").is_file()
+    assert not (episodes / episode).exists()
