@@ -72,7 +72,11 @@ def open_station(b, url: str):
     return page
 
 
-def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, variants: Path, tmp_path: Path) -> None:
+@pytest.mark.parametrize("pull", ["gamepad", "keyboard"])
+def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, variants: Path, tmp_path: Path,
+                                                                       pull: str) -> None:
+    """Roll ~90 deg (Q), approach (W) until the pads reach the handle, grasp (Space), pull (the gamepad's left
+    stick, or S) until the drawer is 90 % open, save (Enter); closed-loop on the status the page shows."""
     from rik.sim.teleop_keys import keymap_rows
 
     episodes = tmp_path / "episodes"
@@ -87,14 +91,17 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
         steps = drive.value("steps")
         drive.press("Space")  # close the grip, then let the fingers close for 1 s
         drive.wait(f"d.grip === 'closed' && Number(d.steps) >= {steps + 20}")
-        # the pull, with the gamepad's left stick pulled back (through the page's test hook)
-        start = time.monotonic()
-        page.evaluate("window.rikTest.setGamepad({axes: [0, 1, 0, 0], buttons: []})")
-        try:
-            drive.wait("Number(d.opening) >= 0.9")
-        finally:
-            page.evaluate("window.rikTest.setGamepad({axes: [0, 0, 0, 0], buttons: []})")
-        stick = time.monotonic() - start
+        stick = 0.0
+        if pull == "keyboard":
+            drive.hold("s", "Number(d.opening) >= 0.9")
+        else:  # the gamepad's left stick pulled back (through the page's test hook)
+            start = time.monotonic()
+            page.evaluate("window.rikTest.setGamepad({axes: [0, 1, 0, 0], buttons: []})")
+            try:
+                drive.wait("Number(d.opening) >= 0.9")
+            finally:
+                page.evaluate("window.rikTest.setGamepad({axes: [0, 0, 0, 0], buttons: []})")
+            stick = time.monotonic() - start
         simulated = drive.value("steps") / 20
         shot = tmp_path / "station.png"
         page.screenshot(path=str(shot))
@@ -102,22 +109,30 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
         drive.wait("d.lastSaved !== ''")
         saved = page.evaluate(f"{STATION}.lastSaved")
         assert "saved" in page.inner_text("#banner")
+        if pull == "keyboard":
+            _check_saved(rik, episodes / saved, variants, drive, stick, simulated, shot)
+            return
         page.click("#btn-replay")  # the saved episode plays back in the stream, then the stream is live again
         drive.wait("d.replaying === 'true'")
         drive.wait("d.replaying === 'false'")
         assert f"replayed {saved}; back to live" in page.inner_text("#banner")
         page.select_option("#size", "640x480")
         page.wait_for_function("document.getElementById('cam-front').naturalWidth === 640", timeout=WAIT_MS)
-    episode = episodes / saved
-    assert (episode / "meta.json").is_file() and (episode / "states.parquet").is_file()
+    _check_saved(rik, episodes / saved, variants, drive, stick, simulated, shot)
+
+
+def _check_saved(rik, episode: Path, variants: Path, drive: Driver, stick: float, simulated: float,
+                 shot: Path) -> None:
+    """The saved episode is there, opened the drawer 90 %, and replays exactly; prints the drive's effort."""
     from rik.sim.episode import read_meta
 
+    assert (episode / "meta.json").is_file() and (episode / "states.parquet").is_file()
     meta = read_meta(episode)
-    assert meta.operator == "browser" and meta.final_opening >= 0.85, meta
+    assert meta.operator == "browser" and meta.max_opening >= 0.9, meta
     res = rik("replay", str(episode), "--variants", str(variants))
     assert res.code == 0 and "exact" in res.out, res.out + res.err
     print(f"\nbrowser drive: {drive.presses} key presses, {drive.held:.1f} s of key holding, {stick:.1f} s of "
-          f"gamepad stick, {simulated:.1f} s simulated; screenshot {shot}")
+          f"gamepad stick, {simulated:.1f} s simulated (final opening {meta.final_opening:.0%}); screenshot {shot}")
 
 
 def test_second_tab_watches_and_a_lost_connection_keeps_a_draft(variants: Path, tmp_path: Path) -> None:
