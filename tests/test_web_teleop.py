@@ -80,9 +80,13 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
     from rik.sim.teleop_keys import keymap_rows
 
     episodes = tmp_path / "episodes"
+    fresh = not any(variants.iterdir())
     with served(config(variants, episodes)) as url, browser() as b:
         page = open_station(b, url)
         assert page.evaluate(f"{STATION}.role") == "controller"
+        if fresh:  # the page built the variant, and said so meanwhile
+            assert page.evaluate(f"{STATION}.sawBuilding") == "true"
+            assert (variants / BOW / "model.xml").is_file()
         shown = page.inner_text("#keymap")  # the keymap the viewer shows too
         assert all(keys in shown and does in shown for keys, does in keymap_rows())
         drive = Driver(page)
@@ -136,7 +140,7 @@ def _check_saved(rik, episode: Path, variants: Path, drive: Driver, stick: float
 
 
 def test_second_tab_watches_and_a_lost_connection_keeps_a_draft(variants: Path, tmp_path: Path) -> None:
-    from rik.web.station import LEFT, WATCHING
+    from rik.web.station import LEFT, PAUSED, WATCHING
 
     episodes = tmp_path / "episodes"
     with served(config(variants, episodes)) as url, browser() as b:
@@ -158,6 +162,9 @@ def test_second_tab_watches_and_a_lost_connection_keeps_a_draft(variants: Path, 
         third = open_station(b, url)  # a new tab controls and is offered the draft
         Driver(third).wait("d.role === 'controller' && d.paused === 'true'")
         assert third.is_visible("#draft-offer") and str(draft) in third.inner_text("#draft-offer")
+        third.keyboard.down("w")  # moving waits for the operator's choice
+        Driver(third).wait(f"document.getElementById('banner').textContent.includes({PAUSED!r})")
+        third.keyboard.up("w")
         third.close()
         watcher.click("#btn-take")  # the watcher takes over once nobody controls
         Driver(watcher).wait("d.role === 'controller'")

@@ -39,6 +39,7 @@ JPEG_QUALITY = 80
 WATCHING = "another tab controls this session; you are watching"
 LEFT = "the controlling tab left; press Take control to drive"
 BUILDING = "building the variant..."
+PAUSED = "a draft was kept: Continue, Save or Discard first"
 
 
 @dataclass
@@ -176,6 +177,8 @@ class Station:
                 except (TypeError, ValueError):
                     client.notice = "ignored an input: axes must be 6 numbers in -1..1, grip a number in 0..1 or null"
                     return
+                if self.paused and (np.any(axes) or grip is not None):
+                    client.notice = PAUSED
                 self.axes = axes * (FINE_FACTOR if msg.get("fine") else 1.0)
                 if grip is not None:
                     self.grip = grip
@@ -207,7 +210,11 @@ class Station:
         self.message = ""
 
     def _run(self) -> None:
-        self._build()
+        builder = threading.Thread(target=self._build, name=f"rik-build-{self.variant}", daemon=True)
+        builder.start()
+        while builder.is_alive() and not self.stop.is_set():  # the page says "building the variant..." meanwhile
+            self._push_status()
+            builder.join(0.2)
         if not self.ready:
             while not self.stop.wait(0.2):
                 self._push_status()
@@ -302,7 +309,7 @@ class Station:
         elif name == "replay":
             self._start_replay()
         elif self.paused:
-            self.message = "a draft was kept: Continue, Save or Discard first"
+            self.message = PAUSED
 
     def _start_replay(self) -> None:
         from rik.sim.episode import read_episode, states

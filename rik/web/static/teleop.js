@@ -156,9 +156,10 @@
     // banner: an error, then this tab's notice, then the station's and the session's last message
     let text = "", level = "info";
     if (st.error) { text = st.error; level = "error"; }
-    else if (!st.ready) { text = "building the variant..."; }
+    else if (!st.ready) { text = "building the variant..."; d.sawBuilding = "true"; }
     else if (st.notice) { text = st.notice; level = "warn"; }
     else if (st.message) { text = st.message; }
+    else if (s && s.state === "time up") { text = "time is up: save (Enter) or discard (Backspace)"; level = "warn"; }
     else if (s && s.message) { text = s.message; }
     const banner = $("banner");
     banner.hidden = !text;
@@ -174,8 +175,6 @@
   function sendSize() {
     const [w, h] = $("size").value.split("x").map(Number);
     send({type: "size", width: w, height: h});
-    const front = $("cam-front");
-    front.style.width = (w === 640 ? 640 : 640) + "px";
   }
   $("size").addEventListener("change", sendSize);
 
