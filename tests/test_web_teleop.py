@@ -182,11 +182,15 @@ def test_unknown_variant_gets_a_404_page_with_the_message(variants: Path, tmp_pa
         assert "rik: error: no handle 'two_point-bow-999' in the catalog" in page.inner_text("#error")
 
 
-def test_shutting_the_server_down_mid_episode_keeps_a_draft(variants: Path, tmp_path: Path) -> None:
+def test_on_screen_button_moves_and_a_server_shut_down_mid_episode_keeps_a_draft(variants: Path, tmp_path: Path) -> None:
     episodes = tmp_path / "episodes"
     with served(config(variants, episodes)) as url, browser() as b:
         page = open_station(b, url)
-        Driver(page).hold("w", "Number(d.steps) >= 5")
+        page.hover("#hold-KeyR")  # the on-screen hold-to-move button "R: up", held with the mouse
+        z = float(page.evaluate(f"{STATION}.z"))
+        page.mouse.down()
+        Driver(page).wait(f"Number(d.steps) >= 5 && Number(d.z) > {z + 0.005}")
+        page.mouse.up()
         episode = page.evaluate(f"{STATION}.episode")
     assert (episodes / ".drafts" / episode / "meta.json").is_file()
     assert not (episodes / episode).exists()

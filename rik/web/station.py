@@ -95,7 +95,7 @@ class Station:
         self.clients: list[Client] = []
         self.controller: Client | None = None
         self.commands: deque[tuple[Client, str]] = deque()
-        self.axes = np.zeros(6)
+        self.axes: np.ndarray = np.zeros(6)
         self.grip: float | None = None
         self.input_time = 0.0
         self.seq = 0
@@ -148,7 +148,7 @@ class Station:
             if kind == "size":
                 size = (msg.get("width"), msg.get("height"))
                 if size in SIZES:
-                    client.size = size  # type: ignore[assignment]
+                    client.size = (int(size[0]), int(size[1]))
                     client.sent_key = None
                 else:
                     sizes = ", ".join(f"{w}x{h}" for w, h in SIZES)
@@ -228,7 +228,7 @@ class Station:
         replay_data = mujoco.MjData(session.scene.model)
         dt = 1.0 / session.scene.control_fps
         next_tick = time.monotonic()
-        sent = deque(maxlen=20)
+        sent: deque[float] = deque(maxlen=20)
         try:
             while not self.stop.is_set():
                 self._step(replay_data)

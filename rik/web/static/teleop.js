@@ -133,7 +133,7 @@
     if (s) {
       d.episode = s.episode; d.state = s.state; d.steps = s.steps; d.opening = s.opening;
       d.grip = s.grip; d.ahead = s.handle.ahead; d.left = s.handle.left; d.up = s.handle.up;
-      d.roll = s.pose[5]; d.lastSaved = s.last_saved || "";
+      d.x = s.pose[0]; d.y = s.pose[1]; d.z = s.pose[2]; d.roll = s.pose[5]; d.lastSaved = s.last_saved || "";
       $("st-episode").textContent = s.episode;
       $("st-state").textContent = st.replay ? "replaying " + st.replay.episode + " (" + st.replay.row + "/" +
         st.replay.rows + ")" : st.paused ? "paused (draft kept)" : s.state;
