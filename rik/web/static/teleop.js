@@ -151,7 +151,7 @@
       d.state = st.error ? "error" : "building";
       $("st-state").textContent = st.error ? "error" : "building the variant...";
     }
-    $("st-fps").textContent = st.fps;
+    $("st-fps").textContent = st.fps ? st.fps + " frames/s" : "still (a frame is sent when the scene changes)";
     if (st.size) $("st-size").textContent = st.size[0] + "x" + st.size[1];
     // banner: an error, then this tab's notice, then the station's and the session's last message
     let text = "", level = "info";
