@@ -1,16 +1,161 @@
-"""The browser teleop station (placeholder: filled in by the teleop work of issue 20)."""
+"""The browser teleop station: ``GET /teleop/{variant}`` serves the page, ``WS /teleop/{variant}/ws`` streams
+the cameras and the status and takes the operator's input; the sessions live in :mod:`rik.web.station`.
+
+Protocol of ``WS /teleop/{variant}/ws``
+---------------------------------------
+Server -> browser, binary (a camera frame)::
+
+    4 bytes: header length N, big-endian unsigned
+    N bytes: JSON header {"camera": "front"|"wrist", "step": recorded steps (or replayed row), "seq": the last
+             input seq applied to the simulation when this frame was rendered, "t": simulated time (s),
+             "sent": server wall clock at render (s since the epoch), "width", "height", "replay": bool}
+    rest:    the JPEG image (no shadows or reflections; quality 80)
+
+Server -> browser, text: JSON status {"type": "status", "variant", "ready" (variant built and session up),
+"error" (why it cannot run, or null), "role" ("controller" | "watcher"), "notice" (a message for this tab),
+"message" (the station's last message), "controlled" (whether a tab controls), "paused" and "draft" (a draft
+kept after the controlling tab's connection was lost: the page offers Continue / Save / Discard), "replay"
+(null or {episode, row, rows}), "seq", "fps" (frames rendered per second), "size" ([w, h] of this tab's frames),
+"session": :meth:`rik.sim.teleop_session.TeleopSession.status` plus "pose" (gripper base x, y, z m, pitch, yaw,
+roll rad) and "roll_deg"}.
+
+Browser -> server, text JSON:
+
+- ``{"type": "input", "seq": n, "axes": [6 numbers in -1..1: x (left), y (away), z (up), pitch, yaw, roll],
+  "grip": 0..1 or null (null: keep the grip), "fine": bool}``; an input older than 0.5 s without a newer one
+  commands no motion (a tab that lost focus);
+- ``{"type": "command", "name": "save" | "discard" | "toggle_grip" | "replay" | "continue" | "take_control"}``;
+- ``{"type": "size", "width": 320|640, "height": 240|480}``.
+
+Frames and status go to every tab through a latest-frame slot per tab (a slow tab skips frames). One tab controls
+(the first); the others watch and their input is refused with a notice, until the controlling tab leaves and one
+of them sends ``take_control``. The simulation steps only while a tab controls.
+"""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import asyncio
+import html
+import json
+from typing import TYPE_CHECKING, Any
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Request, WebSocket, WebSocketDisconnect
+from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
+
+from rik.errors import RikError
+from rik.web.app import STATIC
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
 
+    from rik.web.station import Stations
+
 router = APIRouter()
 
 
+def _stations(app: Any) -> Stations:
+    return app.state.stations
+
+
+def _variant(app: Any, text: str) -> str:
+    """The canonical id of the variant ``text`` names, or a RikError with the catalog's one-line message."""
+    from rik.combinator.ids import parse_variant_id
+
+    return parse_variant_id(app.state.config.catalog, text).id
+
+
+@router.get("/teleop/keymap.json", include_in_schema=False)
+def keymap() -> JSONResponse:
+    """The keymap shared with the viewer (:mod:`rik.sim.teleop_keys`), for the page's keyboard and its table."""
+    from rik.sim import teleop_keys as k
+
+    motion = [{"code": b.code, "label": b.label, "axis": b.axis, "sign": b.sign, "does": b.does}
+              for b in k.MOTION_KEYS]
+    commands = {name: {"code": code, "label": label, "does": does}
+                for name, (code, _, label, does) in k.COMMAND_KEYS.items()}
+    return JSONResponse({"axes": list(k.AXES), "motion": motion, "commands": commands,
+                         "rows": [list(r) for r in k.keymap_rows()], "fine_factor": k.FINE_FACTOR,
+                         "linear_speed": k.LINEAR_SPEED, "angular_speed": k.ANGULAR_SPEED})
+
+
+def error_page(message: str, status: int = 404) -> HTMLResponse:
+    text = html.escape(message)
+    return HTMLResponse(f"<!doctype html><html><head><meta charset='utf-8'><title>rik: error</title>"
+                        f"<link rel='stylesheet' href='/static/teleop.css'></head><body><main class='error'>"
+                        f"<h1>rik teleop</h1><p id='error'>rik: error: {text}</p>"
+                        f"<p><a href='/catalog'>the catalog</a></p></main></body></html>", status_code=status)
+
+
+@router.get("/teleop/{variant}", include_in_schema=False, response_model=None)
+async def page(request: Request, variant: str) -> FileResponse | HTMLResponse:
+    """The station's page; opening it starts the station (building the variant in its thread when needed)."""
+    try:
+        vid = _variant(request.app, variant)
+    except RikError as exc:
+        return error_page(str(exc))
+    _stations(request.app).get(vid)
+    return FileResponse(STATIC / "teleop.html", headers={"Cache-Control": "no-store"})
+
+
+@router.websocket("/teleop/{variant}/ws")
+async def stream(websocket: WebSocket, variant: str) -> None:
+    """One tab's connection: frames and status out, input and commands in (see the module docstring)."""
+    from rik.web.station import Client
+
+    await websocket.accept()
+    try:
+        vid = _variant(websocket.app, variant)
+    except RikError as exc:
+        await websocket.send_text(json.dumps({"type": "status", "ready": False, "error": str(exc)}))
+        await websocket.close(code=1008)
+        return
+    station = _stations(websocket.app).get(vid)
+    client = Client(asyncio.get_running_loop())
+    station.connect(client)
+
+    async def sender() -> None:
+        while True:
+            await client.event.wait()
+            client.event.clear()
+            for item in client.take():
+                if isinstance(item, bytes):
+                    await websocket.send_bytes(item)
+                else:
+                    await websocket.send_text(item)
+
+    task = asyncio.create_task(sender())
+    try:
+        while True:
+            text = await websocket.receive_text()
+            try:
+                msg = json.loads(text)
+            except ValueError:
+                client.notice = "ignored a message that is not JSON"
+                continue
+            station.receive(client, msg)
+    except (WebSocketDisconnect, RuntimeError):
+        pass
+    finally:
+        task.cancel()
+        station.disconnect(client)
+
+
 def install(app: FastAPI) -> None:
-    """Start-up and shut-down of the station's sessions."""
+    """The stations of ``app``; on shut-down their threads stop and episodes in progress are kept as drafts."""
+    from contextlib import asynccontextmanager
+
+    from rik.web.station import Stations
+
+    stations = Stations(app.state.config)
+    app.state.stations = stations
+    inner = app.router.lifespan_context
+
+    @asynccontextmanager
+    async def lifespan(a: Any) -> Any:
+        async with inner(a) as state:
+            try:
+                yield state
+            finally:
+                await asyncio.to_thread(stations.shutdown)
+
+    app.router.lifespan_context = lifespan

@@ -1,0 +1,276 @@
+// rik browser teleop station: streams the cameras, shows the status, sends keyboard / gamepad / button input.
+// Protocol: see rik/web/teleop.py. Plain JavaScript, no build step.
+"use strict";
+
+(function () {
+  const variant = decodeURIComponent(location.pathname.replace(/\/+$/, "").split("/").pop());
+  const $ = (id) => document.getElementById(id);
+  const root = $("station");
+  const DEADZONE = 0.15;
+  const SEND_PERIOD = 33; // ms: inputs ~30 Hz while anything is held
+  const PAD = [ // what the standard-mapping gamepad does (shown on the page)
+    ["left stick", "left / right, towards / away"],
+    ["right stick", "up / down (y), yaw (x)"],
+    ["d-pad", "pitch (up / down), roll (left / right)"],
+    ["right trigger (RT / R2)", "grip: the harder, the tighter (analog)"],
+    ["A / cross", "close / open the gripper"],
+    ["LB / L1 (hold)", "fine motion (x0.25)"],
+    ["Start / Options", "save the episode"],
+    ["Back / Share", "discard the episode"],
+    ["Y / triangle", "replay the last saved episode"],
+  ];
+  const PAD_BUTTONS = {0: "toggle_grip", 9: "save", 8: "discard", 3: "replay"};
+
+  let keymap = null;
+  let ws = null;
+  let seq = 0;
+  let lastSent = null;
+  let lastSentAt = 0;
+  let lastTrigger = 0;
+  let padPrev = [];
+  let virtualPad = null;
+  let status = null;
+  let lastStep = 0;
+  const held = new Set();      // keyboard codes held
+  const pointerHeld = new Set(); // on-screen hold buttons held
+  const frames = {front: 0, wrist: 0};
+
+  $("variant").textContent = variant;
+  root.dataset.variant = variant;
+  document.title = "rik teleop " + variant;
+
+  // ---- keymap -------------------------------------------------------------------------------------------------
+  fetch("/teleop/keymap.json").then((r) => r.json()).then((k) => {
+    keymap = k;
+    const table = $("keymap");
+    for (const [keys, does] of k.rows) {
+      const tr = table.insertRow();
+      tr.insertCell().textContent = keys;
+      tr.insertCell().textContent = does;
+    }
+    const hold = $("hold");
+    for (const b of k.motion) {
+      const btn = document.createElement("button");
+      btn.textContent = b.label + ": " + b.does;
+      btn.dataset.code = b.code;
+      btn.id = "hold-" + b.code;
+      const release = () => { pointerHeld.delete(b.code); btn.classList.remove("held"); };
+      btn.addEventListener("pointerdown", (e) => {
+        pointerHeld.add(b.code); btn.classList.add("held");
+        try { btn.setPointerCapture(e.pointerId); } catch (_) { /* synthetic events */ }
+        e.preventDefault();
+      });
+      for (const ev of ["pointerup", "pointercancel", "lostpointercapture"]) btn.addEventListener(ev, release);
+      hold.appendChild(btn);
+    }
+  });
+  const padTable = $("padmap");
+  for (const [what, does] of PAD) {
+    const tr = padTable.insertRow();
+    tr.insertCell().textContent = what;
+    tr.insertCell().textContent = does;
+  }
+
+  // ---- connection ---------------------------------------------------------------------------------------------
+  function send(obj) {
+    if (ws && ws.readyState === WebSocket.OPEN) { ws.send(JSON.stringify(obj)); return true; }
+    return false;
+  }
+  function command(name) { send({type: "command", name: name}); }
+
+  function connect() {
+    const proto = location.protocol === "https:" ? "wss:" : "ws:";
+    ws = new WebSocket(proto + "//" + location.host + "/teleop/" + encodeURIComponent(variant) + "/ws");
+    ws.binaryType = "arraybuffer";
+    ws.onopen = () => {
+      $("conn").textContent = "connected";
+      root.dataset.connected = "true";
+      sendSize();
+    };
+    ws.onclose = () => {
+      $("conn").textContent = "disconnected: reconnecting...";
+      root.dataset.connected = "false";
+      setTimeout(connect, 1000);
+    };
+    ws.onmessage = (ev) => {
+      if (typeof ev.data === "string") { showStatus(JSON.parse(ev.data)); return; }
+      showFrame(ev.data);
+    };
+  }
+
+  function showFrame(buf) {
+    const view = new DataView(buf);
+    const n = view.getUint32(0, false);
+    const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buf, 4, n)));
+    const img = $("cam-" + header.camera);
+    if (!img) return;
+    const url = URL.createObjectURL(new Blob([new Uint8Array(buf, 4 + n)], {type: "image/jpeg"}));
+    const old = img.dataset.url;
+    img.onload = () => { if (old) URL.revokeObjectURL(old); };
+    img.dataset.url = url;
+    img.src = url;
+    img.dataset.step = header.step;
+    img.dataset.seq = header.seq;
+    img.dataset.t = header.t;
+    frames[header.camera] = (frames[header.camera] || 0) + 1;
+  }
+
+  function pct(x) { return (100 * x).toFixed(0) + " %"; }
+  function showStatus(st) {
+    status = st;
+    const d = root.dataset;
+    d.ready = String(!!st.ready);
+    d.role = st.role || "";
+    d.paused = String(!!st.paused);
+    d.draft = st.draft || "";
+    d.seq = st.seq;
+    d.replaying = String(!!st.replay);
+    const role = $("role");
+    role.textContent = st.role === "controller" ? "you control this session" : st.role === "watcher" ? "watching" : "";
+    role.className = "role " + (st.role || "");
+    $("btn-take").hidden = st.role === "controller";
+    const s = st.session;
+    if (s) {
+      d.episode = s.episode; d.state = s.state; d.steps = s.steps; d.opening = s.opening;
+      d.grip = s.grip; d.ahead = s.handle.ahead; d.left = s.handle.left; d.up = s.handle.up;
+      d.x = s.pose[0]; d.y = s.pose[1]; d.z = s.pose[2]; d.roll = s.pose[5]; d.lastSaved = s.last_saved || "";
+      $("st-episode").textContent = s.episode;
+      $("st-state").textContent = st.replay ? "replaying " + st.replay.episode + " (" + st.replay.row + "/" +
+        st.replay.rows + ")" : st.paused ? "paused (draft kept)" : s.state;
+      $("st-time").textContent = s.time.toFixed(1);
+      $("st-time-left").textContent = s.time_left === null ? "no limit" : s.time_left.toFixed(1) + " s left";
+      $("st-opening").textContent = pct(s.opening) + " (max " + pct(s.max_opening) + ")";
+      $("opening-bar").style.width = Math.max(0, Math.min(100, 100 * s.opening)).toFixed(1) + "%";
+      $("st-grip").textContent = s.grip + " (" + s.grip_command.toFixed(2) + ")";
+      const h = s.handle;
+      $("st-handle").textContent = h.ahead.toFixed(3) + " m ahead, " + h.left.toFixed(3) + " m left, " +
+        h.up.toFixed(3) + " m up";
+      $("st-roll").textContent = s.roll_deg.toFixed(0) + " deg";
+      $("st-last-saved").textContent = s.last_saved || "-";
+    } else {
+      d.state = st.error ? "error" : "building";
+      $("st-state").textContent = st.error ? "error" : "building the variant...";
+    }
+    $("st-fps").textContent = st.fps ? st.fps + " frames/s" : "still (a frame is sent when the scene changes)";
+    if (st.size) $("st-size").textContent = st.size[0] + "x" + st.size[1];
+    // banner: an error, then this tab's notice, then the station's and the session's last message
+    let text = "", level = "info";
+    if (st.error) { text = st.error; level = "error"; }
+    else if (!st.ready) { text = "building the variant..."; d.sawBuilding = "true"; }
+    else if (st.notice) { text = st.notice; level = "warn"; }
+    else if (st.message) { text = st.message; }
+    else if (s && s.state === "time up") { text = "time is up: save (Enter) or discard (Backspace)"; level = "warn"; }
+    else if (s && s.message) { text = s.message; }
+    const banner = $("banner");
+    banner.hidden = !text;
+    banner.textContent = text;
+    banner.className = "banner " + level;
+    banner.dataset.level = level;
+    const offer = $("draft-offer");
+    offer.hidden = !(st.paused && st.role === "controller");
+    if (st.draft) $("draft-text").textContent = "The connection was lost mid-episode; the episode was kept as a " +
+      "draft (" + st.draft + "). Continue it, save it or discard it.";
+  }
+
+  function sendSize() {
+    const [w, h] = $("size").value.split("x").map(Number);
+    send({type: "size", width: w, height: h});
+  }
+  $("size").addEventListener("change", sendSize);
+
+  // ---- buttons ------------------------------------------------------------------------------------------------
+  for (const btn of document.querySelectorAll("button[data-command]")) {
+    btn.addEventListener("click", () => { command(btn.dataset.command); btn.blur(); });
+  }
+
+  // ---- keyboard -----------------------------------------------------------------------------------------------
+  const COMMAND_CODES = {Space: "toggle_grip", Enter: "save", NumpadEnter: "save", Backspace: "discard"};
+  function handled(code) {
+    return code in COMMAND_CODES || code.startsWith("Arrow") || code.startsWith("Shift") ||
+      (keymap && keymap.motion.some((b) => b.code === code));
+  }
+  window.addEventListener("keydown", (e) => {
+    if (e.target && e.target.tagName === "SELECT") return;
+    if (!handled(e.code)) return;
+    e.preventDefault();
+    if (e.code in COMMAND_CODES) { if (!e.repeat) command(COMMAND_CODES[e.code]); return; }
+    held.add(e.code);
+    step();
+  });
+  window.addEventListener("keyup", (e) => {
+    if (handled(e.code)) e.preventDefault();
+    held.delete(e.code);
+    step();
+  });
+  window.addEventListener("blur", () => { held.clear(); pointerHeld.clear(); step(); });
+
+  // ---- gamepad ------------------------------------------------------------------------------------------------
+  function readPad() {
+    if (virtualPad) return virtualPad;
+    const pads = navigator.getGamepads ? navigator.getGamepads() : [];
+    for (const p of pads) if (p && p.connected) return p;
+    return null;
+  }
+  function dz(v) {
+    v = Number(v) || 0;
+    if (Math.abs(v) < DEADZONE) return 0;
+    return Math.sign(v) * (Math.abs(v) - DEADZONE) / (1 - DEADZONE);
+  }
+  function pressed(pad, i) { const b = pad.buttons && pad.buttons[i]; return !!(b && (b.pressed || b.value > 0.5)); }
+
+  // ---- input --------------------------------------------------------------------------------------------------
+  function currentInput() {
+    const axes = [0, 0, 0, 0, 0, 0];
+    let fine = held.has("ShiftLeft") || held.has("ShiftRight") || $("fine").checked;
+    if (keymap) {
+      for (const b of keymap.motion) if (held.has(b.code) || pointerHeld.has(b.code)) axes[b.axis] += b.sign;
+    }
+    let grip = null;
+    const pad = readPad();
+    if (pad) {
+      const a = pad.axes || [];
+      axes[0] -= dz(a[0]); axes[1] += dz(a[1]); axes[2] -= dz(a[3]); axes[4] -= dz(a[2]);
+      if (pressed(pad, 12)) axes[3] -= 1;
+      if (pressed(pad, 13)) axes[3] += 1;
+      if (pressed(pad, 14)) axes[5] += 1;
+      if (pressed(pad, 15)) axes[5] -= 1;
+      if (pressed(pad, 4)) fine = true;
+      const rt = pad.buttons && pad.buttons[7] ? Number(pad.buttons[7].value) || 0 : 0;
+      if (Math.abs(rt - lastTrigger) > 0.02) { grip = rt; lastTrigger = rt; }
+      for (const [i, name] of Object.entries(PAD_BUTTONS)) {
+        const now = pressed(pad, Number(i));
+        if (now && !padPrev[i]) command(name);
+        padPrev[i] = now;
+      }
+      $("pad-state").textContent = "gamepad: " + (pad.id || "connected");
+    } else {
+      $("pad-state").textContent = "no gamepad (press a button on it to connect)";
+    }
+    return {axes: axes.map((v) => Math.round(Math.max(-1, Math.min(1, v)) * 1000) / 1000), grip: grip, fine: fine};
+  }
+
+  function step() {
+    lastStep = performance.now();
+    const inp = currentInput();
+    const moving = inp.axes.some((v) => v !== 0);
+    const key = JSON.stringify([inp.axes, inp.fine]);
+    const now = performance.now();
+    if (key !== lastSent || inp.grip !== null || (moving && now - lastSentAt >= SEND_PERIOD)) {
+      if (send({type: "input", seq: ++seq, axes: inp.axes, grip: inp.grip, fine: inp.fine})) {
+        lastSent = key;
+        lastSentAt = now;
+        root.dataset.sentSeq = seq;
+      }
+    }
+  }
+  function frame() { step(); requestAnimationFrame(frame); }
+  requestAnimationFrame(frame);
+  setInterval(() => { if (performance.now() - lastStep > 100) step(); }, 50); // when animation frames pause
+
+  window.rikTest = {
+    setGamepad(state) { virtualPad = state ? {id: "rikTest virtual gamepad", connected: true, ...state} : null; step(); },
+    status() { return status; },
+    frames: frames,
+  };
+  connect();
+})();

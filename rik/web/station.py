@@ -1,0 +1,417 @@
+"""The browser teleop station's sessions: one :class:`Station` per variant, each running its own thread at the
+control rate (20 Hz) that owns the :class:`rik.sim.teleop_session.TeleopSession` and a ``mujoco.Renderer``, and
+pushes camera frames and status to every connected browser through a latest-frame slot per client (a slow client
+skips frames, never queues them). The wire protocol is described in :mod:`rik.web.teleop`.
+
+Threads: websocket handlers (the event loop) only hand inputs and commands to the station under its lock; the
+station thread does all simulation and rendering (a MuJoCo GL context belongs to the thread that made it).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import json
+import math
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from rik.sim.teleop_keys import FINE_FACTOR
+
+if TYPE_CHECKING:
+    from rik.sim.teleop_session import TeleopSession
+    from rik.web.app import AppConfig
+
+OPERATOR = "browser"
+"""Operator name of episodes recorded in the browser."""
+CAMERAS = ("front", "wrist")
+SIZES = ((320, 240), (640, 480))
+"""Stream sizes a client may ask for, px (width, height)."""
+INPUT_TIMEOUT = 0.5
+"""An input older than this (s) without a newer one commands no motion (a tab that lost focus)."""
+JPEG_QUALITY = 80
+WATCHING = "another tab controls this session; you are watching"
+LEFT = "the controlling tab left; press Take control to drive"
+BUILDING = "building the variant..."
+PAUSED = "a draft was kept: Continue, Save or Discard first"
+
+
+@dataclass
+class Client:
+    """One connected browser tab: its latest-frame slots and the loop that sends them."""
+
+    loop: asyncio.AbstractEventLoop
+    size: tuple[int, int] = SIZES[0]
+    notice: str = ""
+    """A message for this tab only (why its input was refused...)."""
+    slots: dict[str, bytes | str] = field(default_factory=dict)
+    event: asyncio.Event = field(default_factory=asyncio.Event)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    sent_key: object = None
+    """Key of the last frame pushed to this client (a frame is pushed once)."""
+
+    def push(self, slot: str, payload: bytes | str) -> None:
+        """Replace ``slot``'s payload (dropping an unsent older one) and wake the sender. Any thread."""
+        with self.lock:
+            self.slots[slot] = payload
+        try:
+            self.loop.call_soon_threadsafe(self.event.set)
+        except RuntimeError:  # the loop is closed: the server is going down
+            pass
+
+    def take(self) -> list[bytes | str]:
+        with self.lock:
+            items, self.slots = list(self.slots.values()), {}
+        return items
+
+
+def frame_message(header: dict[str, Any], jpeg: bytes) -> bytes:
+    """A binary frame: 4-byte big-endian header length, the JSON header, the JPEG bytes."""
+    head = json.dumps(header, separators=(",", ":")).encode()
+    return len(head).to_bytes(4, "big") + head + jpeg
+
+
+def encode_jpeg(rgb: np.ndarray, quality: int = JPEG_QUALITY) -> bytes:
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(rgb).save(buf, "JPEG", quality=quality)
+    return buf.getvalue()
+
+
+class Station:
+    """One variant's teleop session shared by every tab that opens it; one tab controls, the others watch."""
+
+    def __init__(self, config: AppConfig, variant: str) -> None:
+        self.config = config
+        self.variant = variant
+        self.lock = threading.Lock()
+        self.clients: list[Client] = []
+        self.controller: Client | None = None
+        self.commands: deque[tuple[Client, str]] = deque()
+        self.axes: np.ndarray = np.zeros(6)
+        self.grip: float | None = None
+        self.input_time = 0.0
+        self.seq = 0
+        """Sequence number of the last input received from the controller."""
+        self.applied_seq = 0
+        """Sequence number of the last input applied to the simulation."""
+        self.ready = False
+        self.error: str | None = None
+        self.paused = False
+        self.draft: str | None = None
+        self.message = BUILDING
+        self.replay: dict[str, Any] | None = None
+        self.fps = 0.0
+        self.session: TeleopSession | None = None
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, name=f"rik-station-{variant}", daemon=True)
+        self.thread.start()
+
+    # ---- called from the event loop ---------------------------------------------------------------------------
+    def connect(self, client: Client) -> None:
+        """A new tab: it controls when nobody does, else it watches."""
+        with self.lock:
+            self.clients.append(client)
+            if self.controller is None:
+                self.controller = client
+                for c in self.clients:
+                    if c is not client:
+                        c.notice = WATCHING
+            else:
+                client.notice = WATCHING
+
+    def disconnect(self, client: Client) -> None:
+        with self.lock:
+            if client in self.clients:
+                self.clients.remove(client)
+            if self.controller is client:
+                self.controller = None
+                self.axes = np.zeros(6)
+                self.commands.append((client, "_lost"))
+                for c in self.clients:
+                    c.notice = LEFT
+
+    def receive(self, client: Client, msg: Any) -> None:
+        """One JSON message from a tab (see :mod:`rik.web.teleop`); bad ones are answered with a notice."""
+        if not isinstance(msg, dict):
+            client.notice = "ignored a message that is not a JSON object"
+            return
+        kind = msg.get("type")
+        with self.lock:
+            if kind == "size":
+                size = (msg.get("width"), msg.get("height"))
+                if size in SIZES:
+                    client.size = (int(size[0]), int(size[1]))
+                    client.sent_key = None
+                else:
+                    sizes = ", ".join(f"{w}x{h}" for w, h in SIZES)
+                    client.notice = f"size {size[0]}x{size[1]}: choose one of {sizes}"
+                return
+            if kind == "command" and msg.get("name") == "take_control":
+                if self.controller is None:
+                    self.controller = client
+                    client.notice = ""
+                    for c in self.clients:
+                        if c is not client:
+                            c.notice = WATCHING
+                elif self.controller is not client:
+                    client.notice = WATCHING
+                return
+            if client is not self.controller:
+                client.notice = WATCHING if self.controller is not None else LEFT
+                return
+            client.notice = ""
+            if kind == "input":
+                try:
+                    axes = np.clip(np.nan_to_num(np.asarray(msg.get("axes"), np.float64).reshape(6)), -1.0, 1.0)
+                    grip = msg.get("grip")
+                    grip = None if grip is None else float(np.clip(float(grip), 0.0, 1.0))
+                    seq = int(msg.get("seq", 0))
+                except (TypeError, ValueError):
+                    client.notice = "ignored an input: axes must be 6 numbers in -1..1, grip a number in 0..1 or null"
+                    return
+                if self.paused and (np.any(axes) or grip is not None):
+                    client.notice = PAUSED
+                self.axes = axes * (FINE_FACTOR if msg.get("fine") else 1.0)
+                if grip is not None:
+                    self.grip = grip
+                self.seq = seq
+                self.input_time = time.monotonic()
+            elif kind == "command" and msg.get("name") in ("save", "discard", "toggle_grip", "replay", "continue"):
+                self.commands.append((client, str(msg["name"])))
+            else:
+                client.notice = (f"ignored message type {kind!r}: use input, command (save, discard, toggle_grip, "
+                                 "replay, continue, take_control) or size")
+
+    # ---- the station thread -----------------------------------------------------------------------------------
+    def _build(self) -> None:
+        from rik.errors import RikError
+        from rik.sim.record import variant_dir
+        from rik.sim.scene import build_scene
+        from rik.sim.teleop_session import TeleopSession
+
+        c = self.config
+        try:
+            scene = build_scene(variant_dir(c.catalog, self.variant, c.variants), c.front)
+            self.session = TeleopSession(scene, c.episodes, operator=OPERATOR, seed=c.seed, max_seconds=c.max_seconds)
+        except RikError as exc:
+            self.error = str(exc)
+        except Exception as exc:  # noqa: BLE001 -- shown on the page instead of killing the thread silently
+            self.error = f"building {self.variant} failed: {type(exc).__name__}: {exc}"
+        else:
+            self.ready = True
+        self.message = ""
+
+    def _run(self) -> None:
+        builder = threading.Thread(target=self._build, name=f"rik-build-{self.variant}", daemon=True)
+        builder.start()
+        while builder.is_alive() and not self.stop.is_set():  # the page says "building the variant..." meanwhile
+            self._push_status()
+            builder.join(0.2)
+        if not self.ready:
+            while not self.stop.wait(0.2):
+                self._push_status()
+            return
+        import mujoco
+
+        session = self.session
+        assert session is not None
+        renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        frames: dict[tuple[int, int], tuple[object, list[bytes]]] = {}
+        replay_data = mujoco.MjData(session.scene.model)
+        dt = 1.0 / session.scene.control_fps
+        next_tick = time.monotonic()
+        sent: deque[float] = deque(maxlen=20)
+        try:
+            while not self.stop.is_set():
+                self._step(replay_data)
+                with self.lock:
+                    clients = list(self.clients)
+                data = replay_data if self.replay is not None else session.scene.data
+                key = (session.episode, session.recorder.steps, float(data.time), self.replay and self.replay["row"])
+                for size in {c.size for c in clients}:
+                    if size not in frames or frames[size][0] != key:
+                        frames[size] = (key, self._render(renderers, size, data, session))
+                        sent.append(time.monotonic())
+                for c in clients:
+                    if c.sent_key != (key, c.size):
+                        c.sent_key = (key, c.size)
+                        for cam, payload in zip(CAMERAS, frames[c.size][1], strict=True):
+                            c.push(cam, payload)
+                self._push_status(clients)
+                if len(sent) > 1:
+                    span = sent[-1] - sent[0]
+                    self.fps = (len(sent) - 1) / span if span > 0 and time.monotonic() - sent[-1] < 1.0 else 0.0
+                next_tick += dt
+                delay = next_tick - time.monotonic()
+                if delay > 0:
+                    self.stop.wait(delay)
+                else:
+                    next_tick = time.monotonic()  # behind: no catching up in a burst
+        finally:
+            for r in renderers.values():
+                r.close()
+
+    def _step(self, replay_data: Any) -> None:
+        """Apply commands and input, then advance one control step (or one replayed row)."""
+        session = self.session
+        assert session is not None
+        with self.lock:
+            commands = list(self.commands)
+            self.commands.clear()
+            controlled = self.controller is not None
+            fresh = time.monotonic() - self.input_time <= INPUT_TIMEOUT
+            axes = self.axes.copy() if fresh else np.zeros(6)
+            grip, self.grip = self.grip, None
+            seq = self.seq
+        for _, name in commands:
+            self._command(name, replay_data)
+        if self.replay is not None:
+            self._replay_row(replay_data)
+            return
+        if not controlled or self.paused:
+            return
+        session.set_input(axes, grip)
+        session.tick()
+        self.applied_seq = seq
+
+    def _command(self, name: str, replay_data: Any) -> None:
+        session = self.session
+        assert session is not None
+        if name == "_lost":
+            if session.recording:
+                path = session.keep_draft()
+                self.draft = None if path is None else str(path)
+                self.paused = True
+            return
+        if self.replay is not None and name != "replay":
+            self.message = "replaying the last saved episode: wait until it ends"
+            return
+        self.message = ""
+        if name == "toggle_grip" and not self.paused:
+            session.toggle_grip()
+        elif name == "save":
+            session.save()
+            self.draft, self.paused = None, False
+        elif name == "discard":
+            session.discard()
+            self.draft, self.paused = None, False
+        elif name == "continue":
+            self.draft, self.paused = None, False
+            session.message = "continuing the episode"
+        elif name == "replay":
+            self._start_replay()
+        elif self.paused:
+            self.message = PAUSED
+
+    def _start_replay(self) -> None:
+        from rik.sim.episode import read_episode, states
+
+        session = self.session
+        assert session is not None
+        if self.replay is not None:
+            self.replay = None
+            self.message = "replay stopped"
+            return
+        if session.last_saved is None:
+            self.message = "nothing saved in this session yet: save an episode to replay it"
+            return
+        _, table = read_episode(session.last_saved.path)
+        self.replay = {"episode": session.last_saved.meta.id, "states": states(table), "row": 0}
+
+    def _replay_row(self, data: Any) -> None:
+        import mujoco
+
+        r = self.replay
+        assert r is not None and self.session is not None
+        if r["row"] >= len(r["states"]):
+            self.replay = None
+            self.message = f"replayed {r['episode']}; back to live"
+            return
+        model = self.session.scene.model
+        mujoco.mj_setState(model, data, r["states"][r["row"]], mujoco.mjtState.mjSTATE_INTEGRATION)
+        mujoco.mj_forward(model, data)
+        r["row"] += 1
+
+    def _render(self, renderers: dict[tuple[int, int], Any], size: tuple[int, int], data: Any,
+                session: TeleopSession) -> list[bytes]:
+        import mujoco
+
+        if size not in renderers:
+            r = mujoco.Renderer(session.scene.model, size[1], size[0])
+            r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+            r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+            renderers[size] = r
+        renderer = renderers[size]
+        out = []
+        step = session.recorder.steps if self.replay is None else self.replay["row"]
+        for cam in CAMERAS:
+            renderer.update_scene(data, camera=cam)
+            jpeg = encode_jpeg(renderer.render())
+            header = {"camera": cam, "step": step, "seq": self.applied_seq, "t": round(float(data.time), 4),
+                      "sent": time.time(), "width": size[0], "height": size[1], "replay": self.replay is not None}
+            out.append(frame_message(header, jpeg))
+        return out
+
+    def status(self) -> dict[str, Any]:
+        """The station's status without the per-tab fields (see :mod:`rik.web.teleop`)."""
+        s = self.session
+        st: dict[str, Any] = {"type": "status", "variant": self.variant, "ready": self.ready, "error": self.error,
+                              "paused": self.paused, "draft": self.draft, "seq": self.applied_seq,
+                              "fps": round(self.fps, 1), "controlled": self.controller is not None,
+                              "replay": None, "session": None, "message": self.message}
+        if self.replay is not None:
+            st["replay"] = {"episode": self.replay["episode"], "row": self.replay["row"],
+                            "rows": len(self.replay["states"])}
+        if s is not None and self.ready:
+            st["session"] = s.status()
+            st["session"]["pose"] = [round(float(v), 4) for v in s.scene.pose()]
+            st["session"]["roll_deg"] = round(math.degrees(float(s.scene.pose()[5])), 1)
+        return st
+
+    def _push_status(self, clients: list[Client] | None = None) -> None:
+        if clients is None:
+            with self.lock:
+                clients = list(self.clients)
+        base = self.status()
+        for c in clients:
+            st = dict(base, role="controller" if c is self.controller else "watcher", notice=c.notice,
+                      size=list(c.size))
+            c.push("status", json.dumps(st))
+
+    def shutdown(self) -> Path | None:
+        """Stop the thread; keep the episode in progress as a draft. Returns the draft's path, if one was kept."""
+        self.stop.set()
+        self.thread.join(timeout=30)
+        s = self.session
+        if s is not None and self.ready and s.recording and not self.thread.is_alive():
+            return s.keep_draft()
+        return None
+
+
+class Stations:
+    """Every station of the app, one per variant id, created on first use and kept while the server runs."""
+
+    def __init__(self, config: AppConfig) -> None:
+        self.config = config
+        self.lock = threading.Lock()
+        self.stations: dict[str, Station] = {}
+
+    def get(self, variant: str) -> Station:
+        """The station of ``variant`` (a canonical variant id), started (and its variant built) on first use."""
+        with self.lock:
+            if variant not in self.stations:
+                self.stations[variant] = Station(self.config, variant)
+            return self.stations[variant]
+
+    def shutdown(self) -> list[Path]:
+        with self.lock:
+            stations = list(self.stations.values())
+        return [p for s in stations if (p := s.shutdown()) is not None]

@@ -1,0 +1,196 @@
+"""The browser teleop station driven by a real Chromium (Debian's, through Playwright): keys held on the page (and a
+gamepad through the page's test hook) open the demo drawer, the saved episode replays exactly; a second tab
+watches; a lost connection keeps a draft; an unknown variant gets a 404 page with the one-line message."""
+
+from __future__ import annotations
+
+import shutil
+import time
+from pathlib import Path
+
+import pytest
+from web_fixtures import browser, served
+
+from rik.registry import load_catalog
+
+CAT = load_catalog()
+BOW = "drawer-chest-80__two_point-bow-128__normal"
+WAIT_MS = 90_000
+"""Bound of every wait for the station (a loaded 2-core machine steps the simulation slowly)."""
+STATION = "document.getElementById('station').dataset"
+
+pytestmark = pytest.mark.skipif(shutil.which("chromium") is None, reason="Debian's chromium is not installed")
+
+
+@pytest.fixture(scope="module")
+def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One variants folder for the module: the first page that opens the demo variant builds it."""
+    return tmp_path_factory.mktemp("variants")
+
+
+def config(variants: Path, episodes: Path):
+    from rik.web.app import AppConfig
+
+    return AppConfig(CAT, variants=variants, episodes=episodes)
+
+
+class Driver:
+    """Holds keys on the page until a condition on its status holds; counts presses and seconds of holding."""
+
+    def __init__(self, page) -> None:
+        self.page = page
+        self.presses = 0
+        self.held = 0.0
+
+    def value(self, name: str) -> float:
+        return float(self.page.evaluate(f"{STATION}.{name}"))
+
+    def wait(self, condition: str) -> None:
+        """Wait (bounded) until the JS ``condition`` on ``d`` (the station's data attributes) holds."""
+        self.page.wait_for_function(f"(() => {{ const d = {STATION}; return {condition}; }})()", timeout=WAIT_MS)
+
+    def hold(self, key: str, condition: str) -> None:
+        self.page.keyboard.down(key)
+        start = time.monotonic()
+        self.presses += 1
+        try:
+            self.wait(condition)
+        finally:
+            self.page.keyboard.up(key)
+            self.held += time.monotonic() - start
+
+    def press(self, key: str) -> None:
+        self.page.keyboard.press(key)
+        self.presses += 1
+
+
+def open_station(b, url: str):
+    page = b.new_page(viewport={"width": 1400, "height": 1000})
+    page.goto(f"{url}/teleop/{BOW}")
+    page.wait_for_function(f"{STATION}.ready === 'true' && document.getElementById('cam-front').dataset.step !== ''",
+                           timeout=WAIT_MS)
+    return page
+
+
+@pytest.mark.parametrize("pull", ["gamepad", "keyboard"])
+def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, variants: Path, tmp_path: Path,
+                                                                       pull: str) -> None:
+    """Roll ~90 deg (Q), approach (W) until the pads reach the handle, grasp (Space), pull (the gamepad's left
+    stick, or S) until the drawer is 90 % open, save (Enter); closed-loop on the status the page shows."""
+    from rik.sim.teleop_keys import keymap_rows
+
+    episodes = tmp_path / "episodes"
+    fresh = not any(variants.iterdir())
+    with served(config(variants, episodes)) as url, browser() as b:
+        page = open_station(b, url)
+        assert page.evaluate(f"{STATION}.role") == "controller"
+        if fresh:  # the page built the variant, and said so meanwhile
+            assert page.evaluate(f"{STATION}.sawBuilding") == "true"
+            assert (variants / BOW / "model.xml").is_file()
+        shown = page.inner_text("#keymap")  # the keymap the viewer shows too
+        assert all(keys in shown and does in shown for keys, does in keymap_rows())
+        drive = Driver(page)
+        drive.hold("q", "Number(d.roll) >= 1.50")  # roll the gripper ~90 deg: jaws across the bow handle
+        drive.hold("w", "Number(d.ahead) <= 0.0")  # towards the furniture until the pads reach the handle
+        steps = drive.value("steps")
+        drive.press("Space")  # close the grip, then let the fingers close for 1 s
+        drive.wait(f"d.grip === 'closed' && Number(d.steps) >= {steps + 20}")
+        stick = 0.0
+        if pull == "keyboard":
+            drive.hold("s", "Number(d.opening) >= 0.9")
+        else:  # the gamepad's left stick pulled back (through the page's test hook)
+            start = time.monotonic()
+            page.evaluate("window.rikTest.setGamepad({axes: [0, 1, 0, 0], buttons: []})")
+            try:
+                drive.wait("Number(d.opening) >= 0.9")
+            finally:
+                page.evaluate("window.rikTest.setGamepad({axes: [0, 0, 0, 0], buttons: []})")
+            stick = time.monotonic() - start
+        simulated = drive.value("steps") / 20
+        shot = tmp_path / "station.png"
+        page.screenshot(path=str(shot))
+        drive.press("Enter")
+        drive.wait("d.lastSaved !== ''")
+        saved = page.evaluate(f"{STATION}.lastSaved")
+        assert "saved" in page.inner_text("#banner")
+        if pull == "keyboard":
+            _check_saved(rik, episodes / saved, variants, drive, stick, simulated, shot)
+            return
+        page.click("#btn-replay")  # the saved episode plays back in the stream, then the stream is live again
+        drive.wait("d.replaying === 'true'")
+        drive.wait("d.replaying === 'false'")
+        assert f"replayed {saved}; back to live" in page.inner_text("#banner")
+        page.select_option("#size", "640x480")
+        page.wait_for_function("document.getElementById('cam-front').naturalWidth === 640", timeout=WAIT_MS)
+    _check_saved(rik, episodes / saved, variants, drive, stick, simulated, shot)
+
+
+def _check_saved(rik, episode: Path, variants: Path, drive: Driver, stick: float, simulated: float,
+                 shot: Path) -> None:
+    """The saved episode is there, opened the drawer 90 %, and replays exactly; prints the drive's effort."""
+    from rik.sim.episode import read_meta
+
+    assert (episode / "meta.json").is_file() and (episode / "states.parquet").is_file()
+    meta = read_meta(episode)
+    assert meta.operator == "browser" and meta.max_opening >= 0.9, meta
+    res = rik("replay", str(episode), "--variants", str(variants))
+    assert res.code == 0 and "exact" in res.out, res.out + res.err
+    print(f"\nbrowser drive: {drive.presses} key presses, {drive.held:.1f} s of key holding, {stick:.1f} s of "
+          f"gamepad stick, {simulated:.1f} s simulated (final opening {meta.final_opening:.0%}); screenshot {shot}")
+
+
+def test_second_tab_watches_and_a_lost_connection_keeps_a_draft(variants: Path, tmp_path: Path) -> None:
+    from rik.web.station import LEFT, PAUSED, WATCHING
+
+    episodes = tmp_path / "episodes"
+    with served(config(variants, episodes)) as url, browser() as b:
+        first = open_station(b, url)
+        drive = Driver(first)
+        drive.hold("w", "Number(d.steps) >= 10")  # mid-episode: something recorded
+        watcher = open_station(b, url)
+        assert watcher.evaluate(f"{STATION}.role") == "watcher"
+        assert WATCHING in watcher.inner_text("#banner")
+        watcher.keyboard.down("s")
+        watcher.keyboard.up("s")
+        Driver(watcher).wait(f"document.getElementById('banner').textContent.includes({WATCHING!r})")
+        episode = first.evaluate(f"{STATION}.episode")
+        first.close()  # the controlling tab's connection is lost mid-episode
+        Driver(watcher).wait(f"document.getElementById('banner').textContent.includes({LEFT!r})")
+        draft = episodes / ".drafts" / episode
+        Driver(watcher).wait("d.paused === 'true'")
+        assert (draft / "meta.json").is_file()
+        third = open_station(b, url)  # a new tab controls and is offered the draft
+        Driver(third).wait("d.role === 'controller' && d.paused === 'true'")
+        assert third.is_visible("#draft-offer") and str(draft) in third.inner_text("#draft-offer")
+        third.keyboard.down("w")  # moving waits for the operator's choice
+        Driver(third).wait(f"document.getElementById('banner').textContent.includes({PAUSED!r})")
+        third.keyboard.up("w")
+        third.close()
+        watcher.click("#btn-take")  # the watcher takes over once nobody controls
+        Driver(watcher).wait("d.role === 'controller'")
+        assert watcher.is_visible("#draft-offer")
+        watcher.click("#btn-draft-save")
+        Driver(watcher).wait("d.lastSaved !== ''")
+    assert (episodes / episode / "meta.json").is_file() and not draft.exists()
+
+
+def test_unknown_variant_gets_a_404_page_with_the_message(variants: Path, tmp_path: Path) -> None:
+    with served(config(variants, tmp_path / "episodes")) as url, browser() as b:
+        page = b.new_page()
+        response = page.goto(f"{url}/teleop/drawer-chest-80__two_point-bow-999__normal")
+        assert response is not None and response.status == 404
+        assert "rik: error: no handle 'two_point-bow-999' in the catalog" in page.inner_text("#error")
+
+
+def test_on_screen_button_moves_and_a_server_shut_down_mid_episode_keeps_a_draft(variants: Path, tmp_path: Path) -> None:
+    episodes = tmp_path / "episodes"
+    with served(config(variants, episodes)) as url, browser() as b:
+        page = open_station(b, url)
+        page.hover("#hold-KeyR")  # the on-screen hold-to-move button "R: up", held with the mouse
+        z = float(page.evaluate(f"{STATION}.z"))
+        page.mouse.down()
+        Driver(page).wait(f"Number(d.steps) >= 5 && Number(d.z) > {z + 0.005}")
+        page.mouse.up()
+        episode = page.evaluate(f"{STATION}.episode")
+    assert (episodes / ".drafts" / episode / "meta.json").is_file()
+    assert not (episodes / episode).exists()
