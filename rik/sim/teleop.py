@@ -16,6 +16,7 @@ Enter                   save the episode and start the next
 Backspace               discard the episode and start again
 Esc (or close window)   quit; an unsaved episode is discarded
 1 / 2 / 3               camera: front / wrist / free (drag: orbit, right-drag: pan, wheel: zoom)
+F1                      hide / show the on-screen keymap
 ======================  ==============================================================
 
 The keymap and the live status (episode, time and time left, opening, grip, where the handle is) are drawn in the
@@ -52,7 +53,7 @@ MAX_FPS = 60.0
 STATUS_PERIOD = 1.0
 """Seconds between status lines in the terminal."""
 EXTRA_KEYS = (("Esc", "quit (an unsaved episode is discarded)"), ("1 / 2 / 3", "camera: front / wrist / free"),
-              ("drag / wheel", "orbit / zoom the free camera"))
+              ("drag / wheel", "orbit / zoom the free camera"), ("F1", "hide / show this keymap"))
 """Rows of the on-screen keymap beyond :func:`rik.sim.teleop_keys.keymap_rows`."""
 
 
@@ -130,6 +131,8 @@ class Controls:
     window: TeleopWindow | None = None
     saved: list[EpisodeMeta] = field(default_factory=list)
     quit: bool = False
+    show_keys: bool = True
+    """Whether the keymap is drawn (F1 toggles it)."""
 
     def press(self, key: int, mods: int) -> None:
         """A key went down (GLFW key code)."""
@@ -148,6 +151,8 @@ class Controls:
             self.say(s.message)
         elif key == glfw.KEY_ESCAPE:
             self.quit = True
+        elif key == glfw.KEY_F1:
+            self.show_keys = not self.show_keys
         elif key in (glfw.KEY_1, glfw.KEY_2, glfw.KEY_3) and self.window is not None:
             from rik.sim.teleop_window import CAMERAS
 
@@ -181,8 +186,9 @@ def gripper_angles(session: TeleopSession) -> str:
     return f"pitch {pitch:+.0f} yaw {yaw:+.0f} roll {roll:+.0f} deg"
 
 
-def overlays(session: TeleopSession, camera: str, fps: float) -> list[tuple[int, str, str]]:
-    """The status (top left), the camera and frame rate (top right) and the keymap (bottom left) for the window."""
+def overlays(session: TeleopSession, camera: str, fps: float, show_keys: bool = True) -> list[tuple[int, str, str]]:
+    """The status (top left), the camera and frame rate (top right) and the keymap (bottom left; only a hint of F1
+    when hidden) for the window."""
     import mujoco
 
     from rik.sim.teleop_keys import keymap_rows
@@ -197,7 +203,7 @@ def overlays(session: TeleopSession, camera: str, fps: float) -> list[tuple[int,
               ("gripper", gripper_angles(session))]
     if st["message"]:
         status.append(("", st["message"]))
-    keys = [*keymap_rows(), *EXTRA_KEYS]
+    keys = [*keymap_rows(), *EXTRA_KEYS] if show_keys else [("F1", "show the keymap")]
     grid = mujoco.mjtGridPos
     return [(int(grid.mjGRID_TOPLEFT), "\n".join(k for k, _ in status), "\n".join(v for _, v in status)),
             (int(grid.mjGRID_TOPRIGHT), "camera\nframes/s", f"{camera} (1/2/3)\n{fps:.0f}"),
@@ -266,7 +272,7 @@ def _loop(session: TeleopSession, controls: Controls, window: TeleopWindow) -> N
             session.tick()
             next_tick += dt
         next_tick = max(next_tick, now - dt)  # fallen further behind: drop the missed steps
-        window.render(overlays(session, window.camera, fps))
+        window.render(overlays(session, window.camera, fps, controls.show_keys))
         frames += 1
         now = time.perf_counter()
         if now - fps_since >= 1.0:

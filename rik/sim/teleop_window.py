@@ -106,14 +106,14 @@ class TeleopWindow:
         action = (mujoco.mjtMouse.mjMOUSE_ROTATE_V if button == glfw.MOUSE_BUTTON_LEFT
                   else mujoco.mjtMouse.mjMOUSE_MOVE_V)
         height = glfw.get_window_size(window)[1] or 1
-        mujoco.mjv_moveCamera(self.scene.model, action, (x - x0) / height, (y - y0) / height, self.mjscene,
+        mujoco.mjv_moveCamera(self.scene.model, action, (x - x0) / height, (y - y0) / height,
                               self.cameras["free"])
 
     def _scroll(self, window: Any, dx: float, dy: float) -> None:
         import mujoco
 
         if self.camera == "free":
-            mujoco.mjv_moveCamera(self.scene.model, mujoco.mjtMouse.mjMOUSE_ZOOM, 0.0, -0.05 * dy, self.mjscene,
+            mujoco.mjv_moveCamera(self.scene.model, mujoco.mjtMouse.mjMOUSE_ZOOM, 0.0, -0.05 * dy,
                                   self.cameras["free"])
 
     # ---- output -----------------------------------------------------------------------------------------------
