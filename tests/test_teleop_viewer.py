@@ -26,13 +26,12 @@ LINEAR = 0.10
 ROLL = 45.8
 """deg/s of a held rotation key (0.8 rad/s)."""
 
-pytestmark = pytest.mark.skipif(not (shutil.which("Xvfb") and shutil.which("xdotool")),
-                                reason="needs the Xvfb and xdotool binaries (Debian: xvfb, xdotool)")
-
 
 @pytest.fixture(scope="module")
 def display() -> Iterator[str]:
     """A fresh Xvfb on a free display number, killed afterwards."""
+    if not (shutil.which("Xvfb") and shutil.which("xdotool")):
+        pytest.skip("needs the Xvfb and xdotool binaries (Debian: xvfb, xdotool)")
     for n in range(91 + os.getpid() % 50, 200):
         if Path(f"/tmp/.X11-unix/X{n}").exists() or Path(f"/tmp/.X{n}-lock").exists():
             continue
@@ -220,3 +219,25 @@ def test_quit_discards_and_sessions_take_new_ids(display: str, variants: Path, t
         finally:
             t.kill()
     assert ids[0] != ids[1] and [p.name for p in episodes(out)] == sorted(ids)
+
+
+def test_a_display_without_an_x_server_is_one_line(rik, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """A DISPLAY with no X server behind it: one line naming the display, before any scene is built."""
+    free = next(n for n in range(1999, 2999) if not Path(f"/tmp/.X11-unix/X{n}").exists())
+    monkeypatch.setenv("DISPLAY", f":{free}")
+    r = rik("teleop", VARIANT, "--variants", str(tmp_path / "variants"), "--out", str(tmp_path / "episodes"))
+    assert r.code == 2 and f"teleoperation cannot open a window on display :{free}" in r.err, r.err
+    assert "Traceback" not in r.err and len(r.err.strip().splitlines()) == 1, r.err
+    assert not (tmp_path / "variants").exists()  # it failed before building the scene
+
+
+def test_a_late_frame_drops_steps_instead_of_jumping() -> None:
+    """The loop's pacing: steps due on time run; after a late frame at most CATCH_UP run and the rest are dropped,
+    so the next frame is on time again (no burst)."""
+    from rik.sim.teleop import CATCH_UP, due_steps
+
+    assert due_steps(now=10.0, next_tick=10.01, dt=0.05) == (0, 10.01)
+    assert due_steps(now=10.0, next_tick=9.96, dt=0.05) == (1, pytest.approx(10.01))
+    steps, next_tick = due_steps(now=10.0, next_tick=8.0, dt=0.05)  # a frame 2 s late
+    assert steps == CATCH_UP <= 2 and next_tick == 10.0
+    assert due_steps(now=10.02, next_tick=next_tick, dt=0.05)[0] == 1

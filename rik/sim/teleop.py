@@ -233,8 +233,9 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
     from rik.sim.record import variant_dir
     from rik.sim.scene import build_scene
     from rik.sim.teleop_session import TeleopSession
-    from rik.sim.teleop_window import TeleopWindow
+    from rik.sim.teleop_window import TeleopWindow, open_display
 
+    open_display()  # before the (slow) scene: a display that cannot take a window fails at once
     scene = build_scene(variant_dir(catalog, variant, variants), front)
     session = TeleopSession(scene, out, operator=device_name, seed=seed, max_seconds=max_seconds)
     controls = Controls(session, device, say)
@@ -254,6 +255,17 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
     return controls.saved
 
 
+def due_steps(now: float, next_tick: float, dt: float) -> tuple[int, float]:
+    """How many control steps are due at ``now`` (s, a monotonic clock) when the next was due at ``next_tick`` and
+    they come every ``dt``, and when the next one is due after them: at most :data:`CATCH_UP`; steps missed
+    beyond those are dropped, so a late frame never turns into a burst of steps (a jump)."""
+    steps = 0
+    while next_tick <= now and steps < CATCH_UP:
+        steps += 1
+        next_tick += dt
+    return steps, max(next_tick, now)
+
+
 def _loop(session: TeleopSession, controls: Controls, window: TeleopWindow) -> None:
     """Poll, step on real time at the control rate (dropping steps when behind), draw, until the operator quits."""
     dt = 1.0 / session.scene.control_fps
@@ -265,13 +277,9 @@ def _loop(session: TeleopSession, controls: Controls, window: TeleopWindow) -> N
         window.poll()
         held = controls.held()
         controls.apply(held)
-        now = time.perf_counter()
-        for _ in range(CATCH_UP):
-            if next_tick > now:
-                break
+        steps, next_tick = due_steps(time.perf_counter(), next_tick, dt)
+        for _ in range(steps):
             session.tick()
-            next_tick += dt
-        next_tick = max(next_tick, now - dt)  # fallen further behind: drop the missed steps
         window.render(overlays(session, window.camera, fps, controls.show_keys))
         frames += 1
         now = time.perf_counter()

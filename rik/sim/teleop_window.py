@@ -5,7 +5,8 @@ camera, a free camera the mouse orbits) and the keyboard polled for held keys. N
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
@@ -32,10 +33,9 @@ class TeleopWindow:
         import mujoco
 
         self.scene = scene
-        if not glfw.init():
-            raise RikError("teleoperation cannot open a window: GLFW failed to initialise on this display (DISPLAY="
-                           f"{_display()}); check the X server, or use rik teleop VARIANT --web")
-        self.window = glfw.create_window(size[0], size[1], title, None, None)
+        open_display()
+        with _glfw_errors("cannot open an OpenGL window"):
+            self.window = glfw.create_window(size[0], size[1], title, None, None)
         if not self.window:
             glfw.terminate()
             raise RikError(f"teleoperation cannot open an OpenGL window on display {_display()} (GLFW made none); "
@@ -150,6 +150,33 @@ class TeleopWindow:
         self.context.free()
         glfw.destroy_window(self.window)
         glfw.terminate()
+
+
+def open_display() -> None:
+    """Initialise GLFW on this process's display, or raise one line saying why it cannot (no X server there...)."""
+    import glfw
+
+    with _glfw_errors("cannot open a window"):
+        ok = glfw.init()
+    if not ok:
+        raise RikError(f"teleoperation cannot open a window on display {_display()}: GLFW failed to initialise; "
+                       "check the display, or use rik teleop VARIANT --web for the browser station")
+
+
+@contextmanager
+def _glfw_errors(what: str) -> Iterator[None]:
+    """GLFW's errors inside the block as one-line :class:`RikError` s (outside it they stay warnings)."""
+    import glfw
+
+    glfw.ERROR_REPORTING = "raise"
+    try:
+        yield
+    except glfw.GLFWError as exc:
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise RikError(f"teleoperation {what} on display {_display()}: {why}; check the display, or use rik "
+                       "teleop VARIANT --web for the browser station") from None
+    finally:
+        glfw.ERROR_REPORTING = "warn"
 
 
 def _display() -> str:
