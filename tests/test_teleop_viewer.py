@@ -19,8 +19,9 @@ from pathlib import Path
 import pytest
 
 VARIANT = "drawer-chest-80__two_point-bow-128__normal"
-STATUS = re.compile(r"^(?P<episode>\S+) \| (?P<state>[a-z ]+) \| .* \| open (?P<open>-?\d+)% \| grip (?P<grip>\w+) "
-                    r"\| handle (?P<ahead>[+-][\d.]+) ahead .* roll (?P<roll>[+-]\d+) deg")
+STATUS = re.compile(r"^(?P<episode>\S+) \| (?P<state>[a-z ]+) \| [\d.]+ s \((?P<limit>[^)]*)\) \| open (?P<open>-?\d+)% "
+                    r"\| grip (?P<grip>\w+) \| handle (?P<ahead>[+-][\d.]+) ahead (?P<left>[+-][\d.]+) left "
+                    r"(?P<up>[+-][\d.]+) up m .* roll (?P<roll>[+-]\d+) deg")
 LINEAR = 0.10
 """m/s of a held translation key (rik.sim.teleop_keys.LINEAR_SPEED)."""
 ROLL = 45.8
@@ -160,7 +161,8 @@ def test_hold_keys_to_open_the_drawer_save_and_replay(display: str, variants: Pa
     t = Teleop(display, out, variants)
     try:
         st = t.status()
-        assert st["state"] == "waiting for input" and float(st["ahead"]) > 0.1  # in front of the handle
+        assert st["state"] == "waiting for input" and st["limit"] == "no limit"
+        assert float(st["ahead"]) > 0.1 and abs(float(st["left"])) < 0.01 and abs(float(st["up"])) < 0.01, st
         for _ in range(10):
             if int(st["roll"]) >= 87:
                 break
