@@ -45,12 +45,20 @@ def display() -> Iterator[str]:
             try:
                 yield f":{n}"
             finally:
-                proc.kill()
-                proc.wait(10)
+                _stop(proc)
             return
+        _stop(proc)
+    pytest.fail("no free X display number for Xvfb")
+
+
+def _stop(proc: subprocess.Popen[bytes]) -> None:
+    """Stop Xvfb so that it removes its lock and socket files (a killed one leaves them behind)."""
+    proc.terminate()
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
         proc.kill()
         proc.wait(10)
-    pytest.fail("no free X display number for Xvfb")
 
 
 @pytest.fixture(scope="module")
