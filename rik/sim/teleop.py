@@ -1,25 +1,37 @@
-"""Target-pose teleoperation: the keyboard in MuJoCo's viewer, or a 3Dconnexion SpaceMouse. Every device feeds
-the same :class:`rik.sim.episode.EpisodeRecorder` at the scene's fixed control rate.
+"""Teleoperation in a window of its own: the keyboard (held keys move the target continuously) or a 3Dconnexion
+SpaceMouse drive a :class:`rik.sim.teleop_session.TeleopSession`, which records at the scene's control rate.
 
-Keyboard keymap (one press moves the target one step; hold to repeat):
+Keymap (the same as the browser station's, :mod:`rik.sim.teleop_keys`; directions as seen facing the front):
 
-======================  ==============================================
-I / K                   towards / away from the front (world -y / +y)
-J / L                   left / right (world -x / +x)
-U / O                   up / down (world +z / -z)
-R / F                   pitch: fingers down / up
-T / G                   yaw left / right
-Y / H                   roll about the approach axis
-C / V                   close / open the gripper
-Enter                   finish: save the episode and quit
-Backspace               discard the episode and quit
-======================  ==============================================
+======================  ==============================================================
+W / S                   towards / away from the furniture (hold: 0.10 m/s)
+A / D                   left / right
+R / F                   up / down
+Down / Up               pitch: fingers down / up (hold: 0.8 rad/s)
+Left / Right            yaw left / right
+Q / E                   roll left / right
+Shift                   hold for fine motion (x0.25)
+Space                   close / open the gripper
+Enter                   save the episode and start the next
+Backspace               discard the episode and start again
+Esc (or close window)   quit; an unsaved episode is discarded
+1 / 2 / 3               camera: front / wrist / free (drag: orbit, right-drag: pan, wheel: zoom)
+F1                      hide / show the on-screen keymap
+======================  ==============================================================
+
+The keymap and the live status (episode, time and time left, opening, grip, where the handle is) are drawn in the
+window; the status is also printed to the terminal about once a second. The simulation runs on real time at the
+control rate (20 Hz); a slow frame drops control steps rather than catching up in a burst, so it never turns into
+a jump.
 """
 
 from __future__ import annotations
 
+import math
 import os
+import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -31,70 +43,30 @@ from rik.errors import RikError
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
-    from rik.sim.scene import SimScene
+    from rik.sim.teleop_session import TeleopSession
+    from rik.sim.teleop_window import TeleopWindow
 
-POSITION_STEP = 0.005
-"""m per key press."""
-ANGLE_STEP = np.radians(3.0)
-"""rad per key press."""
-SPACEMOUSE_SPEED = (0.15, np.radians(60.0))
-"""Full deflection of the SpaceMouse: m/s and rad/s."""
+CATCH_UP = 2
+"""Control steps at most per frame when the loop has fallen behind real time; older missed steps are dropped."""
+MAX_FPS = 60.0
+"""Frames per second the window is drawn at most (no vsync under a virtual display)."""
+STATUS_PERIOD = 1.0
+"""Seconds between status lines in the terminal."""
+EXTRA_KEYS = (("Esc", "quit (an unsaved episode is discarded)"), ("1 / 2 / 3", "camera: front / wrist / free"),
+              ("drag / wheel", "orbit / zoom the free camera"), ("F1", "hide / show this keymap"))
+"""Rows of the on-screen keymap beyond :func:`rik.sim.teleop_keys.keymap_rows`."""
 
 
 class DeviceError(RikError):
     """A teleoperation device is missing, not connected, or cannot run here."""
 
 
-def _keymap() -> dict[int, tuple[int, float]]:
-    """GLFW key code -> (action index, change)."""
-    keys = {"I": (1, -POSITION_STEP), "K": (1, POSITION_STEP), "J": (0, -POSITION_STEP), "L": (0, POSITION_STEP),
-            "U": (2, POSITION_STEP), "O": (2, -POSITION_STEP), "R": (3, ANGLE_STEP), "F": (3, -ANGLE_STEP),
-            "T": (4, ANGLE_STEP), "G": (4, -ANGLE_STEP), "Y": (5, ANGLE_STEP), "H": (5, -ANGLE_STEP)}
-    return {ord(k): v for k, v in keys.items()}
-
-
-KEY_ENTER, KEY_BACKSPACE = 257, 259
-"""GLFW key codes."""
-
-
-@dataclass
-class KeyboardDevice:
-    """Key presses in the viewer window nudge the target pose (see the module docstring)."""
-
-    name: str = "keyboard"
-    target: np.ndarray = field(default_factory=lambda: np.zeros(7))
-    finished: str | None = None
-    """``save`` or ``discard`` once the operator ends the episode."""
-
-    def start(self, scene: SimScene) -> None:
-        self.target = np.concatenate([scene.pose(), [0.0]])
-
-    def on_key(self, key: int) -> None:
-        keymap = _keymap()
-        if key in keymap:
-            i, change = keymap[key]
-            self.target[i] += change
-        elif key == ord("C"):
-            self.target[6] = 1.0
-        elif key == ord("V"):
-            self.target[6] = 0.0
-        elif key == KEY_ENTER:
-            self.finished = "save"
-        elif key == KEY_BACKSPACE:
-            self.finished = "discard"
-
-    def read(self, dt: float) -> np.ndarray:
-        return self.target.copy()
-
-
 @dataclass
 class SpaceMouseDevice:
-    """A 3Dconnexion SpaceMouse through ``pyspacemouse``: deflection sets the target's velocity; the left button
-    closes the gripper, the right one opens it; the keyboard's Enter and Backspace end the episode."""
+    """A 3Dconnexion SpaceMouse through ``pyspacemouse``: deflection (-1..1 per axis) is the velocity command;
+    the left button closes the gripper, the right one opens it. The keyboard keeps working beside it."""
 
     name: str = "spacemouse"
-    target: np.ndarray = field(default_factory=lambda: np.zeros(7))
-    finished: str | None = None
     _mouse: Any = None
 
     def open(self) -> None:
@@ -112,26 +84,22 @@ class SpaceMouseDevice:
                               "--device keyboard")
         self._mouse = pyspacemouse
 
-    def start(self, scene: SimScene) -> None:
-        self.target = np.concatenate([scene.pose(), [0.0]])
-
-    def on_key(self, key: int) -> None:
-        if key == KEY_ENTER:
-            self.finished = "save"
-        elif key == KEY_BACKSPACE:
-            self.finished = "discard"
-
-    def read(self, dt: float) -> np.ndarray:
+    def read(self) -> tuple[np.ndarray, float | None]:
+        """The velocity command (x, y, z, pitch, yaw, roll in -1..1) and the grip the buttons ask for (None:
+        unchanged)."""
         s = self._mouse.read()
-        lin, ang = SPACEMOUSE_SPEED
-        # device axes: x right, y forward, z up -> world: forward is -y (towards the front)
-        self.target[:3] += dt * lin * np.array([s.x, -s.y, s.z])
-        self.target[3:6] += dt * ang * np.array([-s.pitch, -s.yaw, s.roll])
-        if s.buttons and s.buttons[0]:
-            self.target[6] = 1.0
-        if len(s.buttons) > 1 and s.buttons[1]:
-            self.target[6] = 0.0
-        return self.target.copy()
+        # device axes: x right, y forward (towards the furniture), z up; world +x is the operator's left, -y ahead
+        command = np.clip(np.array([-s.x, -s.y, s.z, -s.pitch, -s.yaw, s.roll], np.float64), -1.0, 1.0)
+        buttons = list(s.buttons or [])
+        grip = 1.0 if buttons[:1] == [1] else 0.0 if len(buttons) > 1 and buttons[1] else None
+        return command, grip
+
+
+@dataclass
+class KeyboardDevice:
+    """The keyboard alone (the window polls it)."""
+
+    name: str = "keyboard"
 
 
 DEVICES = {"keyboard": KeyboardDevice, "spacemouse": SpaceMouseDevice}
@@ -147,38 +115,180 @@ def make_device(name: str) -> KeyboardDevice | SpaceMouseDevice:
     return device
 
 
+def _glfw_key(name: str) -> int:
+    import glfw
+
+    return int(getattr(glfw, f"KEY_{name}"))
+
+
+@dataclass
+class Controls:
+    """What the operator's keys do to the session (press edges) and the held-key velocity command."""
+
+    session: TeleopSession
+    device: KeyboardDevice | SpaceMouseDevice
+    say: Callable[[str], None]
+    window: TeleopWindow | None = None
+    saved: list[EpisodeMeta] = field(default_factory=list)
+    quit: bool = False
+    show_keys: bool = True
+    """Whether the keymap is drawn (F1 toggles it)."""
+
+    def press(self, key: int, mods: int) -> None:
+        """A key went down (GLFW key code)."""
+        import glfw
+
+        s = self.session
+        if key == glfw.KEY_SPACE:
+            s.toggle_grip()
+        elif key in (glfw.KEY_ENTER, glfw.KEY_KP_ENTER):
+            result = s.save()
+            if result is not None:
+                self.saved.append(result.meta)
+            self.say(s.message)
+        elif key == glfw.KEY_BACKSPACE:
+            s.discard()
+            self.say(s.message)
+        elif key == glfw.KEY_ESCAPE:
+            self.quit = True
+        elif key == glfw.KEY_F1:
+            self.show_keys = not self.show_keys
+        elif key in (glfw.KEY_1, glfw.KEY_2, glfw.KEY_3) and self.window is not None:
+            from rik.sim.teleop_window import CAMERAS
+
+            self.window.camera = CAMERAS[key - glfw.KEY_1]
+
+    def held(self) -> frozenset[str]:
+        """Browser codes of the motion keys held now (Shift as ``fine``)."""
+        from rik.sim.teleop_keys import COMMAND_KEYS, MOTION_KEYS
+
+        assert self.window is not None
+        codes = {k.code for k in MOTION_KEYS if self.window.held(_glfw_key(k.glfw))}
+        if self.window.held(_glfw_key(COMMAND_KEYS["fine"][1])) or self.window.held(_glfw_key("RIGHT_SHIFT")):
+            codes.add("fine")
+        return frozenset(codes)
+
+    def apply(self, held: frozenset[str]) -> None:
+        """Set the session's velocity command from the held keys (and the SpaceMouse)."""
+        from rik.sim.teleop_keys import velocity
+
+        command = velocity(held, fine="fine" in held)
+        grip = None
+        if isinstance(self.device, SpaceMouseDevice):
+            deflection, grip = self.device.read()
+            command = np.clip(command + deflection, -1.0, 1.0)
+        self.session.set_input(command, grip)
+
+
+def gripper_angles(session: TeleopSession) -> str:
+    """The gripper's pitch, yaw and roll in degrees, for the operator."""
+    pitch, yaw, roll = (math.degrees(a) for a in session.scene.pose()[3:6])
+    return f"pitch {pitch:+.0f} yaw {yaw:+.0f} roll {roll:+.0f} deg"
+
+
+def overlays(session: TeleopSession, camera: str, fps: float, show_keys: bool = True) -> list[tuple[int, str, str]]:
+    """The status (top left), the camera and frame rate (top right) and the keymap (bottom left; only a hint of F1
+    when hidden) for the window."""
+    import mujoco
+
+    from rik.sim.teleop_keys import keymap_rows
+
+    st = session.status()
+    h = st["handle"]
+    limit = "no limit" if st["time_left"] is None else f"{st['time_left']:.0f} s left"
+    state = st["state"] + (": Enter saves, Backspace discards" if st["state"] == "time up" else "")
+    status = [("episode", st["episode"]), ("state", state), ("time", f"{st['time']:.1f} s ({limit})"),
+              ("opening", f"{st['opening']:.0%} (most {st['max_opening']:.0%})"), ("grip", st["grip"]),
+              ("handle", f"{h['ahead']:+.3f} ahead {h['left']:+.3f} left {h['up']:+.3f} up m"),
+              ("gripper", gripper_angles(session))]
+    if st["message"]:
+        status.append(("", st["message"]))
+    keys = [*keymap_rows(), *EXTRA_KEYS] if show_keys else [("F1", "show the keymap")]
+    grid = mujoco.mjtGridPos
+    return [(int(grid.mjGRID_TOPLEFT), "\n".join(k for k, _ in status), "\n".join(v for _, v in status)),
+            (int(grid.mjGRID_TOPRIGHT), "camera\nframes/s", f"{camera} (1/2/3)\n{fps:.0f}"),
+            (int(grid.mjGRID_BOTTOMLEFT), "\n".join(k for k, _ in keys), "\n".join(v for _, v in keys))]
+
+
+def _print(line: str) -> None:
+    print(line, flush=True)
+
+
 def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, variants: Path = Path("variants"),
-                front: str | None = None, seed: int = 0, max_seconds: float = 120.0) -> EpisodeMeta | None:
-    """Teleoperate ``variant`` in MuJoCo's viewer with a device, recording at the control rate; the episode is
-    written when the operator presses Enter (or closes the window), not at all on Backspace or Ctrl+C.
-    Returns the episode's meta, or ``None`` when discarded."""
+                front: str | None = None, seed: int = 0, max_seconds: float | None = None,
+                on_message: Callable[[str], None] | None = None) -> list[EpisodeMeta]:
+    """Teleoperate ``variant`` in a window with a device, episode after episode (see the module docstring):
+    Enter saves an episode to ``out/<id>`` (each with its own id: nothing is overwritten), Backspace discards it,
+    Esc or closing the window quits and discards the unsaved one. Returns the saved episodes' metas."""
     from rik.sim.record import check_seeds
 
+    say = on_message or _print
     check_seeds(seed, 1)
     device = make_device(device_name)
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise DeviceError("teleoperation needs a display for MuJoCo's viewer (no DISPLAY is set); for headless "
-                          "recording use rik record VARIANT --strategy NAME")
-    import mujoco.viewer
-
-    from rik.sim.episode import EpisodeRecorder, write_episode
+        raise DeviceError("teleoperation needs a display for its window (no DISPLAY is set); use rik teleop "
+                          "VARIANT --web for the browser station, or rik record VARIANT --strategy NAME")
+    if "mujoco" not in sys.modules:
+        os.environ["MUJOCO_GL"] = "glfw"  # the window's own OpenGL context, not an offscreen one
     from rik.sim.record import variant_dir
     from rik.sim.scene import build_scene
+    from rik.sim.teleop_session import TeleopSession
+    from rik.sim.teleop_window import TeleopWindow, open_display
 
+    open_display()  # before the (slow) scene: a display that cannot take a window fails at once
     scene = build_scene(variant_dir(catalog, variant, variants), front)
-    device.start(scene)
-    recorder = EpisodeRecorder(scene)
-    dt = 1.0 / scene.control_fps
-    with mujoco.viewer.launch_passive(scene.model, scene.data, key_callback=device.on_key) as viewer:
-        next_tick = time.perf_counter()
-        while viewer.is_running() and device.finished is None and recorder.steps * dt < max_seconds:
-            recorder.step(device.read(dt))
-            viewer.sync()
-            next_tick += dt
-            time.sleep(max(0.0, next_tick - time.perf_counter()))
-    if device.finished == "discard" or recorder.steps == 0:
-        return None
-    from rik.sim.episode import episode_id
+    session = TeleopSession(scene, out, operator=device_name, seed=seed, max_seconds=max_seconds)
+    controls = Controls(session, device, say)
+    window = TeleopWindow(scene, f"rik teleop: {variant}", controls.press)
+    controls.window = window
+    say(f"teleop window open: episode {session.episode}; hold W/A/S/D/R/F to move, arrows and Q/E to turn, Space "
+        "grips, Enter saves, Backspace discards, Esc quits")
+    try:
+        _loop(session, controls, window)
+    except KeyboardInterrupt:
+        controls.quit = True
+    finally:
+        window.close()
+    if session.recording:
+        say(f"quit without saving: episode {session.episode} ({session.recorder.steps / scene.control_fps:.1f} s) "
+            "discarded")
+    return controls.saved
 
-    return write_episode(recorder, out, episode=episode_id(scene.info["id"], scene.front.id, device_name, seed),
-                         operator=device_name, operator_kind="device", seed=seed)
+
+def due_steps(now: float, next_tick: float, dt: float) -> tuple[int, float]:
+    """How many control steps are due at ``now`` (s, a monotonic clock) when the next was due at ``next_tick`` and
+    they come every ``dt``, and when the next one is due after them: at most :data:`CATCH_UP`; steps missed
+    beyond those are dropped, so a late frame never turns into a burst of steps (a jump)."""
+    steps = 0
+    while next_tick <= now and steps < CATCH_UP:
+        steps += 1
+        next_tick += dt
+    return steps, max(next_tick, now)
+
+
+def _loop(session: TeleopSession, controls: Controls, window: TeleopWindow) -> None:
+    """Poll, step on real time at the control rate (dropping steps when behind), draw, until the operator quits."""
+    dt = 1.0 / session.scene.control_fps
+    next_tick = last_status = time.perf_counter()
+    frames, fps, fps_since = 0, 0.0, next_tick
+    last_held: frozenset[str] = frozenset()
+    was_up = False
+    while not (controls.quit or window.closing):
+        window.poll()
+        held = controls.held()
+        controls.apply(held)
+        steps, next_tick = due_steps(time.perf_counter(), next_tick, dt)
+        for _ in range(steps):
+            session.tick()
+        window.render(overlays(session, window.camera, fps, controls.show_keys))
+        frames += 1
+        now = time.perf_counter()
+        if now - fps_since >= 1.0:
+            fps, frames, fps_since = frames / (now - fps_since), 0, now
+        if session.time_up and not was_up:
+            controls.say(f"time up ({session.max_seconds:g} s): Enter saves the episode, Backspace discards it")
+        was_up = session.time_up
+        if now - last_status >= STATUS_PERIOD or held != last_held:
+            _print(f"{session.status_line()} | {gripper_angles(session)} | {fps:.0f} frames/s")
+            last_status, last_held = now, held
+        time.sleep(max(0.0, min(next_tick, now + 1.0 / MAX_FPS) - time.perf_counter()))

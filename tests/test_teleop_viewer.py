@@ -1,0 +1,253 @@
+"""The viewer teleop driven the way a person drives it: a real X server (Xvfb), the real ``rik teleop`` in a
+subprocess, keys held down and released with xdotool, the loop closed on the status lines it prints. No wall
+time is asserted: every wait is bounded and waits for a condition."""
+
+from __future__ import annotations
+
+import json
+import os
+import queue
+import re
+import shutil
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+VARIANT = "drawer-chest-80__two_point-bow-128__normal"
+STATUS = re.compile(r"^(?P<episode>\S+) \| (?P<state>[a-z ]+) \| [\d.]+ s \((?P<limit>[^)]*)\) \| open (?P<open>-?\d+)% "
+                    r"\| grip (?P<grip>\w+) \| handle (?P<ahead>[+-][\d.]+) ahead (?P<left>[+-][\d.]+) left "
+                    r"(?P<up>[+-][\d.]+) up m .* roll (?P<roll>[+-]\d+) deg")
+LINEAR = 0.10
+"""m/s of a held translation key (rik.sim.teleop_keys.LINEAR_SPEED)."""
+ROLL = 45.8
+"""deg/s of a held rotation key (0.8 rad/s)."""
+
+
+@pytest.fixture(scope="module")
+def display() -> Iterator[str]:
+    """A fresh Xvfb on a free display number, killed afterwards."""
+    if not (shutil.which("Xvfb") and shutil.which("xdotool")):
+        pytest.skip("needs the Xvfb and xdotool binaries (Debian: xvfb, xdotool)")
+    for n in range(91 + os.getpid() % 50, 200):
+        if Path(f"/tmp/.X11-unix/X{n}").exists() or Path(f"/tmp/.X{n}-lock").exists():
+            continue
+        proc = subprocess.Popen(["Xvfb", f":{n}", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 20
+        while proc.poll() is None and not Path(f"/tmp/.X11-unix/X{n}").exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        if proc.poll() is None and Path(f"/tmp/.X11-unix/X{n}").exists():
+            try:
+                yield f":{n}"
+            finally:
+                _stop(proc)
+            return
+        _stop(proc)
+    pytest.fail("no free X display number for Xvfb")
+
+
+def _stop(proc: subprocess.Popen[bytes]) -> None:
+    """Stop Xvfb so that it removes its lock and socket files (a killed one leaves them behind)."""
+    proc.terminate()
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(10)
+
+
+@pytest.fixture(scope="module")
+def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from rik.registry import load_catalog
+    from rik.sim.record import variant_dir
+
+    out = tmp_path_factory.mktemp("variants")
+    variant_dir(load_catalog(), VARIANT, out)
+    return out
+
+
+class Teleop:
+    """``rik teleop VARIANT`` running in a window on ``display``; its stdout read line by line in a thread."""
+
+    def __init__(self, display: str, out: Path, variants: Path) -> None:
+        self.env = {**os.environ, "DISPLAY": display, "MUJOCO_GL": "glfw", "PYTHONUNBUFFERED": "1"}
+        rik = Path(sys.executable).parent / "rik"
+        self.proc = subprocess.Popen([str(rik), "teleop", VARIANT, "--out", str(out), "--variants", str(variants)],
+                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=self.env)
+        self.lines: queue.Queue[tuple[float, str]] = queue.Queue()
+        self.seen: list[str] = []
+        threading.Thread(target=self._read, daemon=True).start()
+        found = subprocess.run(["xdotool", "search", "--sync", "--onlyvisible", "--name", f"rik teleop: {VARIANT}"], env=self.env,
+                               capture_output=True, text=True, timeout=120)
+        self.window = found.stdout.split()[0]
+        for _ in range(20):  # a window just mapped may refuse the focus for a moment
+            if subprocess.run(["xdotool", "windowfocus", "--sync", self.window], env=self.env, capture_output=True,
+                              timeout=30).returncode == 0:
+                break
+            time.sleep(0.2)
+        else:
+            raise AssertionError(f"cannot focus the teleop window {self.window}")
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.put((time.monotonic(), line.rstrip("\n")))
+
+    def line(self, want: str | re.Pattern[str], *, after: float = 0.0, timeout: float = 30.0) -> str:
+        """The next output line containing ``want`` (a string, or a pattern that matches) printed after ``after``
+        (time.monotonic)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            try:
+                at, line = self.lines.get(timeout=0.5)
+            except queue.Empty:
+                assert self.proc.poll() is None or not self.lines.empty(), \
+                    f"rik teleop exited ({self.proc.returncode}):\n" + "\n".join(self.seen[-20:])
+                continue
+            self.seen.append(line)
+            hit = want in line if isinstance(want, str) else want.search(line)
+            if at >= after and hit:
+                return line
+        raise AssertionError(f"no line with {want!r} within {timeout} s:\n" + "\n".join(self.seen[-20:]))
+
+    def status(self, after: float = 0.0) -> dict[str, str]:
+        """The first status line printed after ``after`` (default: the next), parsed."""
+        match = STATUS.search(self.line(STATUS, after=after))
+        assert match is not None
+        return match.groupdict()
+
+    def settled(self) -> dict[str, str]:
+        """The status once the gripper has caught up with its target after a key was released."""
+        return self.status(after=time.monotonic() + 0.6)
+
+    def xdotool(self, *args: str) -> None:
+        subprocess.run(["xdotool", *args], env=self.env, check=True, timeout=60)
+
+    def hold(self, key: str, seconds: float) -> None:
+        """Hold ``key`` down for ``seconds``, then release it (as one xdotool run, so the hold is not stretched)."""
+        self.xdotool("keydown", key, "sleep", f"{seconds:.2f}", "keyup", key)
+
+    def press(self, key: str) -> None:
+        self.xdotool("key", key)
+
+    def quit(self) -> str:
+        """Esc, and everything it printed until it exited."""
+        self.press("Escape")
+        self.proc.wait(60)
+        rest = [line for _, line in iter_queue(self.lines)]
+        self.seen += rest
+        return "\n".join(self.seen)
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(10)
+
+
+def iter_queue(q: queue.Queue[tuple[float, str]]) -> Iterator[tuple[float, str]]:
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            yield q.get(timeout=0.5)
+        except queue.Empty:
+            return
+
+
+def episodes(out: Path) -> list[Path]:
+    return sorted(p for p in out.iterdir() if not p.name.startswith(".")) if out.exists() else []
+
+
+def test_hold_keys_to_open_the_drawer_save_and_replay(display: str, variants: Path, tmp_path: Path, rik) -> None:
+    """Roll 90 deg (Q), approach until the handle is between the pads (W), grip (Space), pull until the drawer is
+    90 % open (S), save (Enter), quit (Esc): one episode, which replays exactly."""
+    out = tmp_path / "episodes"
+    t = Teleop(display, out, variants)
+    try:
+        st = t.status()
+        assert st["state"] == "waiting for input" and st["limit"] == "no limit"
+        assert float(st["ahead"]) > 0.1 and abs(float(st["left"])) < 0.01 and abs(float(st["up"])) < 0.01, st
+        for _ in range(10):
+            if int(st["roll"]) >= 87:
+                break
+            t.hold("q", (90 - int(st["roll"])) / ROLL)
+            st = t.settled()
+        assert 85 <= int(st["roll"]) <= 95, st
+        for _ in range(15):
+            if float(st["ahead"]) <= 0.0:
+                break
+            t.hold("w", float(st["ahead"]) / LINEAR + 0.05)
+            st = t.settled()
+        assert float(st["ahead"]) <= 0.0, st
+        t.press("space")
+        assert t.settled()["grip"] == "closed"
+        for _ in range(15):
+            if int(st["open"]) >= 90:
+                break
+            t.hold("s", 1.5)
+            st = t.settled()
+        assert int(st["open"]) >= 90, st
+        t.press("Return")
+        t.line("saved ")
+        text = t.quit()
+    finally:
+        t.kill()
+    assert t.proc.returncode == 0, text
+    saved = episodes(out)
+    assert len(saved) == 1, text
+    meta = json.loads((saved[0] / "meta.json").read_text())
+    assert meta["final_opening"] >= 0.9 and meta["operator"] == "keyboard"
+    r = rik("replay", str(saved[0]), "--variants", str(variants))
+    assert r.code == 0 and "exact" in r.out, r.out + r.err
+
+
+def test_quit_discards_and_sessions_take_new_ids(display: str, variants: Path, tmp_path: Path) -> None:
+    """Esc with an unsaved episode writes nothing and says so; two sessions saving into the same folder get two
+    episode ids (the seed advances), never overwriting."""
+    out = tmp_path / "episodes"
+    t = Teleop(display, out, variants)
+    try:
+        t.hold("d", 0.3)
+        assert t.settled()["state"] == "recording"
+        text = t.quit()
+    finally:
+        t.kill()
+    assert "discarded" in text and "no episode saved" in text, text
+    assert episodes(out) == []
+    ids = []
+    for _ in range(2):
+        t = Teleop(display, out, variants)
+        try:
+            t.hold("a", 0.3)
+            t.press("Return")
+            ids.append(t.line("saved ").split("saved ", 1)[1].split(":")[0])
+            t.quit()
+        finally:
+            t.kill()
+    assert ids[0] != ids[1] and [p.name for p in episodes(out)] == sorted(ids)
+
+
+def test_a_display_without_an_x_server_is_one_line(rik, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """A DISPLAY with no X server behind it: one line naming the display, before any scene is built."""
+    free = next(n for n in range(1999, 2999) if not Path(f"/tmp/.X11-unix/X{n}").exists())
+    monkeypatch.setenv("DISPLAY", f":{free}")
+    r = rik("teleop", VARIANT, "--variants", str(tmp_path / "variants"), "--out", str(tmp_path / "episodes"))
+    assert r.code == 2 and f"teleoperation cannot open a window on display :{free}" in r.err, r.err
+    assert "Traceback" not in r.err and len(r.err.strip().splitlines()) == 1, r.err
+    assert not (tmp_path / "variants").exists()  # it failed before building the scene
+
+
+def test_a_late_frame_drops_steps_instead_of_jumping() -> None:
+    """The loop's pacing: steps due on time run; after a late frame at most CATCH_UP run and the rest are dropped,
+    so the next frame is on time again (no burst)."""
+    from rik.sim.teleop import CATCH_UP, due_steps
+
+    assert due_steps(now=10.0, next_tick=10.01, dt=0.05) == (0, 10.01)
+    assert due_steps(now=10.0, next_tick=9.96, dt=0.05) == (1, pytest.approx(10.01))
+    steps, next_tick = due_steps(now=10.0, next_tick=8.0, dt=0.05)  # a frame 2 s late
+    assert steps == CATCH_UP <= 2 and next_tick == 10.0
+    assert due_steps(now=10.02, next_tick=next_tick, dt=0.05)[0] == 1
