@@ -154,6 +154,8 @@ def station(url: str, size: tuple[int, int], seconds: float, taps: int) -> dict[
                     latencies.append(1e3 * (t - sent_at))
                     break
         send([0.0] * 6)
+        ws.send(json.dumps({"type": "command", "name": "discard"}))  # leave no draft for the next size's run
+        list(front_frames(time.perf_counter() + 0.5))
     latencies.sort()
     return {"fps": fps, "latency_median_ms": statistics.median(latencies) if latencies else float("nan"),
             "latency_p90_ms": latencies[int(0.9 * (len(latencies) - 1))] if latencies else float("nan"),

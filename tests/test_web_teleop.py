@@ -84,9 +84,8 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
     with served(config(variants, episodes)) as url, browser() as b:
         page = open_station(b, url)
         assert page.evaluate(f"{STATION}.role") == "controller"
-        if fresh:  # the page built the variant, and said so meanwhile
-            assert page.evaluate(f"{STATION}.sawBuilding") == "true"
-            assert (variants / BOW / "model.xml").is_file()
+        if fresh:  # opening the page built the variant (its "building the variant..." notice may pass unseen when the
+            assert (variants / BOW / "model.xml").is_file()  # asset cache is warm: the build then takes < 1 s)
         shown = page.inner_text("#keymap")  # the keymap the viewer shows too
         assert all(keys in shown and does in shown for keys, does in keymap_rows())
         drive = Driver(page)

@@ -59,7 +59,7 @@ class TeleopSession:
         self.operator = operator
         self.max_seconds = max_seconds
         self.seed = seed
-        self.command = np.zeros(6)
+        self.command: np.ndarray = np.zeros(6)
         """Velocity command in [-1, 1] per axis (x, y, z, pitch, yaw, roll)."""
         self.grip = 0.0
         """Gripper command: 0 open, 1 closed with full force."""

@@ -156,7 +156,7 @@
     // banner: an error, then this tab's notice, then the station's and the session's last message
     let text = "", level = "info";
     if (st.error) { text = st.error; level = "error"; }
-    else if (!st.ready) { text = "building the variant..."; d.sawBuilding = "true"; }
+    else if (!st.ready) { text = "building the variant..."; }
     else if (st.notice) { text = st.notice; level = "warn"; }
     else if (st.message) { text = st.message; }
     else if (s && s.state === "time up") { text = "time is up: save (Enter) or discard (Backspace)"; level = "warn"; }
