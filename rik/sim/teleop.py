@@ -16,7 +16,7 @@ Enter                   save the episode and start the next
 Backspace               discard the episode and start again
 Esc (or close window)   quit; an unsaved episode is discarded
 1 / 2 / 3               camera: front / wrist / free (drag: orbit, right-drag: pan, wheel: zoom)
-F1                      hide / show the on-screen keymap
+F1                      hide / show the keymap (it folds once the episode records)
 ======================  ==============================================================
 
 The keymap and the live status (episode, time and time left, opening, grip, where the handle is) are drawn in the
@@ -131,8 +131,13 @@ class Controls:
     window: TeleopWindow | None = None
     saved: list[EpisodeMeta] = field(default_factory=list)
     quit: bool = False
-    show_keys: bool = True
-    """Whether the keymap is drawn (F1 toggles it)."""
+    show_keys: bool | None = None
+    """Whether the keymap is drawn: None (the start) shows it until the first episode records, then folds it to a
+    one-line hint so that it does not hide the furniture; F1 shows or hides it from then on."""
+
+    @property
+    def keys_shown(self) -> bool:
+        return self.show_keys if self.show_keys is not None else not self.session.recording
 
     def press(self, key: int, mods: int) -> None:
         """A key went down (GLFW key code)."""
@@ -152,7 +157,7 @@ class Controls:
         elif key == glfw.KEY_ESCAPE:
             self.quit = True
         elif key == glfw.KEY_F1:
-            self.show_keys = not self.show_keys
+            self.show_keys = not self.keys_shown
         elif key in (glfw.KEY_1, glfw.KEY_2, glfw.KEY_3) and self.window is not None:
             from rik.sim.teleop_window import CAMERAS
 
@@ -280,7 +285,7 @@ def _loop(session: TeleopSession, controls: Controls, window: TeleopWindow) -> N
         steps, next_tick = due_steps(time.perf_counter(), next_tick, dt)
         for _ in range(steps):
             session.tick()
-        window.render(overlays(session, window.camera, fps, controls.show_keys))
+        window.render(overlays(session, window.camera, fps, controls.keys_shown))
         frames += 1
         now = time.perf_counter()
         if now - fps_since >= 1.0:
