@@ -134,3 +134,13 @@ def test_the_time_limit_stops_the_episode_and_bad_input_is_refused(variants: Pat
         _session(variants, tmp_path, max_seconds=-1)
     with pytest.raises(RikError, match="--seed -2: seeds must lie in 0"):
         _session(variants, tmp_path, seed=-2)
+
+
+def test_the_teleop_docs_show_the_keymap_the_code_uses() -> None:
+    """docs/teleop.md's key table is the keymap of rik.sim.teleop_keys, row for row (no drift)."""
+    from conftest import REPO
+
+    text = (REPO / "docs" / "teleop.md").read_text(encoding="utf-8")
+    table = text.split("| keys | what they do |\n|---|---|\n", 1)[1].split("\n\n", 1)[0]
+    rows = [tuple(c.strip() for c in line.strip("|").split("|")) for line in table.splitlines()]
+    assert rows == keymap_rows()
