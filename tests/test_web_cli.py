@@ -37,6 +37,11 @@ def test_an_unknown_variant_fails_before_any_port_is_taken(rik, tmp_path: Path) 
     assert r.code == 2 and "no handle 'two_point-bow-12'" in r.err and "in use" not in r.err
     r = rik("teleop", BOW, "--web", "--device", "spacemouse", "--variants", str(tmp_path / "v"))
     assert r.code == 2 and "--device spacemouse: the browser station takes the browser's keyboard" in r.err
+    r = rik("teleop", BOW, "--web", "--max-seconds", "0", "--variants", str(tmp_path / "v"))
+    assert r.code == 2 and "--max-seconds 0.0: a time limit must be positive (or none at all)" in r.err
+    r = rik("serve", "--max-seconds", "-5", "--port", "0")
+    assert r.code == 2 and "--max-seconds -5.0: a time limit must be positive" in r.err
+    assert not (tmp_path / "v").exists()  # refused before anything was built
 
 
 def test_rik_serve_answers_and_stops_on_ctrl_c(tmp_path: Path) -> None:

@@ -34,6 +34,14 @@ MAX_FREE_SEEDS = 100_000
 """How many seeds past the requested one are searched for a free episode id."""
 
 
+def check_time_limit(max_seconds: float | None) -> None:
+    """A time limit is positive simulated seconds, or None for none."""
+    if max_seconds is not None and not max_seconds > 0:
+        from rik.errors import RikError
+
+        raise RikError(f"--max-seconds {max_seconds}: a time limit must be positive (or none at all)")
+
+
 @dataclass(frozen=True)
 class Saved:
     """What :meth:`TeleopSession.save` wrote."""
@@ -50,10 +58,7 @@ class TeleopSession:
         from rik.sim.record import check_seeds
 
         check_seeds(seed, 1)
-        if max_seconds is not None and not max_seconds > 0:
-            from rik.errors import RikError
-
-            raise RikError(f"--max-seconds {max_seconds}: a time limit must be positive (or none at all)")
+        check_time_limit(max_seconds)
         self.scene = scene
         self.out = Path(out)
         self.operator = operator

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import errno
 import socket
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -36,7 +36,14 @@ class AppConfig:
     """First seed of teleoperated episodes; each new episode takes the next free one."""
     front: str | None = None
     """Front to operate (None: each variant's first)."""
-    extra: dict[str, object] = field(default_factory=dict)
+
+    def check(self) -> None:
+        """Settings a user gave that cannot work fail here, before the server starts."""
+        from rik.sim.record import check_seeds
+        from rik.sim.teleop_session import check_time_limit
+
+        check_seeds(self.seed, 1)
+        check_time_limit(self.max_seconds)
 
 
 def bind_socket(host: str, port: int) -> socket.socket:
@@ -65,6 +72,7 @@ def serve_station(config: AppConfig, variant: str, *, host: str = DEFAULT_HOST, 
 
     from rik.sim.record import variant_dir
 
+    config.check()
     variant_dir(config.catalog, variant, config.variants)
     serve(config, host=host, port=port, path=f"/teleop/{quote(variant)}", on_ready=on_ready)
 
@@ -99,6 +107,7 @@ def serve(config: AppConfig, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PO
     port in use fails here); the URL of ``path`` is given to ``on_ready(url)`` once it listens."""
     import uvicorn
 
+    config.check()
     sock = bind_socket(host, port)
     bound = sock.getsockname()[1]
     app = create_app(config)
