@@ -226,9 +226,11 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
     Enter saves an episode to ``out/<id>`` (each with its own id: nothing is overwritten), Backspace discards it,
     Esc or closing the window quits and discards the unsaved one. Returns the saved episodes' metas."""
     from rik.sim.record import check_seeds
+    from rik.sim.teleop_session import check_time_limit
 
     say = on_message or _print
     check_seeds(seed, 1)
+    check_time_limit(max_seconds)
     device = make_device(device_name)
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         raise DeviceError("teleoperation needs a display for its window (no DISPLAY is set); use rik teleop "
