@@ -15,6 +15,11 @@ KINDS = {"handles": "handles", "designs": "designs", "bases": "base_units", "pre
          "finishes": "finishes"}
 
 
+def srgb_hex(rgb: list[float]) -> str:
+    """An sRGB colour (three numbers in 0..1) as ``#rrggbb``."""
+    return "#" + "".join(f"{round(c * 255):02x}" for c in rgb)
+
+
 def mm(value: float | None) -> str:
     """A length in metres shown in millimetres ('' when absent)."""
     return "" if value is None else f"{value * 1000:.4g}"
@@ -86,7 +91,7 @@ COLUMNS: dict[str, list[tuple[str, Callable[[Row], str]]]] = {
         ("id", lambda r: r["id"]),
         ("name", lambda r: r["name"]),
         ("kind", lambda r: r["kind"]),
-        ("colour (sRGB)", lambda r: "#" + "".join(f"{round(c * 255):02x}" for c in r["base_color"])),
+        ("colour (sRGB)", lambda r: srgb_hex(r["base_color"])),
         ("metallic", lambda r: f"{r['metallic']:g}"),
         ("roughness", lambda r: f"{r['roughness']:g}"),
         ("pattern", lambda r: r["pattern"]),

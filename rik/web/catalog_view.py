@@ -18,7 +18,7 @@ import rik
 from rik.combinator.ids import variant_id
 from rik.registry.doc import PICTURES_DIR, csv_rows, picture_dir
 from rik.registry.index import CatalogIndex, build_index
-from rik.registry.views import table
+from rik.registry.views import srgb_hex, table
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -97,7 +97,7 @@ def handle_row(entry: Row, designs: dict[str, Row], finishes: dict[str, Row], fi
         **entry,
         "design_name": designs[entry["design"]]["name"],
         "finish_name": finish["name"],
-        "finish_color": _hex(finish["base_color"]),
+        "finish_color": srgb_hex(finish["base_color"]),
         "dimensions_mm": {k: _mm(g[k]) for k in ("length", "width", "projection", "grip_diameter", "hole_spacing")}
         | {f"clearance_{k}": _mm((g.get("clearance") or {}).get(k)) for k in ("depth", "width")},
         "display": dict(zip(headers, cells[0], strict=True)),
@@ -158,10 +158,6 @@ def placeholder_svg(entry_id: str, name: str) -> str:
 
 def _mm(value: float | None) -> float | None:
     return None if value is None else round(value * 1000, 3)
-
-
-def _hex(rgb: list[float]) -> str:
-    return "#" + "".join(f"{round(c * 255):02x}" for c in rgb)
 
 
 def _number(text: str) -> int | float | bool:
