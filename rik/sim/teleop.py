@@ -197,15 +197,13 @@ def overlays(session: TeleopSession, camera: str, fps: float, show_keys: bool = 
     import mujoco
 
     from rik.sim.teleop_keys import keymap_rows
+    from rik.sim.teleop_session import handle_text, time_text
 
     st = session.status()
-    h = st["handle"]
-    limit = "no limit" if st["time_left"] is None else f"{st['time_left']:.0f} s left"
     state = st["state"] + (": Enter saves, Backspace discards" if st["state"] == "time up" else "")
-    status = [("episode", st["episode"]), ("state", state), ("time", f"{st['time']:.1f} s ({limit})"),
+    status = [("episode", st["episode"]), ("state", state), ("time", time_text(st)),
               ("opening", f"{st['opening']:.0%} (most {st['max_opening']:.0%})"), ("grip", st["grip"]),
-              ("handle", f"{h['ahead']:+.3f} ahead {h['left']:+.3f} left {h['up']:+.3f} up m"),
-              ("gripper", gripper_angles(session))]
+              ("handle", handle_text(st)), ("gripper", gripper_angles(session))]
     if st["message"]:
         status.append(("", st["message"]))
     keys = [*keymap_rows(), *EXTRA_KEYS] if show_keys else [("F1", "show the keymap")]

@@ -184,7 +184,8 @@ class TeleopSession:
     # ---- what the operator sees -------------------------------------------------------------------------------
     def status(self) -> dict[str, Any]:
         """The live status: episode id, state, time (s) and time left, opening (fraction), grip, where the handle is
-        from the pads' centre (m: ahead, left, up as the operator faces the front)."""
+        from the pads' centre (m: ahead, left, up as the operator faces the front), the gripper base's pose (x, y, z
+        m; pitch, yaw, roll rad)."""
         from rik.sim.outcome import classify
 
         s = self.scene
@@ -201,6 +202,7 @@ class TeleopSession:
             "grip_command": round(self.grip, 3),
             "handle": {"ahead": round(float(-offset[1]), 4), "left": round(float(offset[0]), 4),
                        "up": round(float(offset[2]), 4)},
+            "pose": [round(float(v), 4) for v in s.pose()],
             "contacts": int(s.contact_summary()["contacts"]), "message": self.message,
             "last_saved": None if self.last_saved is None else self.last_saved.meta.id,
         }
@@ -208,7 +210,17 @@ class TeleopSession:
     def status_line(self) -> str:
         """The status in one line for a terminal."""
         st = self.status()
-        h = st["handle"]
-        left = "no limit" if st["time_left"] is None else f"{st['time_left']:.0f} s left"
-        return (f"{st['episode']} | {st['state']} | {st['time']:.1f} s ({left}) | open {st['opening']:.0%} | grip "
-                f"{st['grip']} | handle {h['ahead']:+.3f} ahead {h['left']:+.3f} left {h['up']:+.3f} up m")
+        return (f"{st['episode']} | {st['state']} | {time_text(st)} | open {st['opening']:.0%} | grip {st['grip']} | "
+                f"handle {handle_text(st)}")
+
+
+def time_text(status: dict[str, Any]) -> str:
+    """The episode's time and what is left of it, from :meth:`TeleopSession.status`: ``3.3 s (no limit)``."""
+    left = "no limit" if status["time_left"] is None else f"{status['time_left']:.0f} s left"
+    return f"{status['time']:.1f} s ({left})"
+
+
+def handle_text(status: dict[str, Any]) -> str:
+    """Where the handle is from the pads, from :meth:`TeleopSession.status`: ``+0.150 ahead +0.000 left ... m``."""
+    h = status["handle"]
+    return f"{h['ahead']:+.3f} ahead {h['left']:+.3f} left {h['up']:+.3f} up m"

@@ -372,8 +372,7 @@ class Station:
                             "rows": len(self.replay["states"])}
         if s is not None and self.ready:
             st["session"] = s.status()
-            st["session"]["pose"] = [round(float(v), 4) for v in s.scene.pose()]
-            st["session"]["roll_deg"] = round(math.degrees(float(s.scene.pose()[5])), 1)
+            st["session"]["roll_deg"] = round(math.degrees(st["session"]["pose"][5]), 1)
         return st
 
     def _push_status(self, clients: list[Client] | None = None) -> None:

@@ -16,8 +16,8 @@ Server -> browser, text: JSON status {"type": "status", "variant", "ready" (vari
 "message" (the station's last message), "controlled" (whether a tab controls), "paused" and "draft" (a draft
 kept after the controlling tab's connection was lost: the page offers Continue / Save / Discard), "replay"
 (null or {episode, row, rows}), "seq", "fps" (frames rendered per second), "size" ([w, h] of this tab's frames),
-"session": :meth:`rik.sim.teleop_session.TeleopSession.status` plus "pose" (gripper base x, y, z m, pitch, yaw,
-roll rad) and "roll_deg"}.
+"session": :meth:`rik.sim.teleop_session.TeleopSession.status` (with "pose": gripper base x, y, z m, pitch, yaw,
+roll rad) plus "roll_deg"}.
 
 Browser -> server, text JSON:
 
