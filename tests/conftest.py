@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import faulthandler
 import os
 import sys
 from dataclasses import dataclass
@@ -13,6 +14,20 @@ REPO = Path(__file__).resolve().parents[1]
 os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering; must be set before mujoco is first imported
 os.environ["HF_HUB_OFFLINE"] = "1"  # nothing may download at run time: tests make their own data
 os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1's banner
+
+
+SESSION_LIMIT = 3600
+"""Seconds after which a test session prints every thread's stack and exits with an error: a suite that hangs
+somewhere pytest-timeout cannot see (a session fixture, a worker's teardown) ends with a diagnosis, well inside CI's
+90-minute limit."""
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    faulthandler.dump_traceback_later(SESSION_LIMIT, exit=True)
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    faulthandler.cancel_dump_traceback_later()
 
 
 @pytest.fixture(autouse=True, scope="session")

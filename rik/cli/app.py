@@ -48,6 +48,7 @@ for _command in (sim.record, sim.teleop, sim.replay, sim.bench, rerender.render,
                  render.visual_gap, export.export_lerobot):
     app.command()(_command)
 app.command("eval")(policy.eval_policy)
+app.command("robot-check")(sim.robot_check)
 app.command("serve")(serve.serve)
 
 

@@ -23,6 +23,18 @@ CatalogOption = Annotated[
 ]
 
 
+RobotOpt = Annotated[str, typer.Option("--robot", help="Robot that opens the front: hand-e (the floating Robotiq "
+                                      "Hand-E), panda-2f85 or so100 (rik catalog list --kind robots).")]
+DEFAULT_ROBOT = "hand-e"
+
+
+def robot_entry(catalog: object, robot: str) -> object | None:
+    """The catalog entry of an arm given as ``--robot`` (None for the floating Hand-E, rik's own gripper); an
+    unknown id is a one-line error with suggestions."""
+    entry = catalog.robot(robot)  # type: ignore[attr-defined]
+    return None if entry.kind.value == "floating" else entry
+
+
 DEFAULT_WORKERS = max(1, min(8, os.cpu_count() or 1))
 """One process per core, at most eight."""
 WorkersOpt = Annotated[int, typer.Option("--workers", "-j", min=1, help="Parallel processes.")]

@@ -8,7 +8,18 @@ from typing import Annotated, Any
 
 import typer
 
-from rik.cli.common import DEFAULT_WORKERS, CatalogOption, HandleTypeOpt, WorkersOpt, console, overlays, progress_bar
+from rik.cli.common import (
+    DEFAULT_ROBOT,
+    DEFAULT_WORKERS,
+    CatalogOption,
+    HandleTypeOpt,
+    RobotOpt,
+    WorkersOpt,
+    console,
+    overlays,
+    progress_bar,
+    robot_entry,
+)
 from rik.errors import RikError
 
 VariantArg = Annotated[str, typer.Argument(help="Variant id, e.g. drawer-chest-80__two_point-bow-128__normal "
@@ -49,7 +60,7 @@ def record(variant: Annotated[str | None, typer.Argument(
                                                      "(default drawer).", show_default=False)] = None,
            workers: Annotated[int, typer.Option("--workers", "-j", min=1, help="With --split: episodes in this "
                                                 "many processes.")] = 1,
-           catalog: CatalogOption = None) -> None:
+           robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """Record episodes of a scripted strategy on a variant, or on variants drawn from a catalog split (--split),
     into --out/<id>/ (meta.json, states.parquet)."""
     from rik.registry.load import load_catalog
@@ -67,6 +78,7 @@ def record(variant: Annotated[str | None, typer.Argument(
     if split is not None and front is not None:
         raise RikError(f"--front {front}: with --split each episode's front is drawn from its seed; drop --front")
     cat = load_catalog(overlays(catalog))
+    arm: Any = robot_entry(cat, robot)
     con = console()
     skipped: list[tuple[int, str, str]] = []
     with progress_bar() as progress:
@@ -80,11 +92,11 @@ def record(variant: Annotated[str | None, typer.Argument(
 
             metas = record_split(cat, Draw.parse(split, types, presets, kinds), strategy, episodes=episodes, seed=seed,
                                  out=out, variants=variants, workers=workers, overlays=overlays(catalog),
-                                 progress=report, skipped=skipped)
+                                 progress=report, skipped=skipped, robot=arm)
         else:
             assert variant is not None
             metas = run(cat, variant, strategy, episodes=episodes, seed=seed, out=out, variants=variants,
-                        front=front, progress=report)
+                        front=front, robot=arm, progress=report)
     for m in metas:
         con.print(f"{out / m.id}: {m.outcome} (opened {m.final_opening:.0%}, {m.steps} steps at {m.fps} Hz)")
     for s, _, reason in skipped:
@@ -207,3 +219,25 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
     else:
         con.print(table)
     con.print(f"{len(rows)} episodes; results in {out / 'results.csv'} and {out / 'table.md'}")
+
+
+def robot_check(variant: VariantArg, robot: RobotOpt = DEFAULT_ROBOT, front: FrontOpt = None,
+                variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
+    """Check a robot on a variant: it starts clear, reaches the handle over the front's travel, has the joint
+    torque to hold the preset's resistance, and grips hard enough. Exit 1 when a check fails."""
+    from rik.registry.load import load_catalog
+    from rik.sim.record import variant_dir
+    from rik.sim.robot_checks import run_checks
+    from rik.sim.scene import build_scene
+
+    cat = load_catalog(overlays(catalog))
+    arm: Any = robot_entry(cat, robot)
+    scene = build_scene(variant_dir(cat, variant, variants), front, robot=arm)
+    con = console()
+    failed = 0
+    for result in run_checks(scene):
+        failed += not result.passed
+        mark = "[green]pass[/]" if result.passed else "[red]FAIL[/]"
+        con.print(f"{mark} {result.name}: {result.reason}")
+    if failed:
+        raise typer.Exit(1)

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from rik.errors import UnknownIdError
 from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, HandleType, JointType, ResistancePreset
+from rik.schemas.robots import Robot
 
 
 @dataclass(frozen=True)
@@ -35,6 +36,8 @@ class Catalog:
     """Design id -> its split (train, val or test; :mod:`rik.registry.splits`)."""
     splits_version: int = 0
     """Version of the split assignment (:data:`rik.registry.splits.SPLITS_VERSION`)."""
+    robots: Mapping[str, Robot] = field(default_factory=dict)
+    """Robots that open the fronts (``hand-e``, the default, and arms)."""
 
     # ---- lookups with suggestions -------------------------------------------------------------------------
     def handle(self, handle_id: str) -> Handle:
@@ -52,6 +55,10 @@ class Catalog:
 
     def finish(self, finish_id: str) -> Finish:
         return _get(self.finishes, finish_id, "finish")
+
+    def robot(self, robot_id: str) -> Robot:
+        """The robot with this id; :class:`UnknownIdError` suggests close ids."""
+        return _get(self.robots, robot_id, "robot")
 
     # ---- derived facts --------------------------------------------------------------------------------------
     def handle_type(self, handle: Handle) -> HandleType:

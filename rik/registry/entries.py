@@ -9,11 +9,12 @@ from pydantic import BaseModel, ValidationError
 
 from rik.registry.sources import RawEntry
 from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
+from rik.schemas.robots import Robot
 
 if TYPE_CHECKING:
     from pydantic_core import ErrorDetails
 
-CatalogModel = Finish | ResistancePreset | HandleDesign | Handle | BaseUnit
+CatalogModel = Finish | ResistancePreset | HandleDesign | Handle | BaseUnit | Robot
 """A catalog entry's model (each has an ``id``)."""
 
 #: Schema model of each section.
@@ -23,6 +24,7 @@ SECTION_MODELS: dict[str, type[CatalogModel]] = {
     "designs": HandleDesign,
     "handles": Handle,
     "base_units": BaseUnit,
+    "robots": Robot,
 }
 
 

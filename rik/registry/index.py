@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
 
 #: The order in which ``lookup`` searches sections and ``rik catalog`` lists kinds.
-LOOKUP_ORDER = ("handles", "designs", "base_units", "presets", "finishes")
+LOOKUP_ORDER = ("handles", "designs", "base_units", "presets", "finishes", "robots")
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ from rik.registry.entries import SECTION_MODELS, CatalogModel, parse_entry
 from rik.registry.sources import NOUNS, SPLITS_KEY, RawEntry, catalog_sources, read_file
 from rik.registry.splits import assign_splits
 from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
+from rik.schemas.robots import Robot
 
 
 def load_catalog(overlays: Iterable[Path] | None = None) -> Catalog:
@@ -42,6 +43,7 @@ def build_catalog(entries: Sequence[RawEntry]) -> Catalog:
     designs = dict(_items(parsed, "designs", HandleDesign))
     handles = dict(_items(parsed, "handles", Handle))
     base_units = dict(_items(parsed, "base_units", BaseUnit))
+    robots = dict(_items(parsed, "robots", Robot))
     for entry, handle in _entries(parsed, "handles", Handle):
         checks.check_handle(entry, handle, designs, finishes)
     used = [h.design for h in handles.values()]
@@ -53,7 +55,7 @@ def build_catalog(entries: Sequence[RawEntry]) -> Catalog:
     splits, version = assign_splits(split_entries, {m.id: e.builtin for e, m in _entries(parsed, "designs",
                                                                                            HandleDesign)})
     return Catalog(designs=designs, handles=handles, base_units=base_units, presets=presets, finishes=finishes,
-                   origins=origins, splits=splits, splits_version=version)
+                   origins=origins, splits=splits, splits_version=version, robots=robots)
 
 
 def _entries[M: CatalogModel](parsed: dict[str, list[tuple[RawEntry, CatalogModel]]], section: str,

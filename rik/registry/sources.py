@@ -15,13 +15,13 @@ if TYPE_CHECKING:
     import yaml
 
 #: Top-level sections a catalog file may hold, each a list of entries.
-SECTIONS = ("finishes", "presets", "designs", "handles", "base_units")
+SECTIONS = ("finishes", "presets", "designs", "handles", "base_units", "robots")
 #: Top-level key of a catalog file that assigns designs to the named splits (:mod:`rik.registry.splits`); its
 #: value is one mapping (``version``, ``train``, ``val``, ``test``), read as a single raw entry of this name.
 SPLITS_KEY = "splits"
 #: How messages name one entry of each section.
 NOUNS = {"finishes": "finish", "presets": "preset", "designs": "design", "handles": "handle",
-         "base_units": "base unit"}
+         "base_units": "base unit", "robots": "robot"}
 
 BUILTIN_DIR = Path(__file__).parent / "data"
 

@@ -8,8 +8,9 @@ from pydantic import Field
 
 from rik.schemas.common import CatalogId, Frozen, PathComponent, SimpleId
 
-EPISODE_FORMAT = 2
-"""2: ``meta_sha256`` seals meta.json itself (format 1 episodes, without it, are still read)."""
+EPISODE_FORMAT = 3
+"""3: the robot (``robot``, ``robot_base``) and its joints (``states.parquet``'s ``robot_joints``, ``robot_targets``,
+``tcp_quat``); 2: ``meta_sha256`` seals meta.json itself. Older episodes are still read (they are the Hand-E's)."""
 MAX_SEED = 2**63 - 1
 """Largest seed: seeds are stored as signed 64-bit integers (Parquet, LeRobot's episode columns)."""
 
@@ -21,7 +22,14 @@ class GripperInfo(Frozen):
     stroke: float = Field(description="m")
     grip_force: float = Field(description="N")
     pad_friction: float
-    arm_force: float = Field(description="N")
+    arm_force: float = Field(description="N; the Hand-E's base (an arm's joint torques are in the catalog)")
+
+
+class RobotBase(Frozen):
+    """Where an arm's base stood (world frame)."""
+
+    pos: tuple[float, float, float] = Field(description="m")
+    yaw: float = Field(description="rad, about +z")
 
 
 class EpisodeMeta(Frozen):
@@ -52,6 +60,13 @@ class EpisodeMeta(Frozen):
     final_opening: float = Field(allow_inf_nan=False, description="fraction of the front's range")
     max_opening: float = Field(allow_inf_nan=False)
     gripper: GripperInfo
+    robot: SimpleId = "hand-e"
+    """The catalog robot that opened the front (episodes before robots existed are the Hand-E's)."""
+    robot_base: RobotBase | None = None
+    """An arm's base placement (None for the floating Hand-E)."""
+    robot_joints: tuple[str, ...] = ()
+    """Names of ``states.parquet``'s ``robot_joints`` and ``robot_targets`` (the robot's joints, then its
+    gripper's: rad or m for joints, the gripper in its actuator's units); empty before format 3."""
     versions: dict[str, str]
     log: tuple[str, ...] = ()
     states_sha256: str = Field(pattern=r"^[0-9a-f]{64}$")

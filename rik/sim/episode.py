@@ -35,8 +35,15 @@ DEFAULT_EPISODES = Path("episodes")
 META = "meta.json"
 STATES = "states.parquet"
 STAGING_PREFIX = ".staging-"
-COLUMNS = ("step", "time", "state", "action", "front_qpos", "front_qvel", "opening", "gripper_opening",
-           "tcp", "contacts", "contact_normal_force", "contact_tangential_force")
+COLUMNS_2 = ("step", "time", "state", "action", "front_qpos", "front_qvel", "opening", "gripper_opening",
+             "tcp", "contacts", "contact_normal_force", "contact_tangential_force")
+"""The columns of episodes before format 3."""
+COLUMNS = (*COLUMNS_2, "tcp_quat", "robot_joints", "robot_targets")
+"""``tcp_quat``: the gripper frame's world orientation (w, x, y, z); ``robot_joints``: the robot's joint positions
+and its gripper's (meta.json's ``robot_joints`` names them); ``robot_targets``: what the servos were commanded in
+the row's step (the IK's joint targets for an arm, then the gripper's goal)."""
+VECTORS = {"state": None, "action": 7, "tcp": 3, "tcp_quat": 4, "robot_joints": None, "robot_targets": None}
+"""Vector columns and their widths (None: the meta's ``state_size``, or the robot's joint count)."""
 
 
 class EpisodeError(RikError):
@@ -60,7 +67,7 @@ class EpisodeRecorder:
     rows: dict[str, list[Any]] = field(default_factory=lambda: {c: [] for c in COLUMNS})
     max_opening: float = 0.0
 
-    def _store(self, action: np.ndarray) -> None:
+    def _store(self, action: np.ndarray, targets: np.ndarray | None = None) -> None:
         s = self.scene
         q, qd = s.front_q()
         contact = s.contact_summary()
@@ -77,11 +84,15 @@ class EpisodeRecorder:
         r["contacts"].append(int(contact["contacts"]))
         r["contact_normal_force"].append(contact["normal_force"])
         r["contact_tangential_force"].append(contact["tangential_force"])
+        r["tcp_quat"].append(s.tcp_quat())
+        r["robot_joints"].append(s.robot_joints())
+        r["robot_targets"].append(targets)
         self.max_opening = max(self.max_opening, s.opening())
 
     def step(self, action: np.ndarray) -> None:
         self._store(action)
         self.scene.step(action)
+        self.rows["robot_targets"][-1] = self.scene._drive.targets(self.scene, np.asarray(action, np.float64))
 
     @property
     def steps(self) -> int:
@@ -91,18 +102,20 @@ class EpisodeRecorder:
         """The rows so far plus the final state, as a pyarrow table."""
         import pyarrow as pa
 
-        last = self.rows["action"][-1] if self.rows["action"] else np.zeros(7)
-        self._store(last)
+        r = self.rows
+        last = r["action"][-1] if r["action"] else np.zeros(7)
+        held = r["robot_targets"][-1] if r["robot_targets"] else self.scene._drive.targets(self.scene, last)
+        self._store(last, held)
         try:
-            r = self.rows
-            n_state = len(r["state"][0])
+            def vectors(name: str) -> pa.Array:
+                return pa.FixedSizeListArray.from_arrays(pa.array(np.concatenate(r[name]), pa.float64()),
+                                                         len(r[name][0]))
+
             arrays = {
                 "step": pa.array(r["step"], pa.int32()),
                 "time": pa.array(r["time"], pa.float64()),
-                "state": pa.FixedSizeListArray.from_arrays(pa.array(np.concatenate(r["state"])), n_state),
-                "action": pa.FixedSizeListArray.from_arrays(pa.array(np.concatenate(r["action"])), 7),
-                "tcp": pa.FixedSizeListArray.from_arrays(pa.array(np.concatenate(r["tcp"])), 3),
                 "contacts": pa.array(r["contacts"], pa.int32()),
+                **{name: vectors(name) for name in VECTORS},
             }
             for c in COLUMNS:
                 if c not in arrays:
@@ -113,8 +126,23 @@ class EpisodeRecorder:
                 self.rows[c].pop()
 
 
-def episode_id(variant: str, front: str, operator: str, seed: int) -> str:
-    return f"{variant}__{front}__{operator}__s{seed:04d}"
+def episode_id(variant: str, front: str, operator: str, seed: int, robot: str = "hand-e") -> str:
+    """``<variant>__<front>__<operator>__s<seed>``; an arm's operator carries ``.<robot>``
+    (``contact_rich.so100``), so the robots' episodes of one seed live side by side."""
+    who = operator if robot == "hand-e" else f"{operator}.{robot}"
+    return f"{variant}__{front}__{who}__s{seed:04d}"
+
+
+def _robot_base(scene: SimScene) -> Any:
+    """An arm's base placement for meta.json (None for the Hand-E)."""
+    from rik.schemas.episodes import RobotBase
+    from rik.sim.drive import ArmDrive
+
+    drive = scene.drive
+    if not isinstance(drive, ArmDrive):
+        return None
+    p = drive.placement
+    return RobotBase(pos=(float(p.pos[0]), float(p.pos[1]), float(p.pos[2])), yaw=float(p.yaw))
 
 
 def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operator: str, operator_kind: str,
@@ -145,6 +173,7 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
             final_opening=round(s.opening(), 6), max_opening=round(recorder.max_opening, 6),
             gripper=GripperInfo(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
                                 arm_force=g.arm_force),
+            robot=s.robot_id, robot_base=_robot_base(s), robot_joints=s._drive.joint_names,
             versions=_versions(), log=tuple(log), states_sha256=digest)
         meta = write_meta(staging, meta.model_dump(mode="json"))
         if final.exists():
@@ -216,13 +245,17 @@ def read_episode(directory: Path) -> tuple[EpisodeMeta, pa.Table]:
     except (pa.ArrowException, OSError) as exc:
         raise EpisodeError(f"{file}: not a readable Parquet file ({type(exc).__name__}: "
                            f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
-    if table.num_rows != meta.steps + 1 or list(table.column_names) != list(COLUMNS):
+    columns = COLUMNS if meta.format >= 3 else COLUMNS_2
+    if table.num_rows != meta.steps + 1 or list(table.column_names) != list(columns):
         raise EpisodeError(f"{file}: {table.num_rows} rows and columns {table.column_names}, expected "
-                           f"{meta.steps + 1} rows and {list(COLUMNS)}")
-    for name, width in (("state", meta.state_size), ("action", None), ("tcp", 3)):
-        _check_vectors(file, table, name, width)
-    for name in COLUMNS:
-        if name not in ("state", "action", "tcp") and not pa.types.is_integer(table.schema.field(name).type) \
+                           f"{meta.steps + 1} rows and {list(columns)}")
+    widths = {"state": meta.state_size, "action": None, "tcp": 3, "tcp_quat": 4,
+              "robot_joints": len(meta.robot_joints), "robot_targets": len(meta.robot_joints)}
+    for name in VECTORS:
+        if name in columns:
+            _check_vectors(file, table, name, widths[name])
+    for name in columns:
+        if name not in VECTORS and not pa.types.is_integer(table.schema.field(name).type) \
                 and not pa.types.is_floating(table.schema.field(name).type):
             raise EpisodeError(f"{file}: column '{name}' holds {table.schema.field(name).type}, expected numbers")
     return meta, table

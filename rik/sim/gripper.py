@@ -72,6 +72,9 @@ class GripperSpec:
     pad_length: float = 0.030
     palm: tuple[float, float, float] = (0.090, 0.050, 0.060)
     """Palm (housing) size along x, y, z, m."""
+    tcp_distance: float | None = None
+    """An arm's gripper: from its flange to the gripper frame along the fingers, m (None: the Hand-E's, from its
+    palm and fingers)."""
 
     def with_(self, **changes: Any) -> GripperSpec:
         return replace(self, **changes)
@@ -83,7 +86,9 @@ class GripperSpec:
 
     @property
     def tcp_offset(self) -> float:
-        """Distance from the base origin (palm's back face) to the middle of the pads along +z, m."""
+        """Distance from the base origin (palm's back face; an arm's flange) to the middle of the pads along +z, m."""
+        if self.tcp_distance is not None:
+            return self.tcp_distance
         return self.palm[2] + self.finger_length - self.pad_length / 2
 
     def friction_capacity(self) -> float:

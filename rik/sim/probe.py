@@ -135,21 +135,6 @@ def find_hooks(scene: SimScene, finger_thickness: float, finger_width: float, st
 
 def pose_is_free(scene: SimScene, pose: np.ndarray, opening: float) -> bool:
     """Whether the gripper at base ``pose`` with each finger ``opening`` from the centre touches nothing (the
-    furniture, the floor). The scene's state is left as it was."""
-    import mujoco
-
-    m, d = scene.model, scene.data
-    saved = d.qpos.copy()
-    d.qpos[scene.base_qpos] = pose
-    d.qpos[scene.finger_qpos] = opening
-    mujoco.mj_kinematics(m, d)
-    mujoco.mj_collision(m, d)
-    free = True
-    for i in range(d.ncon):
-        g1, g2 = int(d.contact.geom1[i]), int(d.contact.geom2[i])
-        if (g1 in scene.gripper_geoms or g2 in scene.gripper_geoms) and d.contact.dist[i] < 0:
-            free = False
-            break
-    d.qpos[:] = saved
-    mujoco.mj_forward(m, d)
-    return free
+    furniture, the floor); an arm is solved to the pose and all of it must be free. The scene's state is left as
+    it was."""
+    return scene._drive.pose_is_free(scene, np.asarray(pose, np.float64), opening)

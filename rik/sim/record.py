@@ -17,6 +17,7 @@ from rik.sim.scene import SimScene, build_scene, start_pose
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
+    from rik.schemas.robots import Robot
     from rik.sim.draw import Draw
 
 MAX_SECONDS = 30.0
@@ -55,16 +56,22 @@ def randomise_start(scene: SimScene, rng: np.random.Generator) -> None:
 
 def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, seed: int = 0,
            out: Path = DEFAULT_EPISODES, variants: Path = Path("variants"), front: str | None = None,
-           gripper: GripperSpec = HAND_E, max_seconds: float = MAX_SECONDS,
+           gripper: GripperSpec = HAND_E, max_seconds: float = MAX_SECONDS, robot: Robot | None = None,
            progress: Callable[[Any], None] | None = None) -> list[Any]:
     """Record ``episodes`` episodes of ``strategy`` on ``variant`` (seeds ``seed``, ``seed + 1``, ...) into
-    ``out``; returns their metas."""
+    ``out`` with the Hand-E ``gripper`` or an arm (``robot``, a catalog entry); returns their metas. An arm that
+    cannot reach the variant's handle is refused before anything is recorded."""
     check_seeds(seed, episodes)
     make_operator(strategy)  # unknown strategy: fail before building anything
     directory = variant_dir(catalog, variant, variants)
+    if robot is not None:
+        from rik.sim.robot_checks import require_reach
+
+        require_reach(build_scene(directory, front, gripper, robot=robot))
     metas = []
     for k in range(episodes):
-        meta = record_one(directory, strategy, seed + k, out, front=front, gripper=gripper, max_seconds=max_seconds)
+        meta = record_one(directory, strategy, seed + k, out, front=front, gripper=gripper, max_seconds=max_seconds,
+                          robot=robot)
         metas.append(meta)
         if progress is not None:
             progress(meta)
@@ -73,33 +80,35 @@ def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, 
 
 def record_one(directory: Path, strategy: str, seed: int, out: Path, *, front: str | None = None,
                gripper: GripperSpec = HAND_E, max_seconds: float = MAX_SECONDS,
-               params: Mapping[str, float | int] | None = None, label: str | None = None) -> Any:
+               params: Mapping[str, float | int] | None = None, label: str | None = None,
+               robot: Robot | None = None) -> Any:
     """Record one episode of ``strategy`` (with its ``params``) with ``seed`` on the built variant at ``directory``
     into ``out``, as :func:`record` does for each of its seeds; returns its meta. ``label`` names the operator in
     the episode's id and meta (default: the strategy)."""
-    scene = build_scene(directory, front, gripper)
+    scene = build_scene(directory, front, gripper, robot=robot)
     rng = np.random.default_rng(seed)
     randomise_start(scene, rng)
     operator = make_operator(strategy, params)
     recorder = run_operator(scene, operator, rng, max_seconds, EpisodeRecorder(scene))
     name = label or strategy
-    return write_episode(recorder, out, episode=episode_id(scene.info["id"], scene.front.id, name, seed),
+    return write_episode(recorder, out, episode=episode_id(scene.info["id"], scene.front.id, name, seed,
+                                                           scene.robot_id),
                          operator=name, operator_kind="strategy", seed=seed, log=tuple(operator.log))
 
 
 def _record_drawn(catalog: Catalog, seed: str, *, draw: Draw, strategy: str, out: Path, dirs: dict[str, Path],
-                  gripper: GripperSpec, max_seconds: float) -> Any:
+                  gripper: GripperSpec, max_seconds: float, robot: Robot | None = None) -> Any:
     """One episode of :func:`record_split` (module level: it runs in worker processes)."""
     episode = draw.episode(catalog, int(seed))
     return record_one(dirs[episode.variant], strategy, int(seed), out, front=episode.front, gripper=gripper,
-                      max_seconds=max_seconds)
+                      max_seconds=max_seconds, robot=robot)
 
 
 def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int = 1, seed: int = 0,
                  out: Path = DEFAULT_EPISODES, variants: Path = Path("variants"), gripper: GripperSpec = HAND_E,
                  max_seconds: float = MAX_SECONDS, workers: int = 1, overlays: Sequence[Path] = (),
                  progress: Callable[[Any], None] | None = None,
-                 skipped: list[tuple[int, str, str]] | None = None) -> list[Any]:
+                 skipped: list[tuple[int, str, str]] | None = None, robot: Robot | None = None) -> list[Any]:
     """Record ``episodes`` episodes of ``strategy`` whose variant and front come from ``draw``
     (:class:`rik.sim.draw.Draw`) for seeds ``seed``, ``seed + 1``, ...: each exactly as :func:`record` writes that
     variant, front and seed. Builds the variants first, then records in ``workers`` processes; metas in seed
@@ -128,7 +137,7 @@ def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int =
         seeds = [s for s in seeds if drawn[s] not in rejected]
     dirs = {v: inside(variants, v, what="variant id") for v in set(drawn.values()) if v not in rejected}
     fn = functools.partial(_record_drawn, draw=draw, strategy=strategy, out=out, dirs=dirs, gripper=gripper,
-                           max_seconds=max_seconds)
+                           max_seconds=max_seconds, robot=robot)
     metas: dict[int, Any] = {}
     for s, meta in map_ids(fn, catalog, [str(s) for s in seeds], workers=workers, overlays=overlays):
         metas[int(s)] = meta

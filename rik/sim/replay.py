@@ -36,7 +36,16 @@ def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: Episo
     g = meta.gripper
     gripper = HAND_E.with_(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
                            arm_force=g.arm_force)
-    scene = build_scene(variant_dir(catalog, meta.variant, variants), meta.front, gripper, meta.fps)
+    robot = None
+    if meta.robot != "hand-e":
+        from rik.errors import UnknownIdError
+
+        try:
+            robot = catalog.robot(meta.robot)
+        except UnknownIdError as exc:
+            raise EpisodeError(f"{Path(directory) / 'meta.json'}: field 'robot': {exc} (give the catalog it was "
+                               "recorded with, --catalog)") from None
+    scene = build_scene(variant_dir(catalog, meta.variant, variants), meta.front, gripper, meta.fps, robot=robot)
     collision = scene.info.get("collision", "coacd")
     if collision != meta.collision:
         raise EpisodeError(f"{Path(directory) / 'meta.json'}: field 'collision': {meta.collision}, but {variants} "

@@ -32,10 +32,13 @@ import numpy as np
 
 from rik.errors import RikError
 from rik.joints.runtime import RuntimeEffects
-from rik.sim.gripper import BASE_JOINTS, GRIPPER_PREFIX, HAND_E, GripperSpec, jaw_target
+from rik.sim.gripper import BASE_JOINTS, GRIPPER_PREFIX, HAND_E, GripperSpec
 
 if TYPE_CHECKING:
     import mujoco
+
+    from rik.schemas.robots import Robot
+    from rik.sim.drive import Drive
 
 CONTROL_FPS = 20
 """Control (and recording) rate, Hz."""
@@ -79,11 +82,26 @@ class SimScene:
     front_bodies: frozenset[int] = frozenset()
     tcp_site: int = -1
     arm_ctrl: np.ndarray = field(default_factory=lambda: np.arange(6))
-    """Control addresses of the base servos (x, y, z, pitch, yaw, roll)."""
+    """Control addresses of the robot's servos: the Hand-E's base axes (x, y, z, pitch, yaw, roll), or an arm's
+    joints."""
     jaw_ctrl: int = 6
     """Control address of the jaw servo."""
     effects: tuple[RuntimeEffects, ...] = ()
     """Runtime joint effects of the variant's fronts, applied around each physics step."""
+    drive: Drive | None = None
+    """How the robot takes the target pose (:mod:`rik.sim.drive`); set by :func:`build_scene`."""
+    robot: Robot | None = None
+    """The catalog entry of an arm (None: the Hand-E of :attr:`gripper`)."""
+
+    @property
+    def robot_id(self) -> str:
+        """The robot's catalog id (``hand-e`` for the floating gripper)."""
+        return self._drive.robot_id
+
+    @property
+    def _drive(self) -> Drive:
+        assert self.drive is not None, "build the scene with build_scene"
+        return self.drive
 
     @property
     def substeps(self) -> int:
@@ -101,12 +119,21 @@ class SimScene:
         return (self.front_q()[0] - lo) / (hi - lo)
 
     def pose(self) -> np.ndarray:
-        """The gripper base's pose: x, y, z (m, world) and pitch, yaw, roll (rad)."""
-        return self.data.qpos[self.base_qpos].copy()
+        """The gripper base's pose: x, y, z (m, world) and pitch, yaw, roll (rad). An arm's is the pose its gripper
+        frame gives (the flange's position and the frame's angles)."""
+        return self._drive.pose(self)
 
     def finger_opening(self) -> float:
         """Jaw opening, m (both fingers)."""
-        return float(self.data.qpos[self.finger_qpos].sum())
+        return self._drive.finger_opening(self)
+
+    def robot_joints(self) -> np.ndarray:
+        """The robot's joint positions, then its gripper's (:attr:`rik.sim.drive.Drive.joint_names`; rad or m)."""
+        return self._drive.joints(self)
+
+    def tcp_quat(self) -> np.ndarray:
+        """World orientation of the gripper frame, unit quaternion (w, x, y, z)."""
+        return _mat2quat(self.data.site_xmat[self.tcp_site])
 
     def tcp(self) -> np.ndarray:
         """World position of the point between the pads, m."""
@@ -167,27 +194,35 @@ class SimScene:
         self.set_pose(start_pose(self))
 
     def set_pose(self, pose: np.ndarray, grip: float = 0.0) -> None:
-        """Put the gripper at ``pose`` at rest (fingers at the grip command's opening) and run kinematics."""
-        import mujoco
-
-        self.data.qpos[self.base_qpos] = pose
-        self.data.qvel[:] = 0.0
-        opening = min(max(jaw_target(self.gripper, grip), 0.0), self.gripper.stroke)
-        self.data.qpos[self.finger_qpos] = opening / 2
-        self.data.ctrl[self.arm_ctrl] = pose
-        self.data.ctrl[self.jaw_ctrl] = opening
-        mujoco.mj_forward(self.model, self.data)
+        """Put the gripper at ``pose`` at rest (fingers at the grip command's opening; an arm solved there from its
+        home posture, its gripper open) and run kinematics."""
+        self._drive.place(self, np.asarray(pose, np.float64), grip)
 
     def step(self, action: np.ndarray) -> None:
-        """One control step: the base servos aim at ``action[:6]``; the jaws move towards the opening of the grip
-        command ``action[6]`` at the gripper's finger speed."""
+        """One control step: the robot aims at the target pose ``action[:6]`` (the Hand-E's base servos directly,
+        an arm through one IK step); the jaws move towards the grip command ``action[6]`` at the gripper's finger
+        speed."""
+        action = np.asarray(action, dtype=np.float64)
+        self._drive.command(self, action)
+        self._run(float(action[6]))
+
+    def step_joints(self, targets: np.ndarray, grip: float) -> None:
+        """One control step of an arm driven joint by joint (a policy trained on an arm's export): its servos aim
+        at ``targets`` (rad, held within reach of the joints as the IK's targets are), the jaws at ``grip``."""
+        from rik.errors import RikError
+        from rik.sim.drive import ArmDrive
+
+        if not isinstance(self.drive, ArmDrive):
+            raise RikError(f"robot {self.robot_id} takes a target pose, not joint targets")
+        self.drive.set_targets(self, np.asarray(targets, np.float64))
+        self._run(float(grip))
+
+    def _run(self, grip: float) -> None:
+        """The physics steps of one control step, the jaw servo slewing towards the grip command."""
         import mujoco
 
-        action = np.asarray(action, dtype=np.float64)
         m, d, jaw, effects = self.model, self.data, self.jaw_ctrl, self.effects
-        d.ctrl[self.arm_ctrl] = action[:6]
-        goal = jaw_target(self.gripper, float(action[6]))
-        dmax = 2.0 * self.gripper.finger_speed * m.opt.timestep
+        goal, dmax = self._drive.jaw(self, grip)
         for _ in range(self.substeps):
             c = float(d.ctrl[jaw])
             d.ctrl[jaw] = c + min(max(goal - c, -dmax), dmax)
@@ -271,13 +306,15 @@ def front_of(info: dict[str, Any], front: str | None, file: Path) -> dict[str, A
 
 
 def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpec = HAND_E,
-                control_fps: int = CONTROL_FPS) -> SimScene:
-    """Compile the scene of the variant built in ``variant_dir`` (its ``model.xml``), operating ``front``."""
+                control_fps: int = CONTROL_FPS, robot: Robot | None = None) -> SimScene:
+    """Compile the scene of the variant built in ``variant_dir`` (its ``model.xml``), operating ``front``, with
+    the Hand-E ``gripper`` or, when ``robot`` is an arm (a catalog entry), that arm at its mount."""
     import mujoco
 
     from rik.joints.runtime import front_effects
-    from rik.sim.gripper import add_gripper
+    from rik.sim.drive import FloatingDrive
 
+    arm = robot is not None and robot.kind.value == "arm"
     file = Path(variant_dir) / "model.xml"
     if not file.is_file():
         raise RikError(f"{file}: no such variant file; build the variant with rik variants build")
@@ -288,14 +325,23 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     info = _variant_info(spec, file)
     record = front_of(info, front, file)
     _add_environment(spec)
-    add_gripper(spec, gripper)
-    # Aim the front camera at the operated handle: compile once to find it, then add the camera.
+    if not arm:
+        from rik.sim.gripper import add_gripper
+
+        add_gripper(spec, gripper)
+    # Aim the front camera at the operated handle (and place an arm by it): compile once to find it.
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     target = data.site_xpos[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, record["grasp_site"])].copy()
     eye = target + FRONT_CAMERA_DISTANCE * np.array([0.35, 0.85, 0.40]) / math.hypot(0.35, 0.85, 0.40)
     spec.worldbody.add_camera(name="front", pos=eye.tolist(), xyaxes=_look_at(eye, target), fovy=50)
+    if arm:
+        from rik.sim.arm import attach_arm, footprint, placement
+
+        assert robot is not None
+        where = placement(robot, target, footprint(model, data))
+        attach_arm(spec, robot, where)
     model = spec.compile()
     data = mujoco.MjData(model)
 
@@ -309,20 +355,56 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     front_info = FrontInfo(record["id"], record["kind"], record["motion"], joint, int(model.jnt_qposadr[joint]),
                            int(model.jnt_dofadr[joint]), (float(lo), float(hi)), body,
                            handle_body, name2id(mujoco.mjtObj.mjOBJ_SITE, record["grasp_site"]))
-    base_qpos = np.array([model.jnt_qposadr[name2id(mujoco.mjtObj.mjOBJ_JOINT, GRIPPER_PREFIX + j)]
-                          for j in BASE_JOINTS])
-    finger_qpos = np.array([model.jnt_qposadr[name2id(mujoco.mjtObj.mjOBJ_JOINT, GRIPPER_PREFIX + f)]
-                            for f in FINGERS])
-    gripper_bodies = {name2id(mujoco.mjtObj.mjOBJ_BODY, GRIPPER_PREFIX + b) for b in ("base", *FINGERS)}
-    gripper_geoms = frozenset(g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in gripper_bodies)
     front_bodies = frozenset({body, handle_body})
-    arm_ctrl = np.array([_ctrl_adr(model, GRIPPER_PREFIX + j) for j in BASE_JOINTS])
-    jaw_ctrl = _ctrl_adr(model, GRIPPER_PREFIX + "jaw")
-    scene = SimScene(model, data, info, front_info, gripper, Path(variant_dir), control_fps, base_qpos, finger_qpos,
-                     gripper_geoms, front_bodies, name2id(mujoco.mjtObj.mjOBJ_SITE, GRIPPER_PREFIX + "tcp"),
-                     arm_ctrl, jaw_ctrl, front_effects(model, info["fronts"]))
+    effects = front_effects(model, info["fronts"])
+    if arm:
+        from rik.sim.arm import ROBOT_PREFIX, TCP_SITE
+        from rik.sim.drive import arm_drive, gripper_spec
+        from rik.sim.ik import ArmIK
+
+        assert robot is not None and robot.gripper.body is not None
+        ik = ArmIK(robot, where, orientation_cost=1.0 if len(robot.joint_names) >= 6 else 0.2)
+        drive = arm_drive(model, robot, ik, where, control_fps)
+        hand = ROBOT_PREFIX + robot.gripper.body
+        hand_bodies = {b for b in range(model.nbody) if _descends(model, b, name2id(mujoco.mjtObj.mjOBJ_BODY, hand))}
+        gripper_geoms = frozenset(g for g in drive.robot_geoms if int(model.geom_bodyid[g]) in hand_bodies)
+        scene = SimScene(model, data, info, front_info, gripper_spec(robot), Path(variant_dir), control_fps,
+                         np.zeros(0, int), np.zeros(0, int), gripper_geoms, front_bodies,
+                         name2id(mujoco.mjtObj.mjOBJ_SITE, ROBOT_PREFIX + TCP_SITE), drive.arm_ctrl, drive.jaw_ctrl,
+                         effects, drive, robot)
+    else:
+        base_qpos = np.array([model.jnt_qposadr[name2id(mujoco.mjtObj.mjOBJ_JOINT, GRIPPER_PREFIX + j)]
+                              for j in BASE_JOINTS])
+        finger_qpos = np.array([model.jnt_qposadr[name2id(mujoco.mjtObj.mjOBJ_JOINT, GRIPPER_PREFIX + f)]
+                                for f in FINGERS])
+        gripper_bodies = {name2id(mujoco.mjtObj.mjOBJ_BODY, GRIPPER_PREFIX + b) for b in ("base", *FINGERS)}
+        gripper_geoms = frozenset(g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in gripper_bodies)
+        arm_ctrl = np.array([_ctrl_adr(model, GRIPPER_PREFIX + j) for j in BASE_JOINTS])
+        jaw_ctrl = _ctrl_adr(model, GRIPPER_PREFIX + "jaw")
+        drive = FloatingDrive(base_qpos, finger_qpos, arm_ctrl, jaw_ctrl)
+        scene = SimScene(model, data, info, front_info, gripper, Path(variant_dir), control_fps, base_qpos,
+                         finger_qpos, gripper_geoms, front_bodies,
+                         name2id(mujoco.mjtObj.mjOBJ_SITE, GRIPPER_PREFIX + "tcp"), arm_ctrl, jaw_ctrl, effects, drive)
     scene.reset()
     return scene
+
+
+def _descends(model: mujoco.MjModel, body: int, ancestor: int) -> bool:
+    """Whether ``body`` is ``ancestor`` or lies below it in the kinematic tree."""
+    while body > 0:
+        if body == ancestor:
+            return True
+        body = int(model.body_parentid[body])
+    return body == ancestor
+
+
+def _mat2quat(mat: np.ndarray) -> np.ndarray:
+    """A rotation matrix (9 numbers, row-major) as a unit quaternion (w, x, y, z) with w >= 0."""
+    import mujoco
+
+    q = np.empty(4)
+    mujoco.mju_mat2Quat(q, np.asarray(mat, np.float64).reshape(9))
+    return -q if q[0] < 0 else q
 
 
 def _ctrl_adr(model: mujoco.MjModel, actuator: str) -> int:

@@ -1,0 +1,301 @@
+"""How a scene's robot takes rik's action: the target pose of the gripper (x, y, z m; pitch, yaw, roll rad, as the
+Hand-E's base) and a gripper command (0 open, 1 closed with the full grip force).
+
+- :class:`FloatingDrive`: the Hand-E on six servoed axes: the pose is the axes' targets, as it always was;
+- :class:`ArmDrive`: an arm: the pose of its gripper frame is turned into joint targets by one IK step per control
+  step (:mod:`rik.sim.ik`). The IK starts from the joints' previous targets (the servos' controls), so a blocked
+  arm's targets run ahead of its joints and its servos push, but never further ahead than full torque needs (or
+  one control step at full speed): it cannot wind up. Everything the IK reads is in MuJoCo's integration state
+  (positions and controls), so a recorded episode re-simulates exactly.
+
+Every operator (the scripted strategies, the teleop front-ends, the gym env's pose actions) works with either.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from rik.sim.gripper import GripperSpec, jaw_target
+
+PROBE_ITERATIONS = 40
+"""IK steps a planner's collision probe of an arm takes towards the probed pose (the floor is then checked by
+collision, not by the IK's limit)."""
+TRACKING_GAIN = 0.5
+"""An arm's servos sag under gravity and lag under load: each control step the IK aims past the target by this
+fraction of the gap between the gripper frame where the servos aim and where it is (0: plain open-loop IK)."""
+
+if TYPE_CHECKING:
+    import mujoco
+
+    from rik.schemas.robots import Robot
+    from rik.sim.arm import Placement
+    from rik.sim.ik import ArmIK
+    from rik.sim.scene import SimScene
+
+
+class Drive(Protocol):
+    """What a scene asks of its robot."""
+
+    robot_id: str
+    joint_names: tuple[str, ...]
+    """Names of :meth:`joints` (the robot's joints, then the gripper)."""
+
+    def pose(self, scene: SimScene) -> np.ndarray: ...
+
+    def place(self, scene: SimScene, pose: np.ndarray, grip: float) -> None: ...
+
+    def command(self, scene: SimScene, action: np.ndarray) -> None: ...
+
+    def jaw(self, scene: SimScene, command: float) -> tuple[float, float]: ...
+
+    def finger_opening(self, scene: SimScene) -> float: ...
+
+    def joints(self, scene: SimScene) -> np.ndarray: ...
+
+    def targets(self, scene: SimScene, action: np.ndarray) -> np.ndarray: ...
+
+    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float) -> bool: ...
+
+
+def angles_of(rotation: np.ndarray) -> np.ndarray:
+    """Pitch, yaw, roll (rad) of a gripper frame's world rotation: the inverse of
+    :func:`rik.sim.scene.gripper_rotation` (yaw in [-pi/2, pi/2], the others in (-pi, pi])."""
+    from scipy.spatial.transform import Rotation
+
+    base = Rotation.from_quat([0.7071067811865476, 0.0, 0.0, 0.7071067811865476], scalar_first=False)
+    return (base.inv() * Rotation.from_matrix(rotation)).as_euler("XYZ")
+
+
+def _touches(scene: SimScene, geoms: frozenset[int]) -> bool:
+    """Whether any of ``geoms`` penetrates anything, with the scene's current positions (collision only)."""
+    import mujoco
+
+    d = scene.data
+    mujoco.mj_collision(scene.model, d)
+    for i in range(d.ncon):
+        g1, g2 = int(d.contact.geom1[i]), int(d.contact.geom2[i])
+        if (g1 in geoms or g2 in geoms) and d.contact.dist[i] < 0:
+            return True
+    return False
+
+
+@dataclass
+class FloatingDrive:
+    """The Hand-E's base: three slides and three hinges whose servo targets are the pose itself."""
+
+    base_qpos: np.ndarray
+    finger_qpos: np.ndarray
+    arm_ctrl: np.ndarray
+    jaw_ctrl: int
+    robot_id: str = "hand-e"
+    joint_names: tuple[str, ...] = ("x", "y", "z", "pitch", "yaw", "roll", "jaw_opening")
+
+    def pose(self, scene: SimScene) -> np.ndarray:
+        return scene.data.qpos[self.base_qpos].copy()
+
+    def place(self, scene: SimScene, pose: np.ndarray, grip: float) -> None:
+        import mujoco
+
+        g = scene.gripper
+        scene.data.qpos[self.base_qpos] = pose
+        scene.data.qvel[:] = 0.0
+        opening = min(max(jaw_target(g, grip), 0.0), g.stroke)
+        scene.data.qpos[self.finger_qpos] = opening / 2
+        scene.data.ctrl[self.arm_ctrl] = pose
+        scene.data.ctrl[self.jaw_ctrl] = opening
+        mujoco.mj_forward(scene.model, scene.data)
+
+    def command(self, scene: SimScene, action: np.ndarray) -> None:
+        scene.data.ctrl[self.arm_ctrl] = action[:6]
+
+    def jaw(self, scene: SimScene, command: float) -> tuple[float, float]:
+        return jaw_target(scene.gripper, command), 2.0 * scene.gripper.finger_speed * scene.model.opt.timestep
+
+    def finger_opening(self, scene: SimScene) -> float:
+        return float(scene.data.qpos[self.finger_qpos].sum())
+
+    def joints(self, scene: SimScene) -> np.ndarray:
+        return np.concatenate([scene.data.qpos[self.base_qpos], [self.finger_opening(scene)]])
+
+    def targets(self, scene: SimScene, action: np.ndarray) -> np.ndarray:
+        return np.concatenate([scene.data.ctrl[self.arm_ctrl], [jaw_target(scene.gripper, float(action[6]))]])
+
+    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float) -> bool:
+        import mujoco
+
+        m, d = scene.model, scene.data
+        saved = d.qpos.copy()
+        d.qpos[self.base_qpos] = pose
+        d.qpos[self.finger_qpos] = opening
+        mujoco.mj_kinematics(m, d)
+        free = not _touches(scene, scene.gripper_geoms)
+        d.qpos[:] = saved
+        mujoco.mj_forward(m, d)
+        return free
+
+
+@dataclass
+class ArmDrive:
+    """An arm driven through its IK (see the module docstring)."""
+
+    robot: Robot
+    ik: ArmIK
+    placement: Placement
+    qpos: np.ndarray
+    """Addresses of the arm joints in ``qpos``."""
+    arm_ctrl: np.ndarray
+    jaw_ctrl: int
+    opening_qpos: int
+    robot_geoms: frozenset[int]
+    dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    """Addresses of the arm joints in ``qvel`` (and the Jacobians' columns)."""
+    lead: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Largest lead of a joint's target over its position, rad."""
+    robot_id: str = ""
+    joint_names: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        assert self.robot.joints is not None
+        self.robot_id = self.robot.id
+        self.joint_names = (*self.robot.joint_names, "gripper")
+
+    # ---- the gripper frame ------------------------------------------------------------------------------------
+    def _frame_target(self, scene: SimScene, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        from rik.sim.scene import gripper_rotation
+
+        rot = gripper_rotation(np.asarray(pose[3:6], float))
+        return np.asarray(pose[:3], float) + rot[:, 2] * scene.gripper.tcp_offset, rot
+
+    def pose(self, scene: SimScene) -> np.ndarray:
+        rot = scene.gripper_rotation()
+        return np.concatenate([scene.tcp() - rot[:, 2] * scene.gripper.tcp_offset, angles_of(rot)])
+
+    # ---- placing and commanding -------------------------------------------------------------------------------
+    def _solve(self, scene: SimScene, pose: np.ndarray) -> np.ndarray:
+        position, rotation = self._frame_target(scene, pose)
+        q, _, _ = self.ik.solve(position, rotation)
+        return q
+
+    def place(self, scene: SimScene, pose: np.ndarray, grip: float) -> None:
+        import mujoco
+
+        q = self._solve(scene, pose)
+        m, d = scene.model, scene.data
+        d.qvel[:] = 0.0
+        d.qpos[self.qpos] = q
+        d.ctrl[self.arm_ctrl] = q
+        goal, _ = self.jaw(scene, grip)
+        d.ctrl[self.jaw_ctrl] = goal
+        mujoco.mj_forward(m, d)
+
+    def command(self, scene: SimScene, action: np.ndarray) -> None:
+        d = scene.data
+        position, rotation = self._frame_target(scene, action)
+        q_cmd = d.ctrl[self.arm_ctrl].copy()
+        if TRACKING_GAIN > 0:  # aim past the target by the gap between where the servos aim and where they are
+            # both frames from joint positions alone (the IK's kinematics): mjData's derived positions are those
+            # before the last integration while recording but fresh after a replay's restore
+            p_cmd, r_cmd = self.ik.frame(q_cmd)
+            p_now, r_now = self.ik.frame(d.qpos[self.qpos])
+            position = position + TRACKING_GAIN * (p_cmd - p_now)
+            rotation = _fraction(r_cmd @ r_now.T, TRACKING_GAIN) @ rotation
+        self.set_targets(scene, self.ik.step(q_cmd, position, rotation, 1.0 / scene.control_fps))
+
+    def set_targets(self, scene: SimScene, q: np.ndarray) -> None:
+        """Servo targets ``q`` (rad), held within the joints' ranges and within :attr:`lead` of where the joints
+        are."""
+        assert self.robot.joints is not None
+        d = scene.data
+        now = d.qpos[self.qpos]
+        q = np.clip(np.asarray(q, float), now - self.lead, now + self.lead)
+        lo = np.array([j.range[0] for j in self.robot.joints.joints])
+        hi = np.array([j.range[1] for j in self.robot.joints.joints])
+        d.ctrl[self.arm_ctrl] = np.clip(q, lo, hi)
+
+    def jaw(self, scene: SimScene, command: float) -> tuple[float, float]:
+        act = self.robot.gripper.actuation
+        assert act is not None
+        c = min(max(command, 0.0), 1.0)
+        span = act.ctrl_closed - act.ctrl_open
+        rate = abs(span) * 2.0 * scene.gripper.finger_speed / scene.gripper.stroke
+        return act.ctrl_open + c * span, rate * scene.model.opt.timestep
+
+    def closure(self, scene: SimScene) -> float:
+        """How closed the jaws are: 0 fully open, 1 touching (a fraction of the stroke; may pass 1 a little)."""
+        act = self.robot.gripper.actuation
+        assert act is not None
+        q = float(scene.data.qpos[self.opening_qpos])
+        return (q - act.joint_open) / (act.joint_closed - act.joint_open)
+
+    def finger_opening(self, scene: SimScene) -> float:
+        return float(scene.gripper.stroke * min(max(1.0 - self.closure(scene), 0.0), 1.0))
+
+    def joints(self, scene: SimScene) -> np.ndarray:
+        return np.concatenate([scene.data.qpos[self.qpos], [scene.data.qpos[self.opening_qpos]]])
+
+    def targets(self, scene: SimScene, action: np.ndarray) -> np.ndarray:
+        goal, _ = self.jaw(scene, float(action[6]))
+        return np.concatenate([scene.data.ctrl[self.arm_ctrl], [goal]])
+
+    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float) -> bool:
+        """Whether the arm, solved to ``pose`` from where its joints are, touches nothing (gripper open)."""
+        import mujoco
+
+        m, d = scene.model, scene.data
+        saved = d.qpos.copy()
+        position, rotation = self._frame_target(scene, pose)
+        q, dp, _ = self.ik.solve(position, rotation, d.qpos[self.qpos], iterations=PROBE_ITERATIONS, floor=False)
+        d.qpos[self.qpos] = q
+        mujoco.mj_kinematics(m, d)
+        free = dp < 0.01 and not _touches(scene, self.robot_geoms)
+        d.qpos[:] = saved
+        mujoco.mj_forward(m, d)
+        return free
+
+
+def _fraction(rotation: np.ndarray, gain: float) -> np.ndarray:
+    """``gain`` of a rotation (the same axis, ``gain`` times the angle)."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_rotvec(gain * Rotation.from_matrix(rotation).as_rotvec()).as_matrix()
+
+
+def arm_lead(robot: Robot, control_fps: int) -> np.ndarray:
+    """Per joint, how far a servo target may lead its joint (rad): what full torque needs, or one control step
+    at full speed, whichever is larger."""
+    assert robot.joints is not None
+    return np.array([max(j.torque / j.stiffness, j.speed / control_fps) for j in robot.joints.joints])
+
+
+def gripper_spec(robot: Robot) -> GripperSpec:
+    """The :class:`GripperSpec` of a catalog robot (what the strategies plan with and episodes record)."""
+    from rik.sim.gripper import HAND_E
+
+    g = robot.gripper
+    spec = HAND_E.with_(name=g.name, stroke=g.stroke, grip_force=g.grip_force.value,
+                        pad_friction=g.pad_friction.value, finger_speed=g.finger_speed.value,
+                        finger_length=g.finger_length, finger_width=g.finger_width,
+                        finger_thickness=g.finger_thickness, pad_length=g.pad_length)
+    if robot.kind.value == "arm":
+        spec = spec.with_(tcp_distance=g.tcp_offset)
+    return spec
+
+
+def arm_drive(model: mujoco.MjModel, robot: Robot, ik: ArmIK, where: Placement, control_fps: int) -> ArmDrive:
+    """The drive of an arm attached to a compiled scene (:func:`rik.sim.arm.attach_arm`)."""
+    from rik.sim.arm import ROBOT_PREFIX
+
+    act = robot.gripper.actuation
+    assert act is not None
+    p = ROBOT_PREFIX
+    qpos = np.array([model.joint(p + n).qposadr[0] for n in robot.joint_names])
+    arm_ctrl = np.array([model.actuator_ctrladr[model.actuator(p + n).id] for n in robot.joint_names])
+    jaw_ctrl = int(model.actuator_ctrladr[model.actuator(p + act.actuator).id])
+    opening = int(model.joint(p + act.opening_joint).qposadr[0])
+    geoms = frozenset(g for g in range(model.ngeom) if model.body(int(model.geom_bodyid[g])).name.startswith(p)
+                      and (model.geom_contype[g] or model.geom_conaffinity[g]))
+    dofs = np.array([model.joint(p + n).dofadr[0] for n in robot.joint_names])
+    return ArmDrive(robot, ik, where, qpos, arm_ctrl, jaw_ctrl, opening, geoms, dofs, arm_lead(robot, control_fps))
