@@ -1,0 +1,131 @@
+"""A robot's LeRobot layout: what ``observation.state`` and ``action`` hold for it, shared by the export, the gym
+environment and ``rik eval`` so that a policy trained on an export runs in the environment unchanged.
+
+- the Hand-E (``layout: pose``): the robot's state of :data:`rik.sim.observation.ROBOT_STATE_NAMES` and the
+  recorded action (target pose and gripper command, :data:`POSE_ACTION_NAMES`);
+- an arm (``layout: joints``): its joint positions in ``observation.state`` and the joint targets its servos were
+  given in ``action``, named and scaled as the catalog's ``lerobot.joints`` say (rad or deg; the gripper as a
+  closure fraction, 0 open and 1 closed, or as percent of its opening, 100 open and 0 closed), plus, where the
+  entry asks for it, ``observation.ee_pose``: the gripper frame in the arm's base frame, as LeRobot's
+  end-effector names (``ee.x``, ``ee.y``, ``ee.z`` m; ``ee.wx``, ``ee.wy``, ``ee.wz``: a rotation vector, rad).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from rik.schemas.robots import Robot
+    from rik.sim.scene import SimScene
+
+POSE_ACTION_NAMES = ("target_x", "target_y", "target_z", "target_pitch", "target_yaw", "target_roll", "gripper")
+"""The Hand-E's action: target pose of the gripper base (m, rad) and gripper command (0 open, 1 closed)."""
+EE_NAMES = ("ee.x", "ee.y", "ee.z", "ee.wx", "ee.wy", "ee.wz")
+HAND_E_ROBOT_TYPE = "rik_hand_e"
+
+
+@dataclass(frozen=True)
+class RobotLayout:
+    """The state and action layout of one robot (see the module docstring)."""
+
+    robot_id: str
+    robot_type: str
+    state_names: tuple[str, ...]
+    action_names: tuple[str, ...]
+    ee_pose: bool
+    joints: tuple[tuple[str | None, str], ...] = ()
+    """An arm's (joint name or None for the gripper, unit) per state and action number."""
+    robot: Robot | None = None
+
+    @property
+    def is_pose(self) -> bool:
+        return self.robot is None
+
+    # ---- observation.state ----------------------------------------------------------------------------------
+    def state(self, scene: SimScene) -> np.ndarray:
+        """``observation.state`` of a scene, float64."""
+        if self.robot is None:
+            from rik.sim.observation import robot_state
+
+            return robot_state(scene)
+        from rik.sim.drive import ArmDrive
+
+        drive = scene.drive
+        assert isinstance(drive, ArmDrive)
+        names = list(self.robot.joint_names)
+        q = scene.data.qpos[drive.qpos]
+        closure = min(max(drive.closure(scene), 0.0), 1.0)
+        return np.array([_to_unit(float(q[names.index(j)]), unit) if j is not None else _grip_to_unit(closure, unit)
+                         for j, unit in self.joints], np.float64)
+
+    # ---- action ---------------------------------------------------------------------------------------------
+    def action(self, pose_action: np.ndarray, targets: np.ndarray) -> np.ndarray:
+        """``action`` of a recorded row: the pose action itself for the Hand-E; for an arm its servos' joint
+        targets (``robot_targets``, rad) and the gripper command (``pose_action[6]``, 0 open .. 1 closed)."""
+        if self.robot is None:
+            return np.asarray(pose_action, np.float64)
+        names = list(self.robot.joint_names)
+        grip = min(max(float(pose_action[6]), 0.0), 1.0)
+        return np.array([_to_unit(float(targets[names.index(j)]), unit) if j is not None else _grip_to_unit(grip, unit)
+                         for j, unit in self.joints], np.float64)
+
+    def joint_targets(self, action: np.ndarray) -> tuple[np.ndarray, float]:
+        """The inverse of :meth:`action` for an arm: (joint targets rad in the robot's joint order, gripper command
+        0..1)."""
+        assert self.robot is not None
+        names = list(self.robot.joint_names)
+        targets = np.zeros(len(names))
+        grip = 0.0
+        for value, (joint, unit) in zip(np.asarray(action, np.float64), self.joints, strict=True):
+            if joint is None:
+                grip = _grip_from_unit(float(value), unit)
+            else:
+                targets[names.index(joint)] = _from_unit(float(value), unit)
+        return targets, min(max(grip, 0.0), 1.0)
+
+    # ---- observation.ee_pose ----------------------------------------------------------------------------------
+    def ee(self, scene: SimScene) -> np.ndarray:
+        """The gripper frame in the arm's base frame: x, y, z (m) and a rotation vector (rad)."""
+        from scipy.spatial.transform import Rotation
+
+        from rik.sim.drive import ArmDrive
+
+        drive = scene.drive
+        assert isinstance(drive, ArmDrive)
+        base = Rotation.from_euler("z", drive.placement.yaw)
+        position = base.inv().apply(scene.tcp() - drive.placement.pos)
+        rotation = base.inv() * Rotation.from_matrix(scene.gripper_rotation())
+        return np.concatenate([position, rotation.as_rotvec()]).astype(np.float64)
+
+
+def _to_unit(value: float, unit: str) -> float:
+    return math.degrees(value) if unit == "deg" else value
+
+
+def _from_unit(value: float, unit: str) -> float:
+    return math.radians(value) if unit == "deg" else value
+
+
+def _grip_to_unit(closure: float, unit: str) -> float:
+    return 100.0 * (1.0 - closure) if unit == "percent" else closure
+
+
+def _grip_from_unit(value: float, unit: str) -> float:
+    return 1.0 - value / 100.0 if unit == "percent" else value
+
+
+def robot_layout(robot: Robot | None) -> RobotLayout:
+    """The layout of a catalog robot (None, or a floating one: the Hand-E's pose layout)."""
+    from rik.sim.observation import ROBOT_STATE_NAMES
+
+    if robot is None or robot.lerobot.layout == "pose":
+        robot_type = HAND_E_ROBOT_TYPE if robot is None else robot.lerobot.robot_type
+        return RobotLayout("hand-e" if robot is None else robot.id, robot_type, ROBOT_STATE_NAMES, POSE_ACTION_NAMES,
+                           False)
+    names = tuple(j.name for j in robot.lerobot.joints)
+    return RobotLayout(robot.id, robot.lerobot.robot_type, names, names, robot.lerobot.ee_pose,
+                       tuple((j.joint, j.unit) for j in robot.lerobot.joints), robot)
