@@ -12,7 +12,12 @@ the real-time factor (simulated seconds per wall second, one process) of a ``gra
 per physics step and the opening reached; best of ``--repeats`` interleaved runs. Targets: real-time factor at least
 10 with CoACD; CoACD/hull ``mj_step`` time ratio at most 2.
 
-Run: ``uv run python benchmarks/sim_speed.py [--variant ID:FRONT ...] [--repeats 3] [--seconds 10]``.
+A second table runs the same episodes (CoACD) with each robot of the catalog (``--robots``, default all): the real-time
+factor per robot (target at least 20 on one core), the wall time of a control step, and the share of it that the
+arm's inverse kinematics takes (``ArmIK.step``, timed by wrapping it).
+
+Run: ``uv run python benchmarks/sim_speed.py [--variant ID:FRONT ...] [--repeats 3] [--seconds 10] [--robots
+hand-e,panda-2f85,so100] [--robots-only]``.
 """
 
 from __future__ import annotations
@@ -108,12 +113,92 @@ def episode(directory: Path, front: str, seconds: float) -> dict[str, float]:
             "mj_us": 1e6 * acc["mj"] / n, "geoms": colliders, "ncon": acc["ncon"] / n, "opening": scene.opening()}
 
 
+def robot_episode(directory: Path, front: str, seconds: float, robot: object | None) -> dict[str, float]:
+    """One grasp_vertical episode with ``robot`` (an arm's catalog entry, None for the Hand-E), timed as a whole,
+    with the arm's IK steps timed apart."""
+    import numpy as np
+
+    from rik.sim import ik
+    from rik.sim.operators import make_operator
+    from rik.sim.scene import build_scene
+
+    scene = build_scene(directory, front, robot=robot)  # type: ignore[arg-type]
+    d = scene.data
+    op = make_operator("grasp_vertical")
+    op.reset(scene, np.random.default_rng(0))
+    acc = {"ik": 0.0, "ik_calls": 0, "control": 0.0, "steps": 0}
+    step, clock = ik.ArmIK.step, time.perf_counter
+
+    def timed(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+        s = clock()
+        out = step(self, *args, **kwargs)
+        acc["ik"] += clock() - s
+        acc["ik_calls"] += 1
+        return out
+
+    ik.ArmIK.step = timed  # type: ignore[method-assign]
+    try:
+        t0, start = d.time, clock()
+        while not op.done and d.time - t0 < seconds - 1e-9:
+            action = op.act(scene)
+            s = clock()
+            scene.step(action)
+            acc["control"] += clock() - s
+            acc["steps"] += 1
+        wall = clock() - start
+    finally:
+        ik.ArmIK.step = step  # type: ignore[method-assign]
+    n = max(acc["steps"], 1)
+    in_steps = acc["ik"] if acc["ik_calls"] <= acc["steps"] else acc["ik"] * acc["steps"] / acc["ik_calls"]
+    return {"rtf": (d.time - t0) / wall, "sim": d.time - t0, "control_ms": 1e3 * acc["control"] / n,
+            "ik_ms": 1e3 * in_steps / n, "ik_share": in_steps / max(acc["control"], 1e-12),
+            "opening": scene.opening(), "nq": scene.model.nq}
+
+
+def robots_table(variants: list[str], robots: list[str], repeats: int, seconds: float) -> None:
+    """Real-time factor and the IK's share of a control step per robot (see the module docstring)."""
+    from rik.registry.load import load_catalog
+    from rik.sim.record import variant_dir
+
+    catalog = load_catalog()
+    header = (f"{'variant':<44} {'robot':<11} {'nq':>3} {'sim s':>5} {'opened':>6} {'control ms':>10} {'IK ms':>6} "
+              f"{'IK share':>8} {'RTF':>5}")
+    print(header)
+    print("-" * len(header))
+    worst: dict[str, float] = {}
+    for item in variants:
+        variant, front = item.split(":")
+        src = variant_dir(catalog, variant, Path("variants"))
+        best: dict[str, dict[str, float]] = {}
+        for _ in range(repeats):
+            for rid in robots:
+                entry = catalog.robot(rid)
+                r = robot_episode(src, front, seconds, entry if entry.kind.value == "arm" else None)
+                if rid not in best or r["rtf"] > best[rid]["rtf"]:
+                    best[rid] = r
+        for rid in robots:
+            r = best[rid]
+            worst[rid] = min(worst.get(rid, float("inf")), r["rtf"])
+            print(f"{variant:<44} {rid:<11} {r['nq']:>3.0f} {r['sim']:>5.2f} {r['opening']:>6.0%} "
+                  f"{r['control_ms']:>10.2f} {r['ik_ms']:>6.2f} {r['ik_share']:>8.0%} {r['rtf']:>5.1f}")
+    print()
+    for rid, rtf in worst.items():
+        print(f"{rid}: lowest real-time factor {rtf:.1f} ({'met' if rtf >= 20 else 'MISSED'}, target >= 20 on one core)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--variant", action="append", help="VARIANT:FRONT (repeatable; default: three drawers)")
     parser.add_argument("--repeats", type=int, default=3, help="runs per set-up; the best is kept")
     parser.add_argument("--seconds", type=float, default=10.0, help="simulated seconds per episode at most")
+    parser.add_argument("--robots", default="hand-e,panda-2f85,so100", help="robots of the second table (comma-"
+                        "separated catalog ids; empty: none)")
+    parser.add_argument("--robots-only", action="store_true", help="only the robots' table")
     args = parser.parse_args()
+    robots = [r.strip() for r in args.robots.split(",") if r.strip()]
+    if args.robots_only:
+        robots_table(args.variant or list(VARIANTS), robots, args.repeats, args.seconds)
+        return
 
     from rik.registry.load import load_catalog
     from rik.sim.record import variant_dir
@@ -149,6 +234,9 @@ def main() -> None:
         print(f"{variant}: CoACD real-time factor {rtf:.1f} ({'met' if rtf >= 10 else 'MISSED'}, target >= 10); "
               f"CoACD/hull mj_step time {ratio:.2f} ({'met' if ratio <= 2 else 'MISSED'}, target <= 2), "
               f"scene.step time {scene_ratio:.2f}")
+    if robots:
+        print()
+        robots_table(args.variant or list(VARIANTS), robots, args.repeats, args.seconds)
 
 
 if __name__ == "__main__":

@@ -185,14 +185,15 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
           out: Annotated[Path, typer.Option("--out", "-o", help="Where results.csv, table.md (and sweep.png) go.")]
           = Path("bench"),
           workers: WorkersOpt = DEFAULT_WORKERS, variants: VariantsOpt = Path("variants"),
-          catalog: CatalogOption = None) -> None:
+          robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """The resistance benchmark: randomised drawer-opening episodes, F/P/S per handle type, strategy and preset
-    (the paper's Table 3)."""
+    (the paper's Table 3), with the Hand-E or an arm (--robot)."""
     from rik.paths import write_atomic
     from rik.registry.load import load_catalog
     from rik.sim import bench as b
 
     cat = load_catalog(overlays(catalog))
+    cat.robot(robot)  # an unknown robot: one line with suggestions, before any work
     grip_forces: tuple[Any, ...] = (None,)
     if sweep is not None:
         if sweep != "grip-force":
@@ -201,7 +202,7 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
     type_names = [t.value for t in types] if types else list(b.DEFAULT_TYPES)
     tasks = b.plan_tasks(cat, types=type_names, presets=[p.strip() for p in presets.split(",") if p.strip()],
                          strategies=[s.strip() for s in strategies.split(",") if s.strip()], per_cell=per_cell,
-                         seed=seed, grip_forces=grip_forces)
+                         seed=seed, grip_forces=grip_forces, robot=robot)
     with progress_bar() as progress:
         task = progress.add_task("episodes", total=len(tasks), last="")
         rows = b.run_bench(cat, tasks, workers=workers, variants=variants, overlays=overlays(catalog),

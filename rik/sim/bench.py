@@ -40,6 +40,7 @@ class BenchTask:
     variant: str = ""
     front: str = ""
     grip_force: float | None = None
+    robot: str = "hand-e"
 
     def encode(self) -> str:
         return json.dumps(asdict(self), sort_keys=True)
@@ -51,9 +52,10 @@ MAX_BENCH_SEED = (2**63 - 1) // 1_000_003 - 1
 
 def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, presets: Sequence[str] = DEFAULT_PRESETS,
                strategies: Sequence[str] = DEFAULT_STRATEGIES, per_cell: int = 10, seed: int = 0,
-               kinds: Sequence[str] = DEFAULT_KINDS, grip_forces: Sequence[float | None] = (None,)) -> list[BenchTask]:
-    """Every episode of the benchmark. The same episode index of every strategy (and grip force) gets the same
-    variant, front and start pose, so strategies are compared on the same draws."""
+               kinds: Sequence[str] = DEFAULT_KINDS, grip_forces: Sequence[float | None] = (None,),
+               robot: str = "hand-e") -> list[BenchTask]:
+    """Every episode of the benchmark. The same episode index of every strategy (and grip force, and robot) gets
+    the same variant, front and start pose, so strategies and robots are compared on the same draws."""
     from rik.combinator.ids import select_variants
     from rik.sim.operators import make_operator
 
@@ -65,6 +67,8 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
     for p in presets:
         if p not in catalog.presets:
             raise RikError(f"unknown preset '{p}' (presets: {', '.join(catalog.presets)})")
+    if catalog.robot(robot).kind.value == "arm" and any(g is not None for g in grip_forces):
+        raise RikError(f"--sweep grip-force varies the Hand-E's grip; robot {robot}'s gripper is its model's")
     compatible = {k.id for k in select_variants(catalog, handle_types=types, presets=presets)}
     tasks = []
     for ti, t in enumerate(types):
@@ -74,7 +78,7 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
                 vid, front = choose_variant(catalog, t, p, np.random.default_rng(task_seed), kinds, compatible)
                 for strategy in strategies:
                     for g in grip_forces:
-                        tasks.append(BenchTask(t, p, strategy, i, task_seed, vid, front, g))
+                        tasks.append(BenchTask(t, p, strategy, i, task_seed, vid, front, g, robot))
     return tasks
 
 
@@ -89,7 +93,15 @@ def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) 
 
     task = BenchTask(**json.loads(encoded))
     gripper = HAND_E if task.grip_force is None else HAND_E.with_(grip_force=task.grip_force)
-    scene = build_scene(variants / task.variant, task.front, gripper)
+    entry = catalog.robot(task.robot)
+    arm = entry if entry.kind.value == "arm" else None
+    scene = build_scene(variants / task.variant, task.front, gripper, robot=arm)
+    gripper = scene.gripper
+    reach = 1.0
+    if arm is not None:
+        from rik.sim.robot_checks import reach_profile, reachable_opening
+
+        reach = reachable_opening(reach_profile(scene))
     rng = np.random.default_rng(task.seed)
     randomise_start(scene, rng)
     operator = make_operator(task.strategy)
@@ -100,7 +112,8 @@ def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) 
             "friction_capacity": gripper.friction_capacity(), "resistance": resistance,
             "capacity_ratio": gripper.friction_capacity() / resistance, "outcome": classify(scene.opening()),
             "final_opening": round(scene.opening(), 4), "max_opening": round(recorder.max_opening, 4),
-            "seconds": round(recorder.steps / scene.control_fps, 2), "log": " | ".join(operator.log)}
+            "seconds": round(recorder.steps / scene.control_fps, 2), "reachable_opening": reach,
+            "log": " | ".join(operator.log)}
 
 
 def run_bench(catalog: Catalog, tasks: Sequence[BenchTask], *, workers: int = 1, variants: Path = Path("variants"),
