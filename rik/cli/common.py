@@ -93,6 +93,10 @@ def progress_bar() -> Progress:
                      tb: TracebackType | None) -> None:
             if exc_type is not None:
                 self.live.transient = True
+                if not self.console.is_terminal:  # rich would still end a piped bar with a line of its own
+                    import io
+
+                    self.console.file = io.StringIO()
             super().__exit__(exc_type, exc, tb)
 
     return WipedOnError(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
