@@ -193,6 +193,9 @@ class Gripper(Frozen):
     finger_thickness: Length
     pad_length: Length
     """Finger and pad dimensions, m, as the grasp planner sees them."""
+    fixed_jaw: Real | None = None
+    """A swinging gripper: where its fixed jaw's pad face lies along the frame's x (the closing axis), m. The grasp
+    planner puts that face just beside the handle, and the swinging jaw closes the handle against it."""
     actuation: GripperActuation | None = None
     """How an arm's gripper is driven (the Hand-E's is built by rik)."""
 
@@ -270,6 +273,8 @@ class Robot(Frozen):
 
     @model_validator(mode="after")
     def _arm_is_whole(self) -> Robot:
+        if (self.gripper.kind == "swing") != (self.gripper.fixed_jaw is not None):
+            raise ValueError("a swinging gripper (and only one) gives gripper.fixed_jaw")
         if self.kind is RobotKind.arm:
             missing = [f for f in ("joints", "mount", "wrist_camera") if getattr(self, f) is None]
             missing += [f"gripper.{f}" for f in ("body", "frame", "actuation") if getattr(self.gripper, f) is None]

@@ -189,6 +189,11 @@ class ArmDrive:
         d.ctrl[self.arm_ctrl] = q
         goal, _ = self.jaw(scene, grip)
         d.ctrl[self.jaw_ctrl] = goal
+        act = self.robot.gripper.actuation
+        assert act is not None
+        if act.joint is not None:  # a one-joint jaw starts where the command puts it (a linkage starts open)
+            c = min(max(grip, 0.0), 1.0)
+            d.qpos[self.opening_qpos] = act.joint_open + c * (act.joint_closed - act.joint_open)
         mujoco.mj_forward(m, d)
 
     def command(self, scene: SimScene, action: np.ndarray) -> None:
@@ -280,7 +285,7 @@ def gripper_spec(robot: Robot) -> GripperSpec:
                         finger_length=g.finger_length, finger_width=g.finger_width,
                         finger_thickness=g.finger_thickness, pad_length=g.pad_length)
     if robot.kind.value == "arm":
-        spec = spec.with_(tcp_distance=g.tcp_offset)
+        spec = spec.with_(tcp_distance=g.tcp_offset, fixed_jaw=g.fixed_jaw)
     return spec
 
 

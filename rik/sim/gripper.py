@@ -72,6 +72,9 @@ class GripperSpec:
     pad_length: float = 0.030
     palm: tuple[float, float, float] = (0.090, 0.050, 0.060)
     """Palm (housing) size along x, y, z, m."""
+    fixed_jaw: float | None = None
+    """A swinging gripper: where its fixed jaw's pad face lies along the gripper frame's x, m (None: parallel jaws
+    that close on the frame's centre)."""
     tcp_distance: float | None = None
     """An arm's gripper: from its flange to the gripper frame along the fingers, m (None: the Hand-E's, from its
     palm and fingers)."""

@@ -35,6 +35,9 @@ SLIP_DISTANCE = 0.015
 STALL_TIME = 1.5
 """A pull that gains less than :data:`STALL_PROGRESS` of the range in this time has stalled, s."""
 STALL_PROGRESS = 0.01
+SWING_MARGIN = 0.008
+"""A swinging gripper's fixed jaw comes this far clear of the handle (beyond :data:`CLEARANCE`), m: a hobby arm's servos
+sag a few millimetres under its own weight."""
 DONE_OPENING = 0.97
 """A strategy stops pulling when the front is this far open (fraction of its range)."""
 
@@ -75,6 +78,12 @@ def pinch_plan(scene: SimScene, vertical: bool) -> GraspPlan:
     tcp = np.array([centre[0], pad_y, centre[2]])
     angles = np.array([0.0, 0.0, math.pi / 2 if vertical else 0.0])
     mode = "pinch_vertical" if vertical else "pinch_horizontal"
+    if g.fixed_jaw is not None:  # a swinging jaw closes the handle against the fixed one: put that one beside it
+        from rik.sim.scene import gripper_rotation
+
+        closing = gripper_rotation(angles)[:, 0]
+        half = 0.5 * float(np.abs(closing) @ (hi - lo))
+        tcp = tcp + closing * (half + CLEARANCE + SWING_MARGIN - g.fixed_jaw)
     return GraspPlan(mode, tcp, angles, np.array([0.0, 1.0, 0.0]), key=mode)
 
 
