@@ -158,7 +158,7 @@ def test_a_command_runs_with_the_same_help_as_in_the_full_app(rik) -> None:
 
     names = [g.name for g in app.registered_groups] + [c.name or get_command_name(c.callback.__name__)
                                                        for c in app.registered_commands]
-    assert len(names) == 16
+    assert len(names) == 17
     for args in [[n, "--help"] for n in names] + [["catalog", "list", "--help"], ["catalog", "lst"], ["catalgo"]]:
         full = CliRunner().invoke(app, args, prog_name="rik", env={"COLUMNS": "100"})
         with pytest.MonkeyPatch.context() as mp:

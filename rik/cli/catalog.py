@@ -19,7 +19,8 @@ from rik.errors import RikError
 if TYPE_CHECKING:
     from rich.tree import Tree
 
-app = typer.Typer(help="Browse the catalog of handles, base units and resistance presets.", no_args_is_help=True)
+app = typer.Typer(help="Browse the catalog of handles, base units, resistance presets and robots.",
+                  no_args_is_help=True)
 
 
 class Kind(StrEnum):
@@ -28,6 +29,7 @@ class Kind(StrEnum):
     bases = "bases"
     presets = "presets"
     finishes = "finishes"
+    robots = "robots"
 
 
 class JointOpt(StrEnum):
@@ -82,7 +84,7 @@ def _check_filters(kind: str, **given: object) -> None:
 @app.command()
 def show(
     entry_id: Annotated[str, typer.Argument(metavar="ID", help="Any catalog id: handle, design, base unit, "
-                                                                "preset or finish.")],
+                                                                "preset, finish or robot.")],
     format: Annotated[OutputFormat, typer.Option("--format", "-f", help="table (readable) or json.")] =
         OutputFormat.table,
     catalog: CatalogOption = None,
@@ -107,7 +109,11 @@ def show(
     if section == "designs":
         tree.add("handles: " + ", ".join(h["id"] for h in index.select("handles", design=entry["id"])))
     console().print(tree)
-    print("Lengths in m, masses in kg, angles in rad (SI).")
+    if section == "robots":
+        print("Lengths in m, forces in N, torques in N·m, angles in rad, speeds in rad/s (joints) and m/s (fingers); "
+              "stiffness N·m/rad, damping N·m·s/rad, armature kg·m² (SI).")
+    else:
+        print("Lengths in m, masses in kg, angles in rad (SI).")
 
 
 def _add_branches(tree: Tree, data: dict[str, Any]) -> None:
@@ -119,8 +125,9 @@ def _add_branches(tree: Tree, data: dict[str, Any]) -> None:
         elif isinstance(value, list) and value and isinstance(value[0], dict):
             branch = tree.add(f"[cyan]{key}[/]")
             for item in value:
-                rest = {k: v for k, v in item.items() if k != "id"}
-                _add_branches(branch.add(f"[bold]{item.get('id', '')}[/]"), rest)
+                label = "id" if "id" in item else "name" if "name" in item else None  # a robot's joints: by name
+                rest = {k: v for k, v in item.items() if k != label}
+                _add_branches(branch.add(f"[bold]{escape(str(item[label])) if label else ''}[/]"), rest)
         else:
             tree.add(f"[cyan]{key}[/]: {escape(str(value))}")
 
@@ -179,6 +186,7 @@ def print_summary(numbers: dict[str, Any]) -> None:
     out.print(f"resistance presets: {', '.join(numbers['presets'])}; finishes: {numbers['finishes']}")
     out.print(f"pairings that fit: {numbers['pairings']['fit']} of {numbers['pairings']['total']} "
                   "(base units x handles)")
+    out.print(f"robots: {', '.join(numbers['robots'])} (rik catalog list --kind robots)")
     if numbers["overlay_entries"]:
         out.print(f"entries from user catalogs: {numbers['overlay_entries']}")
 
@@ -208,12 +216,44 @@ def doc(
     print(f"wrote {out}")
 
 
+@app.command("robots-doc")
+def robots_doc(
+    out: Annotated[Path, typer.Option(help="The page whose generated part to rewrite.")] = Path("docs/robots.md"),
+    check: Annotated[bool, typer.Option("--check", help="Write nothing; exit 1 if the figures are out of date.")]
+        = False,
+) -> None:
+    """Write the robots' figures (joints, gripper, mount, sources) into docs/robots.md, between its markers, from
+    the built-in catalog (user catalogs are not included)."""
+    from rik.paths import write_atomic
+    from rik.registry.index import catalog_index
+    from rik.registry.robots_doc import render_robot_figures, splice
+
+    if not out.is_file():
+        if check:
+            print(f"{out} is missing; restore it and run `rik catalog robots-doc`", file=sys.stderr)
+            raise typer.Exit(1)
+        raise RikError(f"{out}: no such page; its figures go between markers in a page written by hand")
+    current = out.read_text(encoding="utf-8")
+    text = splice(current, render_robot_figures(catalog_index([])), str(out))
+    if check:
+        if current != text:
+            print(f"{out}'s robot figures are out of date; run `rik catalog robots-doc` and commit it",
+                  file=sys.stderr)
+            raise typer.Exit(1)
+        print(f"{out} is up to date")
+        return
+    write_atomic(out, text)
+    print(f"wrote the robot figures of {out}")
+
+
 def _print_table(section: str, rows: list[dict[str, Any]], title: str) -> None:
     from rik.registry.views import format_columns, table
 
     headers, cells = table(section, rows)
+    from rik.registry.views import UNITS
+
     print(format_columns(headers, cells))
-    print(f"{title}; lengths in mm (use --format json or csv for SI values)")
+    print(f"{title}; {UNITS.get(section, 'lengths in mm')} (use --format json or csv for SI values)")
 
 
 def _print_csv(rows: list[dict[str, Any]]) -> None:

@@ -30,8 +30,10 @@ DEFAULT_ROBOT = "hand-e"
 
 def robot_entry(catalog: object, robot: str) -> object | None:
     """The catalog entry of an arm given as ``--robot`` (None for the floating Hand-E, rik's own gripper); an
-    unknown id is a one-line error with suggestions."""
-    entry = catalog.robot(robot)  # type: ignore[attr-defined]
+    unknown id, or an arm whose model's package is not installed, is a one-line error."""
+    from rik.registry.robots import usable_robot
+
+    entry = usable_robot(catalog, robot)  # type: ignore[arg-type]
     return None if entry.kind.value == "floating" else entry
 
 

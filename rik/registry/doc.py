@@ -14,6 +14,7 @@ from pathlib import Path
 
 from rik import CATALOG_SCHEMA, __version__
 from rik.registry.index import CatalogIndex
+from rik.registry.robots_doc import summary_table
 from rik.registry.stats import HANDLE_TYPES, catalog_stats, split_stats
 from rik.registry.views import COLUMNS, Row, mm
 
@@ -99,7 +100,7 @@ def render_catalog_md(index: CatalogIndex, root: Path) -> str:
         "",
         "Contents: " + ", ".join(f"[{TYPE_TITLES[t]}](#{_anchor(TYPE_TITLES[t])})" for t in HANDLE_TYPES)
         + ", [Base units](#base-units), [Resistance presets](#resistance-presets), [Finishes](#finishes), "
-        "[Splits](#splits).",
+        "[Robots](#robots), [Splits](#splits).",
         "",
     ]
     handle_cols = [c for c in COLUMNS["handles"] if c[0] not in ("type",)]
@@ -139,6 +140,10 @@ def render_catalog_md(index: CatalogIndex, root: Path) -> str:
     out += ["", "## Finishes", ""]
     out += _md_table([h for h, _ in COLUMNS["finishes"]],
                      [[cell(f) for _, cell in COLUMNS["finishes"]] for f in index.entries("finishes")])
+    out += ["", "## Robots", "",
+            "What opens the fronts: `--robot` of `rik record`, `rik robot-check` and the benchmark. Their joints, "
+            "grippers, mounts and the source of every figure: [docs/robots.md](docs/robots.md).", ""]
+    out += summary_table(index)
     out += ["", *_splits_section(index)]
     return "\n".join(out) + "\n"
 

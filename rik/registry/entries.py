@@ -36,10 +36,19 @@ def parse_entry(entry: RawEntry) -> CatalogModel:
     except ValidationError as exc:
         errors = exc.errors(include_url=False)
         first = errors[0]
-        field = ".".join(str(p) for p in first["loc"])
+        field = ".".join(str(p) for p in error_loc(first))
         more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''} in this entry)" \
             if len(errors) > 1 else ""
         raise entry.error(field or None, describe_error(model, first) + more) from None
+
+
+def error_loc(error: ErrorDetails) -> tuple[int | str, ...]:
+    """Where an error is: pydantic's location, extended by the field a model validator names
+    (:class:`rik.schemas.common.FieldError`)."""
+    from rik.schemas.common import FieldError
+
+    cause = (error.get("ctx") or {}).get("error")
+    return (*error["loc"], *(cause.loc if isinstance(cause, FieldError) else ()))
 
 
 def describe_error(model: type[BaseModel], error: ErrorDetails) -> str:
@@ -109,6 +118,6 @@ def read_yaml_model[M: BaseModel](path: Path, model: type[M], what: str) -> M:
         return model.model_validate(data if data is not None else {})
     except ValidationError as exc:
         first = exc.errors(include_url=False)[0]
-        field = ".".join(str(p) for p in first["loc"])
-        raise CatalogError(shown, None, field or None, describe_error(model, first),
-                           line_of(path, tuple(first["loc"]))) from None
+        loc = error_loc(first)
+        field = ".".join(str(p) for p in loc)
+        raise CatalogError(shown, None, field or None, describe_error(model, first), line_of(path, loc)) from None

@@ -11,7 +11,8 @@ HANDLE_TYPES = ("knob", "two_point", "finger_pull")
 
 
 def catalog_stats(index: CatalogIndex) -> dict[str, Any]:
-    """Counts per handle type, base units per joint type and front kind, presets, finishes, fitting pairings."""
+    """Counts per handle type, base units per joint type and front kind, presets, finishes, fitting pairings,
+    and the robots' ids."""
     handles, designs = index.entries("handles"), index.entries("designs")
     bases = index.entries("base_units")
     fronts = [f for b in bases for f in b["fronts"]]
@@ -27,6 +28,7 @@ def catalog_stats(index: CatalogIndex) -> dict[str, Any]:
         "presets": [p["id"] for p in index.entries("presets")],
         "finishes": len(index.entries("finishes")),
         "pairings": dict(index.pairings),
+        "robots": [r["id"] for r in index.entries("robots")],
         "overlay_entries": sum(e["origin"] == "overlay" for s in index.sections.values() for e in s),
     }
 

@@ -12,7 +12,7 @@ Row = dict[str, Any]
 
 #: CLI names of the kinds and the catalog section each shows.
 KINDS = {"handles": "handles", "designs": "designs", "bases": "base_units", "presets": "presets",
-         "finishes": "finishes"}
+         "finishes": "finishes", "robots": "robots"}
 
 
 def srgb_hex(rgb: list[float]) -> str:
@@ -45,6 +45,14 @@ def _generator(row: Row) -> str:
     name = gen.pop("name")
     first = next(iter(gen.values()), None)
     return f"{name} ({first})" if isinstance(first, str) else name
+
+
+def _robot_joints(row: Row) -> str:
+    return str(len(row["joints"]["joints"])) if row.get("joints") else ""
+
+
+def _robot_torque(row: Row) -> str:
+    return f"{max(j['torque'] for j in row['joints']['joints']):g}" if row.get("joints") else ""
 
 
 #: Columns per kind: (header, cell function).
@@ -96,7 +104,23 @@ COLUMNS: dict[str, list[tuple[str, Callable[[Row], str]]]] = {
         ("roughness", lambda r: f"{r['roughness']:g}"),
         ("pattern", lambda r: r["pattern"]),
     ],
+    "robots": [
+        ("id", lambda r: r["id"]),
+        ("name", lambda r: r["name"]),
+        ("kind", lambda r: r["kind"]),
+        ("joints", _robot_joints),
+        ("max torque N·m", _robot_torque),
+        ("stroke mm", lambda r: mm(r["gripper"]["stroke"])),
+        ("grip force N", lambda r: f"{r['gripper']['grip_force']['value']:g}"),
+        ("pad friction", lambda r: f"{r['gripper']['pad_friction']['value']:g}"),
+        ("model from", lambda r: r["model"]["package"] or "rik"),
+        ("LeRobot robot_type", lambda r: r["lerobot"]["robot_type"]),
+        ("licence", lambda r: r["model"]["licence"]),
+    ],
 }
+
+#: What the table of a kind shows its figures in (``rik catalog list``'s last line); lengths in mm by default.
+UNITS = {"robots": "stroke in mm, forces in N, torques in N·m"}
 
 
 def table(section: str, rows: list[Row]) -> tuple[list[str], list[list[str]]]:

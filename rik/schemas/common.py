@@ -52,6 +52,16 @@ PathComponent = Annotated[str, AfterValidator(_matches(
     PATH_COMPONENT, "a safe folder name (letters, digits, '_', '.', '-'; not starting with '.'; no '/')"))]
 
 
+class FieldError(ValueError):
+    """A model validator's complaint about one field below its model: ``loc`` is that field's path from the model
+    (``("mount", "home", 3)``), so that the catalog's message names the field and its line, not only the entry
+    (:func:`rik.registry.entries.parse_entry` appends it to pydantic's location)."""
+
+    def __init__(self, loc: tuple[str | int, ...], message: str) -> None:
+        super().__init__(message)
+        self.loc = loc
+
+
 class Frozen(BaseModel):
     """Base of every catalog model: immutable, unknown fields rejected, schema built on first use."""
 

@@ -21,7 +21,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from rik.schemas.common import Frozen, Length, Quat, Real, SimpleId, Vec3
+from rik.schemas.common import FieldError, Frozen, Length, Quat, Real, SimpleId, Vec3
 
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
@@ -248,10 +248,12 @@ class LeRobotLayout(Frozen):
         if self.layout == "pose" and (self.joints or self.ee_pose):
             raise ValueError("the pose layout takes no joints and no ee_pose")
         names = [j.name for j in self.joints]
-        if len(set(names)) != len(names):
-            raise ValueError(f"feature names repeat: {names}")
-        if sum(j.joint is None for j in self.joints) > 1:
-            raise ValueError("only one entry may be the gripper (joint: null)")
+        for i, name in enumerate(names):
+            if name in names[:i]:
+                raise FieldError(("joints", i, "name"), f"feature name '{name}' repeats (entry {names.index(name)})")
+        grippers = [i for i, j in enumerate(self.joints) if j.joint is None]
+        if len(grippers) > 1:
+            raise FieldError(("joints", grippers[1], "joint"), "only one entry may be the gripper (joint: null)")
         return self
 
 
@@ -284,21 +286,22 @@ class Robot(Frozen):
                 raise ValueError(f"an arm needs {', '.join(missing)}")
             assert self.joints is not None and self.mount is not None
             if len(self.mount.home) != len(self.joints.joints):
-                raise ValueError(f"mount.home has {len(self.mount.home)} positions for "
-                                 f"{len(self.joints.joints)} joints")
-            for j, q in zip(self.joints.joints, self.mount.home, strict=True):
+                raise FieldError(("mount", "home"), f"{len(self.mount.home)} positions for "
+                                 f"{len(self.joints.joints)} joints (one per joint, rad)")
+            for i, (j, q) in enumerate(zip(self.joints.joints, self.mount.home, strict=True)):
                 if not j.range[0] <= q <= j.range[1]:
-                    raise ValueError(f"mount.home puts joint {j.name} at {q} rad, outside its range "
+                    raise FieldError(("mount", "home", i), f"puts joint {j.name} at {q} rad, outside its range "
                                      f"({j.range[0]}, {j.range[1]})")
-            known = {j.name for j in self.joints.joints}
-            for entry in self.lerobot.joints:
+            known = [j.name for j in self.joints.joints]
+            for i, entry in enumerate(self.lerobot.joints):
                 if entry.joint is not None and entry.joint not in known:
-                    raise ValueError(f"lerobot layout entry '{entry.name}' reads joint '{entry.joint}', which is "
-                                     f"not one of the robot's joints ({', '.join(sorted(known))})")
+                    raise FieldError(("lerobot", "joints", i, "joint"), f"layout entry '{entry.name}' reads joint "
+                                     f"'{entry.joint}', which is not one of the robot's joints ({', '.join(known)})")
             if self.lerobot.layout != "joints":
-                raise ValueError("an arm exports its joints (lerobot.layout: joints)")
+                raise FieldError(("lerobot", "layout"), "an arm exports its joints (lerobot.layout: joints)")
         elif self.joints is not None or self.mount is not None:
-            raise ValueError("a floating robot has no joints or mount")
+            raise FieldError(("joints" if self.joints is not None else "mount",),
+                             "a floating robot has no joints or mount")
         return self
 
     @property

@@ -1,0 +1,69 @@
+"""Robots when they are used: what the catalog cannot check when it loads (it stays as fast as a plain pydantic
+program, and a robot nobody uses may name a package this machine lacks), checked once a command asks for a robot.
+
+An arm's model comes from an installed Python package (never downloaded). Such a package that is missing, or
+that lacks the entry's files, is a one-line :class:`rik.errors.CatalogError` naming the catalog file and line, the
+entry and the field (``model.package``, ``model.files.N``), as the loader's own errors do.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rik.errors import CatalogError
+
+if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
+    from rik.schemas.robots import Robot
+
+
+def installed_package_dir(name: str) -> Path | None:
+    """The folder of the installed package importable as ``name``, found without importing it (the packages'
+    own code pulls in dependencies rik does not install); None when it is not installed."""
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, ValueError):  # a dotted name whose parent is missing; an empty or relative name
+        return None
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    return Path(next(iter(spec.submodule_search_locations)))
+
+
+def entry_error(catalog: Catalog, section: str, entry_id: str, field: str | None, problem: str) -> CatalogError:
+    """A :class:`CatalogError` for an entry of a loaded catalog, naming its file, line, entry and field (the file
+    is read again to find them: only done when reporting)."""
+    from rik.registry.sources import NOUNS, display_path, read_file
+
+    origin = catalog.origins.get((section, entry_id))
+    if origin is None:
+        return CatalogError("(catalog)", f"{NOUNS[section]} '{entry_id}'", field, problem)
+    try:
+        entries = read_file(Path(origin.file), origin.builtin)
+    except CatalogError:  # the file changed since it was loaded
+        entries = []
+    for entry in entries:
+        if entry.section == section and isinstance(entry.data, dict) and entry.data.get("id") == entry_id:
+            return entry.error(field, problem)
+    return CatalogError(display_path(Path(origin.file)), f"{NOUNS[section]} '{entry_id}'", field, problem)
+
+
+def usable_robot(catalog: Catalog, robot_id: str) -> Robot:
+    """The robot ``robot_id`` (:class:`rik.errors.UnknownIdError` with suggestions when absent), its model's
+    package installed and holding the model's files."""
+    robot = catalog.robot(robot_id)
+    name = robot.model.package
+    if name is None:
+        return robot
+    folder = installed_package_dir(name)
+    builtin = catalog.origins[("robots", robot.id)].builtin if ("robots", robot.id) in catalog.origins else True
+    if folder is None:
+        remedy = "run scripts/setup.sh, or uv sync" if builtin else "install the distribution that ships it"
+        raise entry_error(catalog, "robots", robot.id, "model.package",
+                          f"the Python package '{name}' that ships the model is not installed ({remedy})")
+    for i, file in enumerate(robot.model.files):
+        if not (folder / file).is_file():
+            raise entry_error(catalog, "robots", robot.id, f"model.files.{i}",
+                              f"'{file}' is not in the installed package '{name}' ({folder})")
+    return robot
