@@ -19,9 +19,10 @@ from rik.registry import load_catalog
 
 CAT = load_catalog()
 BIN = Path(sys.executable).parent
-VARIANT = "drawer-chest-80__two_point-bow-128__normal"
 DRAW = ("train", ("two_point",), ("normal",))
-"""A draw that holds :data:`VARIANT` (its handle is in the train split), so the test builds one variant."""
+VARIANT, FRONT = "drawer-bench-120__two_point-bow-96__normal", "drawer-left"
+"""The variant and front of :data:`DRAW`'s seed 0: lerobot-train and rik eval with seed 0 open it, and so does
+the environment's first scene (that of seed 0), so the test builds one variant."""
 EPISODE_LENGTH = 10
 
 
@@ -31,22 +32,13 @@ def _run(*cmd: str, cwd: Path, timeout: float = 300) -> subprocess.CompletedProc
     return subprocess.run(list(cmd), cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
 
 
-def _seed_of_variant() -> int:
-    """The first seed of :data:`DRAW` that opens :data:`VARIANT`'s first drawer."""
-    from rik.sim.draw import Draw
-
-    draw = Draw(DRAW[0], DRAW[1], DRAW[2])
-    for seed in range(500):
-        episode = draw.episode(CAT, seed)
-        if episode.variant == VARIANT and episode.front == "drawer-1":
-            return seed
-    raise AssertionError(f"no seed below 500 draws {VARIANT} (the draw changed: pick another variant)")
-
-
 @pytest.fixture(scope="module")
 def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from rik.combinator.build import require_variants
+    from rik.sim.draw import Draw
 
+    drawn = Draw(*DRAW).episode(CAT, 0)
+    assert (drawn.variant, drawn.front) == (VARIANT, FRONT), f"the draw changed: seed 0 now opens {drawn}"
     out = tmp_path_factory.mktemp("variants")
     require_variants(CAT, [VARIANT], out)
     return out
@@ -219,12 +211,11 @@ def so100_policy(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> di
 
     root = tmp_path_factory.mktemp("so100-loop")
     # rik record VARIANT -s grasp_vertical --robot so100 -n 2, in the library: 3 s episodes keep it short
-    record(CAT, VARIANT, "grasp_vertical", episodes=2, out=root / "episodes", variants=variants,
+    record(CAT, VARIANT, "grasp_vertical", episodes=2, front=FRONT, out=root / "episodes", variants=variants,
            robot=CAT.robot("so100"), max_seconds=3.0)
     _arm_dataset(root / "episodes", root / "dataset", "local/so100", variants)
     info = json.loads((root / "dataset" / "meta" / "info.json").read_text())
     assert info["robot_type"] == "so_follower" and info["features"]["action"]["shape"] == [6]
-    seed = _seed_of_variant()
     res = _run(str(BIN / "lerobot-train"), "--dataset.repo_id=local/so100", "--dataset.root=dataset",
                "--policy.type=act", "--policy.push_to_hub=false", "--policy.device=cpu",
                "--policy.pretrained_backbone_weights=null", "--policy.dim_model=32", "--policy.dim_feedforward=64",
@@ -234,26 +225,26 @@ def so100_policy(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> di
                '"ACTION": "MEAN_STD"}',
                "--env.type=rik", "--env.robot=so100", f"--env.split={DRAW[0]}", f"--env.handle_types={DRAW[1][0]}",
                f"--env.presets={DRAW[2][0]}", f"--env.episode_length={EPISODE_LENGTH}", f"--env.variants_dir={variants}",
-               f"--seed={seed}", "--steps=4", "--batch_size=4", "--env_eval_freq=4", "--eval.n_episodes=1",
+               "--seed=0", "--steps=4", "--batch_size=4", "--env_eval_freq=4", "--eval.n_episodes=1",
                "--eval.batch_size=1", "--save_freq=4", "--log_freq=2", "--output_dir=train", "--wandb.enable=false",
                "--num_workers=0", cwd=root, timeout=300)
     assert res.returncode == 0, res.stderr[-3000:]
-    return {"root": root, "policy": root / "train/checkpoints/last/pretrained_model", "seed": seed}
+    return {"root": root, "policy": root / "train/checkpoints/last/pretrained_model"}
 
 
 def test_so100_policy_loop(so100_policy: dict, variants: Path, rik) -> None:
-    root, policy, seed = so100_policy["root"], so100_policy["policy"], so100_policy["seed"]
+    root, policy = so100_policy["root"], so100_policy["policy"]
     config = json.loads((policy / "config.json").read_text())
     assert config["output_features"]["action"]["shape"] == [6]
     assert config["input_features"]["observation.state"]["shape"] == [6]
     assert sorted((root / "train" / "eval").rglob("*.mp4")), "lerobot-train's evaluation in rik's env wrote no video"
     out = root / "eval"
     r = rik("eval", str(policy), "--robot", "so100", "--split", DRAW[0], "--types", DRAW[1][0], "--presets",
-            DRAW[2][0], "--episodes-per-cell", "1", "--seed", str(seed), "--episode-length", str(EPISODE_LENGTH),
+            DRAW[2][0], "--episodes-per-cell", "1", "--seed", "0", "--episode-length", str(EPISODE_LENGTH),
             "--videos", "0", "--workers", "1", "--out", str(out), "--variants", str(variants))
     assert r.code == 0, r.err
     (row,) = json.loads((out / "eval_info.json").read_text())["rik"]["per_episode"]
-    assert row["variant"] == VARIANT and row["steps"] == EPISODE_LENGTH
+    assert (row["variant"], row["front"], row["steps"]) == (VARIANT, FRONT, EPISODE_LENGTH)
     assert (out / "table.md").read_text().startswith("# act:")
     assert "with robot so100" in (out / "table.md").read_text().splitlines()[0]
     # the same policy with the Hand-E: one line, exit 2, nothing written
@@ -262,6 +253,43 @@ def test_so100_policy_loop(so100_policy: dict, variants: Path, rik) -> None:
         f"rik: error: {policy / 'config.json'}: output 'action' has shape [6]; robot hand-e takes [7] (a policy "
         "trained on an arm's export runs with --robot and that arm)")
     assert not (root / "wrong").exists()
+
+
+def test_the_exported_joint_actions_replay_a_recording(so100_policy: dict, so100) -> None:
+    """A recording's actions in the SO-100's layout (degrees and gripper percent, what the dataset holds), stepped
+    in the joints mode from the recording's seed, redo the recording: the same start, and the drawer opens as it
+    did (the degree-radian round trip changes the last bits, and contact amplifies them a little)."""
+    from rik.sim.episode import find_episodes, read_episode, states
+
+    recorded = next(d for d in find_episodes([so100_policy["root"] / "episodes"]) if read_episode(d)[0].seed == 0)
+    table = read_episode(recorded)[1]
+    rows = states(table)
+    actions = np.asarray(table.column("action").to_pylist())
+    targets = np.asarray(table.column("robot_targets").to_pylist())
+    opening = table.column("opening").to_pylist()
+    so100.reset(seed=0, options={"front": FRONT})
+    assert np.array_equal(so100.scene.state(), rows[0])
+    for k in range(len(rows) - 1):
+        so100.step(so100.layout.action(actions[k], targets[k]))
+    assert opening[-1] > 0.1 and so100.scene.opening() == pytest.approx(opening[-1], abs=1e-3)
+
+
+def test_scripted_eval_with_an_arm_is_rik_record_with_it(so100_policy: dict, variants: Path, rik,
+                                                         tmp_path: Path) -> None:
+    """``rik eval strategy:S --robot so100`` runs the episode ``rik record --robot so100 --seed`` records: the
+    recording of seed 0 (3 s, 60 control steps) and the evaluated episode of seed 0 cut off after 60 steps end at
+    the same opening (a quarter open: the arm pulled)."""
+    from rik.sim.episode import find_episodes, read_episode
+
+    recorded = next(d for d in find_episodes([so100_policy["root"] / "episodes"]) if read_episode(d)[0].seed == 0)
+    opening = read_episode(recorded)[1].column("opening").to_pylist()
+    r = rik("eval", "strategy:grasp_vertical", "--robot", "so100", "--split", DRAW[0], "--types", DRAW[1][0],
+            "--presets", DRAW[2][0], "-n", "1", "--seed", "0", "--episode-length", str(len(opening) - 1), "--videos",
+            "0", "--workers", "1", "--out", str(tmp_path / "eval"), "--variants", str(variants))
+    assert r.code == 0, r.err
+    (row,) = json.loads((tmp_path / "eval" / "eval_info.json").read_text())["rik"]["per_episode"]
+    assert (row["variant"], row["front"], row["steps"]) == (VARIANT, FRONT, len(opening) - 1)
+    assert opening[-1] > 0.1 and row["final_opening"] == pytest.approx(opening[-1], abs=1e-4)
 
 
 def test_eval_refuses_a_policy_whose_state_is_another_robots(so100_policy: dict, rik, tmp_path: Path) -> None:
