@@ -89,8 +89,9 @@ class OpenFrontEnv(gym.Env):
         self._robot = None if entry.kind.value == "floating" else entry
         self.layout = robot_layout(self._robot)
         if action_mode == "joints" and self.layout.is_pose:
+            arms = ", ".join(r for r, e in self._catalog.robots.items() if e.kind.value == "arm")
             raise RikError(f"action_mode 'joints': robot {robot} takes a target pose (action_mode 'delta' or "
-                           "'absolute'); joint actions are for arms (so100, panda-2f85)")
+                           f"'absolute'); joint actions are for arms ({arms})")
         self._variants = Path(variants_dir)
         self._draw = None
         if split is not None or variant is None:
@@ -230,7 +231,6 @@ class OpenFrontEnv(gym.Env):
                                f"numbers ({', '.join(names)})")
             targets, grip = self.layout.joint_targets(a)
             self.scene.step_joints(targets, grip)
-            self._target = self.scene.pose()
         else:
             if self.action_mode == "delta":
                 absolute = delta_to_absolute(self._target, action)
