@@ -9,7 +9,16 @@ from typing import Annotated, Any
 
 import typer
 
-from rik.cli.common import DEFAULT_WORKERS, CatalogOption, WorkersOpt, console, overlays, progress_bar
+from rik.cli.common import (
+    DEFAULT_ROBOT,
+    DEFAULT_WORKERS,
+    CatalogOption,
+    RobotOpt,
+    WorkersOpt,
+    console,
+    overlays,
+    progress_bar,
+)
 
 
 def _advance(progress: Any, label: str, total: int) -> Callable[[dict[str, Any]], None]:
@@ -46,9 +55,12 @@ def eval_policy(
                                           "videos/ go.")] = Path("eval"),
         workers: WorkersOpt = DEFAULT_WORKERS,
         variants: Annotated[Path, typer.Option("--variants", help="Directory of built variants.")] = Path("variants"),
+        robot: RobotOpt = DEFAULT_ROBOT,
         catalog: CatalogOption = None) -> None:
     """Evaluate a policy on rik's benchmark: episodes drawn from a split, F/P/S per handle type x preset (the
-    paper's Table 3) with Wilson intervals, per-episode rows, videos and lerobot-eval's eval_info.json."""
+    paper's Table 3) with Wilson intervals, per-episode rows, videos and lerobot-eval's eval_info.json. A policy
+    trained on an arm's export runs with --robot and that arm (its joint actions); scripted strategies run with any
+    robot."""
     from rik.errors import RikError
     from rik.evaluation.evaluate import EvalSpec, finished_rows, prepare, run_eval, slug, write_tables
     from rik.registry.load import load_catalog
@@ -60,7 +72,8 @@ def eval_policy(
     cat = load_catalog(overlays(catalog))
     draw = Draw.parse(split, types, presets, kinds)
     specs = [prepare(cat, EvalSpec(p, draw.split, draw.handle_types, draw.presets, draw.kinds, per_cell, seed,
-                                   episode_length, rerendered, videos, str(variants), label)) for p in policies]
+                                   episode_length, rerendered, videos, str(variants), label, robot))
+             for p in policies]
     labels = [s.label for s in specs]
     if len(set(labels)) < len(labels):
         raise RikError(f"two policies have the same name ({', '.join(labels)}): give them different run folders")

@@ -5,7 +5,9 @@ Episodes are the seeds ``seed .. seed + cells x N - 1`` of a draw (:mod:`rik.sim
 --seed S`` runs. A learned policy runs through lerobot's own ``rollout`` (``lerobot.scripts.lerobot_eval``) on a
 one-environment vector env made by the ``lerobot_env_rik`` config, so both tools execute the same code per
 episode. A scripted strategy (``strategy:contact_rich``) runs its operator in the same environment, so scripted
-and learned rows are paired episode by episode.
+and learned rows are paired episode by episode. ``robot`` (a catalog id) runs either with that robot: a learned
+policy must read and write that robot's layout (:mod:`rik.sim.robot_layout`; an arm takes joint actions), a
+scripted strategy drives any robot by target poses.
 
 Outputs (in ``--out``): ``table.md`` (F/P/S per handle type x preset, with Wilson intervals for S),
 ``episodes.csv`` (one row per episode), ``eval_info.json`` (lerobot-eval's layout: ``per_task``, ``per_group``,
@@ -48,6 +50,8 @@ class EvalSpec:
     variants: str = "variants"
     label: str = ""
     """Name of the operator in tables (default: the strategy, or the policy's type and folder)."""
+    robot: str = "hand-e"
+    """The robot (catalog id) that runs the episodes."""
     needs: dict[str, Any] = field(default_factory=dict)
     """Filled by :func:`prepare`: the policy's cameras, streams and image size."""
 
@@ -71,12 +75,15 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     if spec.seed < 0:
         raise RikError(f"--seed {spec.seed}: must be 0 or more")
     Draw(spec.split, spec.handle_types, spec.presets, spec.kinds).check(catalog)
+    robot = catalog.robot(spec.robot)  # an unknown robot: one line with suggestions
     if spec.strategy is not None:
         make_operator(spec.strategy)
         return EvalSpec(**{**asdict(spec), "label": spec.label or spec.strategy})
     from rik.evaluation.load import policy_needs
+    from rik.sim.robot_layout import robot_layout
 
-    needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered)
+    layout = robot_layout(None if robot.kind.value == "floating" else robot)
+    needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered, layout=layout)
     label = spec.label or f"{needs.policy_type}:{run_name(Path(spec.operator))}"
     return EvalSpec(**{**asdict(spec), "label": label, "needs": asdict(needs)})
 
@@ -96,7 +103,7 @@ def env_config(spec: EvalSpec) -> Any:
 
     needs = spec.needs or {"cameras": (), "streams": ("sim",), "image_size": (96, 128)}
     h, w = needs["image_size"]
-    return RikEnvConfig(episode_length=spec.episode_length, split=spec.split or "all",
+    return RikEnvConfig(robot=spec.robot, episode_length=spec.episode_length, split=spec.split or "all",
                         handle_types=",".join(spec.handle_types), presets=",".join(spec.presets),
                         kinds=",".join(spec.kinds), cameras=",".join(needs["cameras"]),
                         streams=",".join(needs["streams"]) or "sim", observation_height=h, observation_width=w,
@@ -133,7 +140,9 @@ def _context(spec: EvalSpec) -> dict[str, Any]:
     else:
         import gymnasium as gym
 
-        ctx["env"] = gym.make(cfg.gym_id, disable_env_checker=True, **cfg.gym_kwargs).unwrapped
+        # operators give target poses: the absolute action, for any robot
+        kwargs = {**cfg.gym_kwargs, "action_mode": "absolute"}
+        ctx["env"] = gym.make(cfg.gym_id, disable_env_checker=True, **kwargs).unwrapped
     _CONTEXT.update(ctx)
     return _CONTEXT
 
@@ -288,7 +297,8 @@ def write_tables(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[str, 
     first, n = specs[0], len(specs[0].seeds())
     seeds = f"seeds {first.seed}..{first.seed + n - 1}, {first.episodes_per_cell} per cell"
     episodes = f"The same {n} episodes for each ({seeds})" if len(specs) > 1 else f"{n} episodes, {seeds}"
-    head = (f"# {', '.join(s.label for s in specs)} on the {first.split or 'all'} split\n\n{episodes}; F/P/S "
+    robot = f" with robot {first.robot}" if first.robot != "hand-e" else ""
+    head = (f"# {', '.join(s.label for s in specs)} on the {first.split or 'all'} split{robot}\n\n{episodes}; F/P/S "
             "fractions, S with its 95 % Wilson interval.\n\n")
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "table.md", head + table_markdown(rows, first.presets, ci=True))

@@ -4,7 +4,9 @@
 or any folder with a policy's ``config.json`` and weights; the policy may be of any type lerobot can load. Its
 input features say what the environment renders: ``observation.images.<camera>`` asks for MuJoCo's image of that
 camera, ``observation.images.<camera>_rerendered`` for Mitsuba's (only when the re-render is allowed: it is slow
-without a GPU), at the size the policy was trained on.
+without a GPU), at the size the policy was trained on. Its state and action must be those of the robot it runs
+with (``--robot``, :mod:`rik.sim.robot_layout`): a policy trained on an arm's export reads that arm's joints and
+writes its joint targets.
 """
 
 from __future__ import annotations
@@ -12,10 +14,13 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
-from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, ROBOT_STATE_NAMES, STREAM_SUFFIX
+from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, STREAM_SUFFIX
+
+if TYPE_CHECKING:
+    from rik.sim.robot_layout import RobotLayout
 
 CONFIG = "config.json"
 OLD_STATE_WIDTH = 14
@@ -51,22 +56,42 @@ def policy_config(policy_dir: Path) -> dict[str, Any]:
     return data
 
 
-def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False) -> PolicyNeeds:
-    """What the policy in ``policy_dir`` reads, checked against what rik's environment supplies."""
+def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: RobotLayout | None = None) -> PolicyNeeds:
+    """What the policy in ``policy_dir`` reads, checked against what rik's environment supplies with the robot of
+    ``layout`` (default: the Hand-E's)."""
+    from rik.sim.robot_layout import EE_NAMES, robot_layout
+
+    layout = layout or robot_layout(None)
     config = policy_config(policy_dir)
     file = Path(policy_dir) / CONFIG
     inputs = config.get("input_features") or {}
     cameras: list[str] = []
     streams: list[str] = []
     size: tuple[int, int] | None = None
-    widths = {"observation.state": len(ROBOT_STATE_NAMES), "observation.environment_state": len(ENV_STATE_NAMES)}
+    robot = layout.robot_id
+    hint = ("a policy trained on an arm's export runs with --robot and that arm" if layout.is_pose else
+            "a policy trained on another robot's export runs with --robot and that robot; the Hand-E's with "
+            "--robot hand-e")
+    action = (config.get("output_features") or {}).get("action")
+    if action is not None and tuple(action.get("shape", ())) != (len(layout.action_names),):
+        raise RikError(f"{file}: output 'action' has shape {list(action.get('shape', ()))}; robot {robot} takes "
+                       f"[{len(layout.action_names)}] ({hint})")
+    widths = {"observation.state": len(layout.state_names), "observation.environment_state": len(ENV_STATE_NAMES)}
+    if layout.ee_pose:
+        widths["observation.ee_pose"] = len(EE_NAMES)
     for key, feature in inputs.items():
         shape = tuple(feature.get("shape", ()))
+        if key == "observation.ee_pose" and key not in widths:
+            raise RikError(f"{file}: input '{key}' is not something rik's environment supplies for robot {robot} "
+                           f"(only arms whose layout has an end-effector pose, such as panda-2f85; {hint})")
         if key in widths:
-            if key == "observation.state" and shape == (OLD_STATE_WIDTH,):
+            if key == "observation.state" and shape == (OLD_STATE_WIDTH,) and layout.is_pose:
                 raise RikError(f"{file}: input 'observation.state' has {OLD_STATE_WIDTH} numbers: the policy was "
                                "trained on an export made before rik split the robot's and the front's state; "
                                "re-export the episodes (rik export-lerobot) and train again")
+            if key == "observation.state" and shape != (widths[key],):
+                raise RikError(f"{file}: input '{key}' has shape {list(shape)}; robot {robot} supplies "
+                               f"[{widths[key]}] ({hint})")
             if shape != (widths[key],):
                 raise RikError(f"{file}: input '{key}' has shape {list(shape)}; rik's environment supplies "
                                f"[{widths[key]}]")
@@ -74,8 +99,8 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False) -> PolicyN
         camera, stream = _image_feature(key)
         if camera is None:
             raise RikError(f"{file}: input '{key}' is not something rik's environment supplies (it gives "
-                           "observation.state, observation.environment_state and observation.images.<camera>"
-                           f"[_rerendered] for cameras {', '.join(CAMERAS)})")
+                           "observation.state, observation.environment_state, observation.ee_pose for arms that "
+                           f"have one, and observation.images.<camera>[_rerendered] for cameras {', '.join(CAMERAS)})")
         if stream == "rerendered" and not allow_rerendered:
             raise RikError(f"{file}: input '{key}' is a Mitsuba re-render, which the environment is not asked to "
                            "render; pass --rerendered (slow without a GPU) or train without the _rerendered keys "

@@ -4,14 +4,23 @@
   :mod:`rik.sim.draw`: the same seed gives the same variant, front and start pose everywhere); a reset may also
   name ``options={"variant": ..., "front": ..., "preset": ...}``. The gripper starts at a randomised pose in front of
   the handle: a reset with seed ``S`` starts where ``rik record --seed S`` starts on that variant;
-- **observation** (a dict, shaped as LeRobot's environments return them): ``agent_pos`` = the robot's state and
-  ``environment_state`` = the front's state (:mod:`rik.sim.observation`), float32; with image streams also
-  ``pixels`` = ``{camera: uint8 HxWx3}`` (``front``, ``wrist``; ``front_rerendered`` for Mitsuba's stream);
+- **robot** (``robot=``, a catalog id, :mod:`rik.sim.robot_layout`): ``hand-e`` (rik's floating gripper, the
+  default), ``so100`` or ``panda-2f85`` (an arm at its mount beside the handle);
+- **observation** (a dict, shaped as LeRobot's environments return them): ``agent_pos`` = the robot's state as
+  its export's ``observation.state`` holds it (the Hand-E's :data:`rik.sim.observation.ROBOT_STATE_NAMES`; an
+  arm's joint positions and gripper, in its layout's names and units, e.g. the SO-100's degrees and gripper
+  percent) and ``environment_state`` = the front's state (:mod:`rik.sim.observation`), float32; for a robot whose
+  layout has one (the Panda), ``ee_pose`` = its gripper frame in its base frame (``ee.x`` .. ``ee.wz``: m and a
+  rotation vector, rad), float32; with image streams also ``pixels`` = ``{camera: uint8 HxWx3}`` (``front``,
+  ``wrist``; ``front_rerendered`` for Mitsuba's stream);
 - **action** (``action_mode``): ``delta``, 7 numbers in [-1, 1] (the last in [0, 1]): a target-pose change scaled by
   :data:`rik.sim.observation.MAX_DELTA` (m and rad per control step) and the gripper command (0 open, 1 closed
   with full force); or
   ``absolute``, the target pose itself (x, y, z m; pitch, yaw, roll rad) and the gripper command, as rik's
-  episodes and LeRobot exports record them;
+  episodes and the Hand-E's LeRobot exports record them; both drive any robot (an arm through its IK); or, for an
+  arm only, ``joints``: its layout's action vector, the numbers (and units) an arm's export writes as ``action``
+  (the servos' joint targets and the gripper's goal, e.g. the SO-100's degrees and percent open), applied joint by
+  joint (:meth:`rik.sim.scene.SimScene.step_joints`);
 - **reward**: the gain in opening (fraction of the range) per step; **terminated** when the front is open to
   rik's success threshold (90 %, as ManiSkill's OpenCabinetDrawer); **truncated** after ``episode_length``
   control steps; ``info`` holds ``is_success``, the F/P/S ``outcome`` (rik.sim.outcome), ``opening`` and
@@ -34,12 +43,12 @@ from rik.errors import RikError
 from rik.sim.observation import (
     CAMERAS,
     ENV_STATE_NAMES,
-    ROBOT_STATE_NAMES,
     delta_to_absolute,
+    environment_state,
     image_name,
-    state_observation,
 )
 from rik.sim.outcome import SUCCESS_OPENING, classify
+from rik.sim.robot_layout import EE_NAMES, RobotLayout, robot_layout
 from rik.sim.scene import CONTROL_FPS, SimScene
 
 if TYPE_CHECKING:
@@ -49,7 +58,8 @@ ENV_ID = "rik/OpenFront-v0"
 DEFAULT_VARIANT = "drawer-chest-80__two_point-bow-128__normal"
 EPISODE_LENGTH = 400
 """Control steps of an episode before it is truncated: 20 s at 20 Hz; scripted demonstrations take up to 232."""
-ACTION_MODES = ("delta", "absolute")
+ACTION_MODES = ("delta", "absolute", "joints")
+DEFAULT_ROBOT = "hand-e"
 SCENE_CACHE = 16
 """Compiled scenes kept per environment (a split draws many variants)."""
 
@@ -62,7 +72,8 @@ class OpenFrontEnv(gym.Env):
     def __init__(self, variant: str | None = DEFAULT_VARIANT, front: str | None = None, *,
                  split: str | None = None, handle_types: tuple[str, ...] | None = None,
                  presets: tuple[str, ...] | None = None, kinds: tuple[str, ...] | None = None,
-                 action_mode: str = "delta", images: bool = False, streams: tuple[str, ...] = (),
+                 robot: str = DEFAULT_ROBOT, action_mode: str = "delta", images: bool = False,
+                 streams: tuple[str, ...] = (),
                  cameras: tuple[str, ...] = CAMERAS, image_size: tuple[int, int] = (96, 128), spp: int = 16,
                  episode_length: int = EPISODE_LENGTH, variants_dir: str | Path = "variants",
                  render_mode: str | None = None, catalog_paths: tuple[str, ...] = ()) -> None:
@@ -74,6 +85,13 @@ class OpenFrontEnv(gym.Env):
         if episode_length < 1:
             raise RikError(f"episode_length {episode_length}: must be at least 1 control step")
         self._catalog = load_catalog([Path(p) for p in catalog_paths])
+        entry = self._catalog.robot(robot)  # an unknown id: one line with suggestions
+        self._robot = None if entry.kind.value == "floating" else entry
+        self.layout = robot_layout(self._robot)
+        if action_mode == "joints" and self.layout.is_pose:
+            arms = ", ".join(r for r, e in self._catalog.robots.items() if e.kind.value == "arm")
+            raise RikError(f"action_mode 'joints': robot {robot} takes a target pose (action_mode 'delta' or "
+                           f"'absolute'); joint actions are for arms ({arms})")
         self._variants = Path(variants_dir)
         self._draw = None
         if split is not None or variant is None:
@@ -95,16 +113,26 @@ class OpenFrontEnv(gym.Env):
         self.scene = self._scene(first, front)
         self.task_description = ""
         spaces: dict[str, gym.Space[Any]] = {
-            "agent_pos": gym.spaces.Box(-np.inf, np.inf, (len(ROBOT_STATE_NAMES),), np.float32),
+            "agent_pos": gym.spaces.Box(-np.inf, np.inf, (len(self.layout.state_names),), np.float32),
             "environment_state": gym.spaces.Box(-np.inf, np.inf, (len(ENV_STATE_NAMES),), np.float32)}
+        if self.layout.ee_pose:
+            spaces["ee_pose"] = gym.spaces.Box(-np.inf, np.inf, (len(EE_NAMES),), np.float32)
         if self._streams:
             h, w = image_size
             spaces["pixels"] = gym.spaces.Dict({image_name(c, s): gym.spaces.Box(0, 255, (h, w, 3), np.uint8)
                                                 for s in self._streams for c in self._cameras})
         self.observation_space = gym.spaces.Dict(spaces)
-        bound = 1.0 if action_mode == "delta" else np.inf
-        low, high = np.array([-bound] * 6 + [0.0]), np.array([bound] * 6 + [1.0])
+        if action_mode == "joints":
+            low, high = joint_action_bounds(self.layout)
+        else:
+            bound = 1.0 if action_mode == "delta" else np.inf
+            low, high = np.array([-bound] * 6 + [0.0]), np.array([bound] * 6 + [1.0])
         self.action_space = gym.spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+
+    @property
+    def robot(self) -> str:
+        """The robot's catalog id."""
+        return self.layout.robot_id
 
     # ---- scenes and images ----------------------------------------------------------------------------------
     def _scene(self, variant: str, front: str | None) -> SimScene:
@@ -115,7 +143,8 @@ class OpenFrontEnv(gym.Env):
         if key in self._scenes:
             self._scenes.move_to_end(key)
         else:
-            self._scenes[key] = build_scene(variant_dir(self._catalog, variant, self._variants), front)
+            self._scenes[key] = build_scene(variant_dir(self._catalog, variant, self._variants), front,
+                                            robot=self._robot)
             while len(self._scenes) > SCENE_CACHE:
                 self._scenes.popitem(last=False)
         return self._scenes[key]
@@ -176,7 +205,10 @@ class OpenFrontEnv(gym.Env):
         return self.task_description
 
     def _obs(self) -> dict[str, Any]:
-        obs = state_observation(self.scene)
+        obs: dict[str, Any] = {"agent_pos": self.layout.state(self.scene).astype(np.float32),
+                               "environment_state": environment_state(self.scene).astype(np.float32)}
+        if self.layout.ee_pose:
+            obs["ee_pose"] = self.layout.ee(self.scene).astype(np.float32)
         if self._streams:
             pixels = {}
             for stream in self._streams:
@@ -191,16 +223,25 @@ class OpenFrontEnv(gym.Env):
                 "is_success": bool(opening >= SUCCESS_OPENING), "steps": self._steps}
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
-        if self.action_mode == "delta":
-            absolute = delta_to_absolute(self._target, action)
-        else:
+        if self.action_mode == "joints":
             a = np.asarray(action, np.float64).reshape(-1)
-            if a.shape != (7,) or not np.all(np.isfinite(a)):
-                raise RikError(f"action {a.tolist()}: an absolute action is 7 finite numbers (target x, y, z m; "
-                               "pitch, yaw, roll rad; gripper 0..1)")
-            absolute = np.concatenate([a[:6], [float(np.clip(a[6], 0.0, 1.0))]])
-        self._target = absolute[:6]
-        self.scene.step(absolute)
+            names = self.layout.action_names
+            if a.shape != (len(names),) or not np.all(np.isfinite(a)):
+                raise RikError(f"action {a.tolist()}: robot {self.robot}'s joint action is {len(names)} finite "
+                               f"numbers ({', '.join(names)})")
+            targets, grip = self.layout.joint_targets(a)
+            self.scene.step_joints(targets, grip)
+        else:
+            if self.action_mode == "delta":
+                absolute = delta_to_absolute(self._target, action)
+            else:
+                a = np.asarray(action, np.float64).reshape(-1)
+                if a.shape != (7,) or not np.all(np.isfinite(a)):
+                    raise RikError(f"action {a.tolist()}: an absolute action is 7 finite numbers (target x, y, z m; "
+                                   "pitch, yaw, roll rad; gripper 0..1)")
+                absolute = np.concatenate([a[:6], [float(np.clip(a[6], 0.0, 1.0))]])
+            self._target = absolute[:6]
+            self.scene.step(absolute)
         self._steps += 1
         opening = self.scene.opening()
         reward = float(opening - self._opening)
@@ -222,6 +263,16 @@ class OpenFrontEnv(gym.Env):
 
     def close(self) -> None:
         self._close_renderers()
+
+
+def joint_action_bounds(layout: RobotLayout) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest and highest joint action of an arm's layout: its joints' ranges and its gripper's open..closed, in
+    the layout's units."""
+    assert layout.robot is not None and layout.robot.joints is not None
+    lo = np.array([j.range[0] for j in layout.robot.joints.joints] + [0.0])
+    hi = np.array([j.range[1] for j in layout.robot.joints.joints] + [0.0])
+    ends = np.stack([layout.action(np.array([0.0] * 6 + [g]), t) for t in (lo, hi) for g in (0.0, 1.0)])
+    return ends.min(axis=0), ends.max(axis=0)
 
 
 if ENV_ID not in gym.registry:

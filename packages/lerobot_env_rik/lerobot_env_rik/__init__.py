@@ -2,18 +2,29 @@
 
 LeRobot 0.6.1 imports this package at start-up (``register_third_party_plugins`` imports every installed
 distribution named ``lerobot_env_*``), which registers :class:`RikEnvConfig` under the name ``rik``. The
-environment is rik's ``rik/OpenFront-v0`` in its absolute-action mode, drawing each episode's variant from a
-catalog split by its seed (``rik.sim.draw``), so ``lerobot-eval --seed S`` and ``rik eval --seed S`` run the same
-episodes. Its observations map onto exactly the feature names of ``rik export-lerobot``:
+environment is rik's ``rik/OpenFront-v0``, drawing each episode's variant from a catalog split by its seed
+(``rik.sim.draw``), so ``lerobot-eval --seed S`` and ``rik eval --seed S`` run the same episodes.
 
-====================================  ===============================================
+``--env.robot`` picks the robot (a catalog id: ``hand-e``, the default, ``so100`` or ``panda-2f85``); the features
+follow that robot's LeRobot layout (:mod:`rik.sim.robot_layout`), so a policy trained on a robot's export runs
+with that robot: the Hand-E takes the absolute action (target pose and gripper, 7 numbers), an arm its joint
+action (``action_mode="joints"``: the joint targets and gripper in its export's names and units, e.g. the SO-100's
+6 numbers in degrees and gripper percent). Observations map onto exactly the feature names of
+``rik export-lerobot``:
+
+====================================  =====================================================================
 environment key                       dataset / policy feature
-====================================  ===============================================
-``agent_pos``                         ``observation.state`` (the robot's state)
+====================================  =====================================================================
+``agent_pos``                         ``observation.state`` (the robot's state, in its layout)
 ``environment_state``                 ``observation.environment_state`` (the front's)
+``ee_pose`` (Panda only)              ``observation.ee_pose`` (``ee.x`` .. ``ee.wz``, in the arm's base)
 ``pixels/front``                      ``observation.images.front``
 ``pixels/front_rerendered``           ``observation.images.front_rerendered``
-====================================  ===============================================
+====================================  =====================================================================
+
+lerobot 0.6.1's ``preprocess_observation`` maps ``agent_pos``, ``environment_state`` and ``pixels`` by name and
+passes any other array key ``k`` through as ``observation.k``: ``ee_pose`` becomes ``observation.ee_pose``, the
+name the Panda's export gives it.
 
 List-valued options are comma-separated strings (``--env.presets=smooth,normal``); ``--env.cameras=`` (empty)
 evaluates a state-only policy without rendering.
@@ -25,11 +36,20 @@ from dataclasses import dataclass, field
 
 from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
-from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
+from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE, OBS_STR
 
 import rik.sim.env  # noqa: F401  (registers rik/OpenFront-v0 with gymnasium)
+from rik.sim.robot_layout import EE_NAMES, RobotLayout, robot_layout
 
-__all__ = ["RikEnvConfig", "env_kwargs"]
+__all__ = ["RikEnvConfig", "env_kwargs", "robot_layout_of"]
+
+
+def robot_layout_of(robot: str) -> RobotLayout:
+    """The LeRobot layout of a catalog robot (an unknown id is a one-line ``UnknownIdError``)."""
+    from rik.registry.load import load_catalog
+
+    entry = load_catalog().robot(robot)
+    return robot_layout(None if entry.kind.value == "floating" else entry)
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -42,6 +62,8 @@ class RikEnvConfig(EnvConfig):
     """rik's drawer and door opening task (see the module docstring)."""
 
     task: str | None = "OpenFront-v0"
+    robot: str = "hand-e"
+    """The robot (rik catalog id): ``hand-e``, ``so100`` or ``panda-2f85``; its layout sets the features."""
     fps: int = 20
     """Control rate, Hz (rik's scenes step at 20 Hz; datasets exported at their own rate match it)."""
     episode_length: int = 400
@@ -67,12 +89,16 @@ class RikEnvConfig(EnvConfig):
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES, image_name
+        from rik.sim.observation import ENV_STATE_NAMES, image_name
 
-        self.features = {ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(7,)),
-                         "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(len(ROBOT_STATE_NAMES),)),
+        layout = robot_layout_of(self.robot)
+        self.features = {ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(len(layout.action_names),)),
+                         "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(len(layout.state_names),)),
                          "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(len(ENV_STATE_NAMES),))}
         self.features_map = {ACTION: ACTION, "agent_pos": OBS_STATE, "environment_state": OBS_ENV_STATE}
+        if layout.ee_pose:
+            self.features["ee_pose"] = PolicyFeature(type=FeatureType.STATE, shape=(len(EE_NAMES),))
+            self.features_map["ee_pose"] = f"{OBS_STR}.ee_pose"
         shape = (self.observation_height, self.observation_width, 3)
         for stream in _names(self.streams) if _names(self.cameras) else ():
             for cam in _names(self.cameras):
@@ -100,7 +126,9 @@ def env_kwargs(cfg: RikEnvConfig) -> dict:
     draw = Draw.parse(cfg.split, cfg.handle_types, cfg.presets, cfg.kinds)
     cameras = _names(cfg.cameras)
     return {"variant": None, "split": draw.split, "handle_types": draw.handle_types, "presets": draw.presets,
-            "kinds": draw.kinds, "action_mode": "absolute", "streams": _names(cfg.streams) if cameras else (),
+            "kinds": draw.kinds, "robot": cfg.robot,
+            "action_mode": "absolute" if robot_layout_of(cfg.robot).is_pose else "joints",
+            "streams": _names(cfg.streams) if cameras else (),
             "cameras": cameras or ("front",), "image_size": (cfg.observation_height, cfg.observation_width),
             "spp": cfg.spp, "episode_length": cfg.episode_length, "variants_dir": cfg.variants_dir,
             "render_mode": cfg.render_mode}
