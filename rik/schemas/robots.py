@@ -116,6 +116,9 @@ class Mount(Frozen):
     """With a sideways ``offset``: stand on the furniture's side nearer the handle (x and yaw mirrored there)."""
     home: tuple[Real, ...]
     """Joint positions (rad, one per joint) from which the start pose is solved."""
+    start_distance: Length = 0.25
+    """How far in front of the handle the gripper frame starts, m (the Hand-E's 0.25 unless the arm is too short
+    to fold back that far)."""
     reason: Text
     """Why here: what was checked (reach over the opening, joint margins)."""
 

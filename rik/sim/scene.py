@@ -434,7 +434,15 @@ def gripper_rotation(angles: np.ndarray) -> np.ndarray:
     return (base * chain).as_matrix()
 
 
-def start_pose(scene: SimScene, distance: float = 0.25) -> np.ndarray:
-    """The gripper's rest pose: fingers towards the operated handle, ``distance`` in front of it."""
+START_DISTANCE = 0.25
+"""How far in front of the operated handle the Hand-E starts, m (an arm's mount says its own)."""
+
+
+def start_pose(scene: SimScene, distance: float | None = None) -> np.ndarray:
+    """The gripper's rest pose: fingers towards the operated handle, ``distance`` in front of it (default: the
+    robot's, :data:`START_DISTANCE` for the Hand-E)."""
+    if distance is None:
+        mount = scene.robot.mount if scene.robot is not None else None
+        distance = mount.start_distance if mount is not None else START_DISTANCE
     target = scene.grasp_point() + np.array([0.0, distance, 0.0])
     return base_for_tcp(scene.gripper, target, np.zeros(3))
