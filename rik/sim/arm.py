@@ -234,6 +234,7 @@ def attach_arm(spec: mujoco.MjSpec, robot: Robot, where: Placement) -> None:
     arm.option.cone, arm.option.impratio = spec.option.cone, spec.option.impratio  # the scene's physics rule
     frame = spec.worldbody.add_frame(pos=where.pos.tolist(), quat=where.quat())
     frame.attach_body(arm.body(robot.model.root_body), ROBOT_PREFIX, "")
+    spec.camera(f"{ROBOT_PREFIX}wrist").name = "wrist"  # every robot's wrist camera is "wrist" (observation.CAMERAS)
     height = float(where.pos[2])
     if height > 0.01:
         pedestal = spec.worldbody.add_body(name=f"{ROBOT_PREFIX}pedestal", pos=where.pos.tolist(),
