@@ -328,3 +328,43 @@ def test_an_episode_whose_robot_the_catalog_lacks_is_named(rik, panda: Path, var
         assert r.code == 2 and r.err.strip() == f"rik: error: {eps / src.name / 'meta.json'}: {expected}"
         assert not out.exists() and not out.with_name(f"{out.name}.partial").exists()
 
+
+
+# ---- the Hand-E, before and after robots ---------------------------------------------------------------------------
+def test_a_format_2_hand_e_episode_exports_as_before(variants: Path, tmp_path: Path) -> None:
+    """An episode recorded before robots (format 2: no robot, no robot columns) is the Hand-E's: it exports to the
+    same table as the same episode in format 3, in the Hand-E's pose layout."""
+    import hashlib
+    import shutil
+
+    import pyarrow.parquet as pq
+
+    from rik.exporters.lerobot_export import ExportSpec, export_lerobot
+    from rik.sim.episode import COLUMNS_2, meta_digest
+    from rik.sim.observation import ROBOT_STATE_NAMES
+    from rik.sim.record import record
+
+    (meta,) = record(CAT, BOW, "contact_rich", max_seconds=0.3, out=tmp_path / "new", variants=variants)
+    old = tmp_path / "old" / meta.id
+    shutil.copytree(tmp_path / "new" / meta.id, old)
+    pq.write_table(pq.read_table(old / "states.parquet").select(list(COLUMNS_2)), old / "states.parquet",
+                   compression="zstd")
+    data = json.loads((old / "meta.json").read_text())
+    for key in ("robot", "robot_base", "robot_joints", "meta_sha256"):
+        data.pop(key)
+    data["format"], data["states_sha256"] = 2, hashlib.sha256((old / "states.parquet").read_bytes()).hexdigest()
+    data["meta_sha256"] = meta_digest(data)
+    (old / "meta.json").write_text(json.dumps(data, indent=2) + "\n")
+    tables = []
+    for name in ("new", "old"):
+        result = export_lerobot(CAT, [tmp_path / name], tmp_path / f"{name}-ds", ExportSpec(REPO, streams=()),
+                                variants=variants)
+        assert (result.robot, result.robot_type) == ("hand-e", "rik_hand_e")
+        info = json.loads((tmp_path / f"{name}-ds" / "meta" / "info.json").read_text())
+        assert info["robot_type"] == "rik_hand_e"
+        assert info["features"]["observation.state"]["names"] == list(ROBOT_STATE_NAMES)
+        assert info["features"]["action"]["names"] == ["target_x", "target_y", "target_z", "target_pitch",
+                                                       "target_yaw", "target_roll", "gripper"]
+        assert "observation.ee_pose" not in info["features"]
+        tables.append(pq.read_table(next((tmp_path / f"{name}-ds" / "data").rglob("*.parquet"))).to_pylist())
+    assert tables[0] == tables[1] and len(tables[0]) == meta.steps + 1
