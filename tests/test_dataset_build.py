@@ -244,6 +244,8 @@ BAD_SPECS = {
                          ["bad.yaml, field 'operators.0.strategy': unknown strategy 'teleport'", "contact_rich"]),
     "selects_nothing": (BASE + "variants: {handles: [knob/mushroom-30], handle_types: [two_point]}\n",
                         ["bad.yaml, field 'variants': the selection keeps no variant"]),
+    "unknown_robot": (BASE + "robot: so10\n",
+                      ["bad.yaml, field 'robot': no robot 'so10' in the catalog; did you mean 'so100'?"]),
 }
 
 
@@ -268,6 +270,33 @@ def test_bad_spec(rik, tmp_path, case: str) -> None:
     for part in parts:
         assert part in line, (part, line)
     assert sorted(p.name for p in tmp_path.iterdir()) == written  # no out, out.work or variants
+
+
+def test_spec_robot_records_and_exports_that_robot(rik, tmp_path, variants) -> None:
+    """``robot: so100``: the episodes are the SO-100's (their ids say so), the dataset is in its layout; a spec that
+    names the Hand-E, rik's default, hashes as one that names no robot (specs from before robots keep their hash)."""
+    import json
+
+    from rik.dataset.spec import load_spec, spec_hash
+
+    spec = tmp_path / "so100.yaml"
+    spec.write_text("repo_id: local/rik-so100\nrobot: so100\nvariants:\n  ids: [drawer-chest-80__two_point-bow-128__normal]\n"
+                    "operators:\n  - strategy: contact_rich\nmax_seconds: 0.5\nstreams: []\n")
+    hand_e = tmp_path / "hand-e.yaml"
+    hand_e.write_text(spec.read_text().replace("robot: so100", "robot: hand-e"))
+    default = tmp_path / "default.yaml"
+    default.write_text(spec.read_text().replace("robot: so100\n", ""))
+    assert spec_hash(load_spec(hand_e)) == spec_hash(load_spec(default)) != spec_hash(load_spec(spec))
+    out = tmp_path / "ds"
+    r = rik("dataset", "build", str(spec), "--out", str(out), "-j", "1", "--variants", str(variants))
+    assert r.code == 0, r
+    assert "robot: so100" in r.out
+    episodes = sorted(p.name for p in (tmp_path / "ds.work" / "episodes").iterdir() if not p.name.startswith("."))
+    assert episodes == ["drawer-chest-80__two_point-bow-128__normal__drawer-1__contact_rich.so100__s0000"]
+    info = json.loads((out / "meta" / "info.json").read_text())
+    assert info["robot_type"] == "so_follower" and info["features"]["action"]["names"][0] == "shoulder_pan.pos"
+    assert "rik catalog robot `so100`" in (out / "README.md").read_text()
+    assert rik("dataset", "verify", str(out)).code == 0
 
 
 def test_render_actors_without_ray(rik, tmp_path, spec_file) -> None:

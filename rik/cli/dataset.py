@@ -70,6 +70,7 @@ def _print_plan(plan: Plan) -> None:
     w, h = s.size
     ops = ", ".join(o.label + (f" {o.params}" if o.params else "") for o in s.operators)
     print(f"{plan.source}: {s.repo_id} (spec hash {plan.spec_hash[:12]})")
+    print(f"  robot: {s.robot}")
     print(f"  {len(plan.variants)} variants x {len(s.operators)} operators ({ops}) x {s.episodes_per_variant} "
           f"episodes = {len(plan.episodes)} episodes, seeds {s.seed}..{s.seed + s.episodes_per_variant - 1}")
     streams = ", ".join(s.streams) or "none (state only)"

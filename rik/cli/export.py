@@ -50,10 +50,10 @@ def export_lerobot(
         renders: Annotated[Path, typer.Option("--renders", help="Root of rendered streams (reused; missing ones "
                                               "are rendered).")] = Path("renders"),
         workers: WorkersOpt = 1, variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
-    """Export recorded episodes to a LeRobot v3.0 dataset through lerobot's own writer: observation.state,
-    observation.environment_state, action, one video per camera and stream (none with --streams none), a task
-    string and rik's metadata per episode, a dataset card. Renders missing image streams first; crash-safe
-    (sharded, --resume); checks every episode's frame count."""
+    """Export recorded episodes of one robot to a LeRobot v3.0 dataset through lerobot's own writer: observation.state
+    and action in the robot's layout (an arm's joints in LeRobot's names for it), observation.environment_state, one
+    video per camera and stream (none with --streams none), a task string and rik's metadata per episode, a dataset
+    card. Renders missing image streams first; crash-safe (sharded, --resume); checks every episode's frame count."""
     from rik.exporters.lerobot_export import ExportSpec, parse_streams
     from rik.exporters.lerobot_export import export_lerobot as run
     from rik.registry.load import load_catalog
@@ -73,7 +73,7 @@ def export_lerobot(
     con = console()
     con.print(f"dataset {result.root} ({result.repo_id}): {result.episodes} episodes, {result.frames} frames at "
               f"{result.fps} Hz; shards written {result.shards_written}, reused {result.shards_skipped}")
-    con.print(f"features: {', '.join(result.features)}")
+    con.print(f"robot: {result.robot} (robot_type {result.robot_type}); features: {', '.join(result.features)}")
     con.print(f"checked: loads offline with LeRobotDataset; state layout {result.checks['layout']}; "
               + result.checks["frame_counts"])
     con.print(f'load it: LeRobotDataset("{result.repo_id}", root="{result.root}")')

@@ -18,7 +18,6 @@ if TYPE_CHECKING:
 
 SAMPLE_STREAM = 0xDA7A_5E7
 """Second word of the seed sequence that draws ``variants.sample`` (apart from the episodes' own seeds)."""
-GRIPPER = "hand-e"
 
 
 @dataclass(frozen=True)
@@ -31,12 +30,14 @@ class EpisodeUnit:
     operator: OperatorSpec
     seed: int
     key: str
+    robot: str = "hand-e"
+    """The catalog robot that opens the front."""
 
     @property
     def episode_id(self) -> str:
         from rik.sim.episode import episode_id
 
-        return episode_id(self.variant, self.front, self.operator.label, self.seed)
+        return episode_id(self.variant, self.front, self.operator.label, self.seed, self.robot)
 
 
 @dataclass(frozen=True)
@@ -164,6 +165,14 @@ def check_operators(spec: DatasetSpec, source: str) -> None:
             raise _field_error(source, f"operators.{i}.strategy", exc) from None
 
 
+def check_robot(catalog: Catalog, spec: DatasetSpec, source: str) -> None:
+    """The spec's robot is in the catalog."""
+    try:
+        catalog.robot(spec.robot)
+    except RikError as exc:
+        raise _field_error(source, "robot", exc) from None
+
+
 def check_cameras(spec: DatasetSpec, source: str) -> None:
     """The spec's cameras exist in rik's scenes."""
     from rik.sim.observation import CAMERAS
@@ -183,6 +192,7 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
     from rik.dataset.spec import library_versions
     from rik.dataset.spec import spec_hash as hash_of_spec
 
+    check_robot(catalog, spec, source)
     check_operators(spec, source)
     check_cameras(spec, source)
     chosen = select_variants(catalog, spec, source)
@@ -206,9 +216,9 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
                 seed = spec.seed + k
                 key = json_sha256({"stage": "record", "variant": v, "variant_hash": plan.variants[v],
                                    "front": front, "strategy": op.strategy, "params": op.params, "label": op.label,
-                                   "seed": seed, "max_seconds": spec.max_seconds, "gripper": GRIPPER,
-                                   "versions": record_versions})
-                plan.episodes.append(EpisodeUnit(len(plan.episodes), v, front, op, seed, key))
+                                   "seed": seed, "max_seconds": spec.max_seconds, "gripper": spec.robot,
+                                   "versions": record_versions})  # the robot ("gripper" since the Hand-E's days)
+                plan.episodes.append(EpisodeUnit(len(plan.episodes), v, front, op, seed, key, spec.robot))
     render_versions = library_versions("mujoco", "mitsuba")
     for e in plan.episodes:
         for s in spec.streams:

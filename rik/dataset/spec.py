@@ -8,6 +8,8 @@ from typing import Any
 
 from rik.schemas.dataset import DatasetSpec
 
+DEFAULT_ROBOT = "hand-e"
+
 
 def load_spec(path: Path) -> DatasetSpec:
     """The spec in the YAML file ``path``; bad input raises one line naming the file, line and field."""
@@ -17,8 +19,12 @@ def load_spec(path: Path) -> DatasetSpec:
 
 
 def spec_data(spec: DatasetSpec) -> dict[str, Any]:
-    """The spec as JSON data, every default filled in (what its hash covers)."""
-    return spec.model_dump(mode="json")
+    """The spec as JSON data, every default filled in (what its hash covers), but ``robot`` where it is the
+    Hand-E: specs written before robots existed keep their hash, and the datasets built from them stay current."""
+    data = spec.model_dump(mode="json")
+    if data.get("robot") == DEFAULT_ROBOT:
+        del data["robot"]
+    return data
 
 
 def spec_hash(spec: DatasetSpec) -> str:

@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from rik.exporters.lerobot_export import ExportSpec
     from rik.registry.catalog import Catalog
+    from rik.schemas.robots import Robot
+    from rik.sim.robot_layout import RobotLayout
 
 CITATION = """@misc{realikea,
   title  = {Real-IKEA: Physical Fidelity is the Prerequisite for Robust Manipulation},
@@ -20,6 +22,17 @@ NORMALIZATION = {"act": '{"VISUAL": "MEAN_STD", "STATE": "MEAN_STD", "ENV": "MEA
                  "diffusion": '{"VISUAL": "MEAN_STD", "STATE": "MIN_MAX", "ENV": "MIN_MAX", "ACTION": "MIN_MAX"}'}
 """``--policy.normalization_mapping`` for ``lerobot-train``, per policy: its default mapping plus ``ENV`` (lerobot
 0.6.1's ACT and diffusion leave ``observation.environment_state`` unnormalised otherwise)."""
+CALIBRATION_NOTES = {
+    "so_follower": "**Joint zeros.** The joint positions are the simulated model's (MuJoCo Menagerie's SO-ARM100: 0 "
+                   "where its MJCF puts 0, its axes' signs), not LeRobot's calibration of a real arm: LeRobot's "
+                   "SO follower reads each body motor in degrees from the middle of the range recorded when the arm "
+                   "was calibrated, and the gripper as 0-100 over its calibrated range. The names and units match, "
+                   "but before co-training with real SO-100 data expect a fixed offset (and possibly a sign) per "
+                   "joint: estimate it from real episodes, e.g. from a pose both hold, and add it to one side.",
+}
+"""What a robot type's card says about its joint zeros, by ``robot_type``."""
+UNIT_WORDS = {"rad": "rad", "deg": "degrees", "fraction": "closure: 0 open, 1 closed",
+              "percent": "percent of the opening: 100 open, 0 closed"}
 CARD_FIELDS = "rik_card.json"
 """The card's fields, kept beside the dataset so that ``push`` can give the Hub the same card."""
 
@@ -37,6 +50,72 @@ def _names(names: tuple[str, ...]) -> str:
     return ", ".join(f"`{n}`" for n in names)
 
 
+def _range(values: list[float], unit: str) -> str:
+    lo, hi = min(values), max(values)
+    return f"{lo:g} {unit}" if lo == hi else f"{lo:g}-{hi:g} {unit}"
+
+
+def robot_text(robot: Robot, layout: RobotLayout) -> str:
+    """The card's section on the robot: its catalog name and id, its model's origin and licence, its mount, its
+    joints' and gripper's simulation parameters with their sources, and (for LeRobot's SO follower) what its
+    joint zeros are (markdown)."""
+    g = robot.gripper
+    lines = [f"**Robot: {robot.name}** (rik catalog robot `{robot.id}`, `robot_type` `{layout.robot_type}`).", "",
+             f"- **Model:** {robot.model.origin}; licence {robot.model.licence}."]
+    if robot.mount is not None:
+        m = robot.mount
+        side = ", on the side nearer the handle" if m.mirror else ""
+        lines.append(f"- **Mount:** the base stands at ({', '.join(f'{v:g}' for v in m.offset)}) m from the handle's "
+                     f"grasp point with the front closed (+x left, +y out of the front, +z up), heading {m.yaw:.3g} "
+                     f"rad{side}: {m.reason}")
+    if robot.joints is not None:
+        j = robot.joints
+        gravity = ("compensated by the controller (counted against each torque)" if j.gravity_compensation
+                   else "not compensated")
+        lines.append(f"- **Joints:** {len(j.joints)} position servos, torque capped at "
+                     f"{_range([x.torque for x in j.joints], 'N·m')}, speed at most "
+                     f"{_range([x.speed for x in j.joints], 'rad/s')}, stiffness "
+                     f"{_range([x.stiffness for x in j.joints], 'N·m/rad')}; gravity {gravity}. Sources: {j.source}.")
+    else:
+        from rik.sim.gripper import HAND_E
+
+        lines.append(f"- **Base:** six servoed axes, forces capped at {HAND_E.arm_force:g} N and torques at "
+                     f"{HAND_E.arm_torque:g} N·m (a collaborative arm's order of magnitude; an assumption).")
+    lines.append(f"- **Gripper:** {g.name} ({g.kind}, {g.stroke * 1000:g} mm stroke); grip force "
+                 f"{g.grip_force.value:g} N ({g.grip_force.source}); pad friction {g.pad_friction.value:g} "
+                 f"({g.pad_friction.source}); finger speed {g.finger_speed.value:g} m/s ({g.finger_speed.source}).")
+    if g.actuation is not None and g.actuation.force_limit is not None:
+        lines.append(f"- **Gripper servo:** force capped at {g.actuation.force_limit.value:g} N·m "
+                     f"({g.actuation.force_limit.source}).")
+    if robot.joints is not None:
+        feature = {joint: name for name, (joint, _) in zip(layout.state_names, layout.joints, strict=True)}
+        lines += ["", "| joint | feature | range (rad) | torque (N·m) | speed (rad/s) | stiffness (N·m/rad) "
+                      "| damping (N·m·s/rad) |", "|---|---|---|---|---|---|---|"]
+        lines += [f"| {x.name} | `{feature.get(x.name, '-')}` | {x.range[0]:g} .. {x.range[1]:g} | {x.torque:g} | "
+                  f"{x.speed:g} | {x.stiffness:g} | {x.damping:g} |" for x in robot.joints.joints]
+    note = CALIBRATION_NOTES.get(layout.robot_type)
+    if note and not layout.is_pose:
+        lines += ["", note]
+    return "\n".join(lines)
+
+
+def _layout_bullets(layout: RobotLayout) -> tuple[str, str]:
+    """The card's bullets of an arm: on ``observation.state`` (and ``observation.ee_pose``), and on ``action``."""
+    from rik.sim.robot_layout import EE_NAMES
+
+    numbers = ", ".join(f"`{name}` ({UNIT_WORDS[unit]})"
+                        for name, (_, unit) in zip(layout.state_names, layout.joints, strict=True))
+    state = (f"- **`observation.state`** (robot {layout.robot_id}'s joints, {len(layout.state_names)} numbers, "
+             f"LeRobot's names for this robot): {numbers}.\n")
+    if layout.ee_pose:
+        state += (f"- **`observation.ee_pose`**: the gripper frame (between the pads) in the arm's base frame, "
+                  f"{_names(EE_NAMES[:3])} (m) and the rotation vector {_names(EE_NAMES[3:])} (rad).\n")
+    action = ("- **`action`:** the joint targets the arm's position servos were given at each step (rik's "
+              "differential IK turns the operator's target pose into them), in the names and units of "
+              "`observation.state`; the gripper's entry is the gripper command.\n")
+    return state, action
+
+
 def training_text() -> str:
     """How to train ACT or diffusion on an export with ``lerobot-train`` (markdown; the card and docs say it)."""
     return f"""**Training with `lerobot-train`.** `observation.environment_state` is a feature of type ENV, and the
@@ -52,8 +131,13 @@ and for diffusion (its defaults normalise state and action by min and max)
 `--policy.normalization_mapping='{NORMALIZATION["diffusion"]}'`."""
 
 
-def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str, Any], info: dict[str, Any]) -> str:
+def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str, Any], info: dict[str, Any],
+                 robot: Robot) -> str:
     import rik
+    from rik.schemas.robots import RobotKind
+    from rik.sim.robot_layout import robot_layout
+
+    layout = robot_layout(robot if robot.kind is RobotKind.arm else None)
     images = [k for k, f in info["features"].items() if f.get("dtype") == "video"]
     sim_only = [k for k in images if not k.endswith("_rerendered")]
     from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
@@ -65,7 +149,8 @@ def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str,
   stream. Images are {spec.width}x{spec.height}, codec {spec.codec}.
 """
         one_stream = f"""**Training on one stream.** Policies take every `observation.*` feature by default. To train on
-the sim stream only, give the policy's `input_features` just `observation.state`, `observation.environment_state` and
+the sim stream only, give the policy's `input_features` just `observation.state`, \
+{'`observation.ee_pose`, ' if layout.ee_pose else ''}`observation.environment_state` and
 {', '.join(f'`{k}`' for k in sim_only)} (or the `_rerendered` keys for the re-rendered stream), or drop the other keys
 in your data loader.
 
@@ -77,24 +162,34 @@ in your data loader.
 """
         one_stream = ""
         frames = "a state-only export (no videos)."
-    return f"""Episodes of a simulated gripper opening articulated furniture (drawers, doors and flaps with real
-handle geometry), scripted or teleoperated in MuJoCo, exported by rik (Real-IKEA kit) {rik.__version__}, catalog
-schema {rik.CATALOG_SCHEMA}.
-
-- **Episodes:** {checks['episodes']}, **frames:** {checks['frames']} at {fps} Hz; {frames}
-{streams}- **`observation.state`** (the robot's state, {len(ROBOT_STATE_NAMES)} numbers, rik's state layout
+    if layout.is_pose:
+        action = ("- **`action`:** the commanded target pose of the gripper base (m, rad) and the gripper "
+                  "command (0 open, 1 closed).\n")
+        state = f"""- **`observation.state`** (the robot's state, {len(ROBOT_STATE_NAMES)} numbers, rik's state layout
   {checks.get('layout', 2)}): {_names(ROBOT_STATE_NAMES)}: the gripper base's position (m, world) and pitch, yaw,
   roll (rad), the jaw opening (m), the pads' centre (m, world) and the fingers' normal force on the front (N).
-- **`observation.environment_state`** (the front's state, {len(ENV_STATE_NAMES)} numbers):
+"""
+    else:
+        state, action = _layout_bullets(layout)
+    state_text = state + f"""- **`observation.environment_state`** (the front's state, {len(ENV_STATE_NAMES)} numbers):
   {_names(ENV_STATE_NAMES)}: the front's joint position (m for a drawer, rad for a door or flap) and velocity (m/s
   or rad/s), its opening (fraction of the range), the handle's grasp point (m, world), its orientation (unit
   quaternion w, x, y, z with w >= 0, world) and the unit direction in which the grasp point moves as the front
   opens (world).
-- **`action`:** the commanded target pose of the gripper base (m, rad) and the gripper command (0 open, 1 closed).
-- **Task:** one instruction per episode, e.g. "open the drawer by its bow handle".
+"""
+    state_text += action
+    who = "gripper" if layout.is_pose else f"robot arm ({robot.name})"
+    return f"""Episodes of a simulated {who} opening articulated furniture (drawers, doors and flaps with real
+handle geometry), scripted or teleoperated in MuJoCo, exported by rik (Real-IKEA kit) {rik.__version__}, catalog
+schema {rik.CATALOG_SCHEMA}.
+
+- **Episodes:** {checks['episodes']}, **frames:** {checks['frames']} at {fps} Hz; {frames}
+{streams}{state_text}- **Task:** one instruction per episode, e.g. "open the drawer by its bow handle".
 - **Episode metadata:** columns `rik/variant`, `rik/base_unit`, `rik/handle`, `rik/handle_type`, `rik/preset`,
   `rik/front`, `rik/operator`, `rik/operator_kind`, `rik/outcome` (F, P or S), `rik/seed`, `rik/final_opening`
   of `meta/episodes`; filter with `LeRobotDataset(..., episode_filter=lambda e: e["rik/outcome"] == "S")`.
+
+{robot_text(robot, layout)}
 
 {training_text()}
 
@@ -110,16 +205,18 @@ def card_fields(root: Path) -> dict[str, str]:
 
 
 def write_card(catalog: Catalog, root: Path, spec: ExportSpec, fps: int, checks: dict[str, Any],
-               extra: str = "") -> Path:
+               extra: str = "", robot: str = "hand-e") -> Path:
     """Write ``README.md`` (lerobot's dataset card, filled in) and the card's fields into the dataset; ``extra``
-    (markdown) is added to the description (how a built dataset was made: :mod:`rik.dataset.build`)."""
+    (markdown) is added to the description (how a built dataset was made: :mod:`rik.dataset.build`); ``robot``: the
+    catalog robot whose episodes it holds."""
     from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
     from lerobot.datasets.utils import create_lerobot_dataset_card
 
     from rik.paths import write_atomic
 
     info = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))
-    description = _description(catalog, spec, fps, checks, info) + (f"\n{extra}\n" if extra else "")
+    description = (_description(catalog, spec, fps, checks, info, catalog.robot(robot))
+                   + (f"\n{extra}\n" if extra else ""))
     fields = {"dataset_description": description,
               "paper": "Real-IKEA (see CITATION below)", "citation_bibtex": CITATION}
     write_atomic(root / "meta" / CARD_FIELDS, json.dumps(fields, indent=1) + "\n")

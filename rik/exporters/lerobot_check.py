@@ -7,9 +7,12 @@ from __future__ import annotations
 import json
 from collections import defaultdict
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+
+if TYPE_CHECKING:
+    from rik.sim.robot_layout import RobotLayout
 
 TOLERANCE_S = 1e-4
 
@@ -60,36 +63,60 @@ def check_frame_counts(root: Path) -> dict[str, int]:
     return decoded
 
 
-def state_layout(features: dict[str, Any]) -> int | None:
-    """rik's state layout of a dataset's ``features`` (info.json): 2 (``observation.state`` of the robot,
-    ``observation.environment_state`` of the front), 1 (one 14-number ``observation.state``, exports made before
-    the split), or None (not a rik layout)."""
+def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> int | None:
+    """rik's state layout of a dataset's ``features`` (info.json) for the robot of ``robot`` (None: the Hand-E): 2
+    (``observation.state`` of the robot in its layout, ``observation.environment_state`` of the front), 1 (one
+    14-number ``observation.state``, Hand-E exports made before the split), or None (not a rik layout)."""
     from rik.exporters.lerobot_frames import LAYOUT_1_STATE_NAMES
-    from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
+    from rik.sim.observation import ENV_STATE_NAMES
+    from rik.sim.robot_layout import robot_layout
+
+    robot = robot or robot_layout(None)
 
     def names(key: str) -> tuple[str, ...] | None:
         return tuple(features[key].get("names") or ()) if key in features else None
 
-    if names("observation.state") == ROBOT_STATE_NAMES and names("observation.environment_state") == ENV_STATE_NAMES:
+    if names("observation.state") == robot.state_names and names("observation.environment_state") == ENV_STATE_NAMES:
         return 2
     if names("observation.state") == LAYOUT_1_STATE_NAMES and "observation.environment_state" not in features:
         return 1
     return None
 
 
-def describe_layout(layout: int | None) -> str:
-    """A state layout in words."""
+def describe_layout(layout: int | None, robot: RobotLayout | None = None) -> str:
+    """A state layout in words (``robot``: the robot's layout; None: the Hand-E's)."""
     if layout == 2:
-        return "2 (observation.state: the robot's 11 numbers; observation.environment_state: the front's 13)"
+        who = "the robot's" if robot is None or robot.is_pose else f"robot {robot.robot_id}'s"
+        n = 11 if robot is None else len(robot.state_names)
+        return f"2 (observation.state: {who} {n} numbers; observation.environment_state: the front's 13)"
     if layout == 1:
         return ("1 (one 14-number observation.state, no observation.environment_state: an export made before the "
                 "state split; export the episodes again for layout 2)")
     return "unknown (not one of rik's layouts)"
 
 
-def check_dataset(root: Path, repo_id: str, episodes: int) -> dict[str, Any]:
-    """Load the dataset offline with ``LeRobotDataset``, check its episode count, rik's metadata columns and its
-    frame counts; returns a summary."""
+def check_robot(root: Path, robot_type: str | None, feats: dict[str, Any], robot: RobotLayout) -> None:
+    """The dataset's ``robot_type`` and its features ``action`` and ``observation.ee_pose`` are those of
+    ``robot``'s layout."""
+    from rik.exporters.lerobot_frames import EE_POSE
+    from rik.sim.robot_layout import EE_NAMES
+
+    if robot_type != robot.robot_type:
+        raise RikError(f"{root}: robot_type is {robot_type!r}, robot {robot.robot_id}'s is {robot.robot_type!r}")
+    action = tuple(feats.get("action", {}).get("names") or ())
+    if action != robot.action_names:
+        raise RikError(f"{root}: action holds {', '.join(action)}; robot {robot.robot_id}'s layout is "
+                       f"{', '.join(robot.action_names)}")
+    ee = tuple(feats[EE_POSE].get("names") or ()) if EE_POSE in feats else None
+    if ee != (EE_NAMES if robot.ee_pose else None):
+        raise RikError(f"{root}: {EE_POSE} is {'missing' if ee is None else ', '.join(ee)}; robot "
+                       f"{robot.robot_id}'s layout {'has' if robot.ee_pose else 'has none'}"
+                       + (f" ({', '.join(EE_NAMES)})" if robot.ee_pose else ""))
+
+
+def check_dataset(root: Path, repo_id: str, episodes: int, robot: RobotLayout | None = None) -> dict[str, Any]:
+    """Load the dataset offline with ``LeRobotDataset``, check its episode count, rik's metadata columns, its
+    robot's layout (``robot``; None: the Hand-E's) and its frame counts; returns a summary."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     ds = LeRobotDataset(repo_id, root=root, video_backend="pyav")
@@ -100,13 +127,17 @@ def check_dataset(root: Path, repo_id: str, episodes: int) -> dict[str, Any]:
     if missing:
         raise RikError(f"{root}: meta/episodes lacks rik's columns {missing}")
     from rik.exporters.lerobot_frames import LAYOUT
+    from rik.sim.robot_layout import robot_layout
 
-    layout = state_layout(ds.meta.features)
+    robot = robot or robot_layout(None)
+    layout = state_layout(ds.meta.features, robot)
     if layout != LAYOUT:
-        raise RikError(f"{root}: holds rik's state layout {describe_layout(layout)}, not layout {LAYOUT}")
+        raise RikError(f"{root}: holds rik's state layout {describe_layout(layout)}, not layout {LAYOUT} of robot "
+                       f"{robot.robot_id}")
+    check_robot(root, ds.meta.robot_type, ds.meta.features, robot)
     decoded = check_frame_counts(root)
     counts = ("every episode's video frames equal its rows" if decoded else
               "no video features to check (a state-only export)")
     return {"episodes": ds.meta.total_episodes, "frames": ds.meta.total_frames, "fps": ds.meta.fps,
-            "layout": layout, "layout_text": describe_layout(layout), "video_frames_decoded": decoded,
+            "layout": layout, "layout_text": describe_layout(layout, robot), "video_frames_decoded": decoded,
             "frame_counts": counts}

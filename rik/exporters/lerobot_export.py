@@ -29,9 +29,9 @@ from rik.errors import RikError
 from rik.exporters.lerobot_frames import (
     LAYOUT,
     LAYOUT_1_STATE_NAMES,
-    ROBOT_TYPE,
     EpisodeSource,
     episode_frames,
+    episode_layout,
     episode_metadata,
     features,
 )
@@ -41,6 +41,7 @@ from rik.sim.observation import STREAM_SUFFIX
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
+    from rik.sim.robot_layout import RobotLayout
 
 STREAMS = tuple(STREAM_SUFFIX)
 """The image streams an export can hold: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
@@ -89,6 +90,10 @@ class ExportResult:
     shards_written: int
     shards_skipped: int
     checks: dict[str, Any] = field(default_factory=dict)
+    robot: str = "hand-e"
+    """The catalog robot whose episodes the dataset holds."""
+    robot_type: str = "rik_hand_e"
+    """``info.json``'s ``robot_type``."""
 
 
 def parse_streams(text: str) -> tuple[str, ...]:
@@ -131,6 +136,18 @@ def _episode_fps(metas: dict[Path, EpisodeMeta], spec: ExportSpec) -> int:
     return rates.pop()
 
 
+def one_robot(metas: dict[Path, EpisodeMeta]) -> str:
+    """The robot of the episodes, which must all have the same one: a dataset holds one robot's state and action
+    layout. Read from meta.json alone, before any other work."""
+    first_dir, first = next(iter(metas.items()))
+    for d, m in metas.items():
+        if m.robot != first.robot:
+            raise RikError(f"{d / 'meta.json'}: robot '{m.robot}' differs from robot '{first.robot}' of "
+                           f"{first_dir / 'meta.json'}; a dataset holds one robot's state and action layout, so "
+                           "export each robot's episodes to a dataset of its own")
+    return first.robot
+
+
 def _check_same_features(dirs: list[Path]) -> None:
     """Every episode loads whole (sha256 checked) and records the action rik exports, before any work starts."""
     from rik.exporters.lerobot_frames import ACTION_NAMES
@@ -145,8 +162,8 @@ def _check_same_features(dirs: list[Path]) -> None:
                            "dataset")
 
 
-def _plan(metas: dict[Path, EpisodeMeta], spec: ExportSpec, fps: int) -> dict[str, Any]:
-    return {"spec": {**asdict(spec), "fps": fps, "layout": LAYOUT},
+def _plan(metas: dict[Path, EpisodeMeta], spec: ExportSpec, fps: int, robot: str = "hand-e") -> dict[str, Any]:
+    return {"spec": {**asdict(spec), "fps": fps, "layout": LAYOUT, "robot": robot},
             "encoder_options": ENCODER_OPTIONS.get(spec.codec, {}),
             "episodes": [[m.id, m.states_sha256] for m in metas.values()]}  # an older partial export is not mixed in
 
@@ -182,22 +199,33 @@ def quiet_encoders() -> None:
     av.logging.set_libav_level(av.logging.ERROR)
 
 
+def sources_layout(catalog: Catalog, sources: Sequence[EpisodeSource]) -> RobotLayout:
+    """The robot layout of episodes that share one robot (:func:`one_robot` checks that they do)."""
+    from rik.sim.episode import read_meta
+
+    metas = {s.directory: read_meta(s.directory) for s in sources}
+    one_robot(metas)
+    directory, meta = next(iter(metas.items()))
+    return episode_layout(catalog, directory, meta)
+
+
 def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[EpisodeSource], cameras: list[str],
                 spec: ExportSpec, fps: int, variants: Path) -> int:
-    """Write one shard dataset at ``root`` through lerobot's writer; returns its frame count. Marked done only
-    after ``finalize()`` and the frame-count check."""
+    """Write one shard dataset at ``root`` through lerobot's writer, in its episodes' robot's layout; returns its
+    frame count. Marked done only after ``finalize()`` and the frame-count check."""
     from lerobot.configs import RGBEncoderConfig
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     from rik.exporters.lerobot_check import check_frame_counts
 
     quiet_encoders()
+    layout = sources_layout(catalog, sources)
     if root.exists():
         shutil.rmtree(root)  # an unfinished shard is redone from scratch
     root.parent.mkdir(parents=True, exist_ok=True)
     ds = LeRobotDataset.create(repo_id=repo_id, fps=fps, features=features(cameras, spec.streams, spec.width,
-                                                                             spec.height),
-                               root=root / "ds", robot_type=ROBOT_TYPE, use_videos=bool(spec.streams),
+                                                                             spec.height, layout),
+                               root=root / "ds", robot_type=layout.robot_type, use_videos=bool(spec.streams),
                                video_backend="pyav",
                                rgb_encoder=RGBEncoderConfig(vcodec=spec.codec,
                                                              extra_options=dict(ENCODER_OPTIONS.get(spec.codec, {}))),
@@ -283,15 +311,19 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                        "delete it")
     dirs = find_episodes(list(episodes))
     metas = {d: read_meta(d) for d in dirs}
+    robot = one_robot(metas)
+    layout = [episode_layout(catalog, d, m) for d, m in metas.items()][0]  # in the catalog, with its joints
     _check_same_features(dirs)
     fps = _episode_fps(metas, spec)
-    plan = _plan(metas, spec, fps)
+    plan = _plan(metas, spec, fps, robot)
     if partial_dir.exists():
         try:
             old = json.loads((partial_dir / PLAN).read_text(encoding="utf-8"))
         except (OSError, ValueError):
             old = None
         _check_layout(partial_dir, old)
+        if isinstance(old, dict) and isinstance(old.get("spec"), dict):
+            old["spec"].setdefault("robot", "hand-e")  # plans written before robots were the Hand-E's
         if old != json.loads(json.dumps(plan)):
             raise RikError(f"{partial_dir}: the interrupted export there was of other episodes or settings; delete "
                            "it, or run it again with the same ones")
@@ -355,12 +387,13 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     from rik.exporters.lerobot_card import write_card
     from rik.exporters.lerobot_check import check_dataset
 
-    checks = check_dataset(merged, spec.repo_id, len(dirs))
-    write_card(catalog, merged, spec, fps, checks)
+    checks = check_dataset(merged, spec.repo_id, len(dirs), layout)
+    write_card(catalog, merged, spec, fps, checks, robot=robot)
     publish(merged, out)
     shutil.rmtree(partial_dir, ignore_errors=True)
     return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
-                        sorted(features(cams, spec.streams, spec.width, spec.height)), len(jobs), skipped, checks)
+                        sorted(features(cams, spec.streams, spec.width, spec.height, layout)), len(jobs), skipped,
+                        checks, robot, layout.robot_type)
 
 
 def _order_stats(root: Path) -> None:

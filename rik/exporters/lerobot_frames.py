@@ -3,11 +3,14 @@ dataset's rate) and the per-episode metadata.
 
 Features follow LeRobot's conventions: ``observation.state`` (the robot's state) and
 ``observation.environment_state`` (the front's state), named, as the gym environment's ``agent_pos`` and
-``environment_state`` (:mod:`rik.sim.observation`); ``action`` (the recorded absolute target pose and gripper
-command, named: what the environment takes with ``action_mode="absolute"``), and one video feature per camera and
-stream: ``observation.images.<camera>`` for the sim stream, ``observation.images.<camera>_rerendered`` for the
-Mitsuba one. Episode metadata are not features (policies take every ``observation.*`` feature): they are columns
-``rik/<field>`` of ``meta/episodes``, which survive loading, ``episode_filter``, resuming and merging.
+``environment_state`` (:mod:`rik.sim.observation`); ``action``, and one video feature per camera and stream:
+``observation.images.<camera>`` for the sim stream, ``observation.images.<camera>_rerendered`` for the Mitsuba one.
+What ``observation.state`` and ``action`` hold is the episode's robot's layout (:mod:`rik.sim.robot_layout`): for
+the Hand-E its pose state and the recorded absolute target pose and gripper command (what the environment takes
+with ``action_mode="absolute"``); for an arm its joint positions and the joint targets its servos were given, in
+LeRobot's names and units for that robot, with ``observation.ee_pose`` where the robot's entry asks for it. A
+dataset holds one robot. Episode metadata are not features (policies take every ``observation.*`` feature): they are
+columns ``rik/<field>`` of ``meta/episodes``, which survive loading, ``episode_filter``, resuming and merging.
 """
 
 from __future__ import annotations
@@ -27,13 +30,20 @@ if TYPE_CHECKING:
 
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
+    from rik.schemas.robots import Robot
+    from rik.sim.robot_layout import RobotLayout
 
 ACTION_NAMES = ("target_x", "target_y", "target_z", "target_pitch", "target_yaw", "target_roll", "gripper")
-"""The recorded action: target pose of the gripper base (m, rad) and gripper command (0 open, 1 closed)."""
+"""The recorded action (``states.parquet``'s ``action``, every robot's): target pose of the gripper base (m, rad) and
+gripper command (0 open, 1 closed); the Hand-E's exported ``action`` too."""
+EE_POSE = "observation.ee_pose"
+"""The feature of an arm's end-effector pose in its base frame (:data:`rik.sim.robot_layout.EE_NAMES`), where its
+catalog entry asks for one."""
 META_PREFIX = "rik/"
 META_FIELDS = ("episode_id", "variant", "base_unit", "handle", "handle_type", "preset", "front", "operator",
                "operator_kind", "outcome", "seed", "final_opening", "source_fps")
 ROBOT_TYPE = "rik_hand_e"
+"""``info.json``'s ``robot_type`` of the Hand-E's exports (an arm's is its catalog entry's ``lerobot.robot_type``)."""
 LAYOUT = 2
 """Version of the state layout an export writes: 2 is ``observation.state`` (the robot's state,
 :data:`rik.sim.observation.ROBOT_STATE_NAMES`) beside ``observation.environment_state`` (the front's state); 1 was
@@ -48,22 +58,56 @@ def image_key(camera: str, stream: str) -> str:
     return f"observation.images.{image_name(camera, stream)}"
 
 
-def features(cameras: Sequence[str], streams: Sequence[str], width: int, height: int) -> dict[str, dict[str, Any]]:
-    """The LeRobot feature dict of an export."""
-    from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
+def _vector(names: Sequence[str]) -> dict[str, Any]:
+    return {"dtype": "float32", "shape": (len(names),), "names": list(names)}
 
-    out: dict[str, dict[str, Any]] = {
-        "observation.state": {"dtype": "float32", "shape": (len(ROBOT_STATE_NAMES),),
-                              "names": list(ROBOT_STATE_NAMES)},
-        "observation.environment_state": {"dtype": "float32", "shape": (len(ENV_STATE_NAMES),),
-                                          "names": list(ENV_STATE_NAMES)},
-        "action": {"dtype": "float32", "shape": (len(ACTION_NAMES),), "names": list(ACTION_NAMES)},
-    }
+
+def features(cameras: Sequence[str], streams: Sequence[str], width: int, height: int,
+             layout: RobotLayout | None = None) -> dict[str, dict[str, Any]]:
+    """The LeRobot feature dict of an export of one robot's episodes (``layout``; None: the Hand-E's)."""
+    from rik.sim.observation import ENV_STATE_NAMES
+    from rik.sim.robot_layout import EE_NAMES, robot_layout
+
+    layout = layout or robot_layout(None)
+    out: dict[str, dict[str, Any]] = {"observation.state": _vector(layout.state_names)}
+    if layout.ee_pose:
+        out[EE_POSE] = _vector(EE_NAMES)
+    out["observation.environment_state"] = _vector(ENV_STATE_NAMES)
+    out["action"] = _vector(layout.action_names)
     for cam in cameras:
         for stream in streams:
             out[image_key(cam, stream)] = {"dtype": "video", "shape": (height, width, 3),
                                            "names": ["height", "width", "channels"]}
     return out
+
+
+def episode_robot(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> Robot:
+    """The catalog entry of the robot an episode was recorded with (``meta.robot``); an id the catalog lacks is one
+    line naming the episode's meta.json."""
+    from rik.errors import UnknownIdError
+
+    try:
+        return catalog.robot(meta.robot)
+    except UnknownIdError as exc:
+        raise RikError(f"{Path(directory) / 'meta.json'}: field 'robot': {exc} (give the catalog it was recorded "
+                       "with, --catalog)") from None
+
+
+def episode_layout(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> RobotLayout:
+    """The LeRobot layout of an episode's robot (:func:`rik.sim.robot_layout.robot_layout`); an arm's recorded
+    joints must be its catalog entry's, as the layout reads them by name."""
+    from rik.schemas.robots import RobotKind
+    from rik.sim.robot_layout import robot_layout
+
+    robot = episode_robot(catalog, directory, meta)
+    if robot.kind is not RobotKind.arm:
+        return robot_layout(None)
+    expected = (*robot.joint_names, "gripper")
+    if tuple(meta.robot_joints) != expected:
+        raise RikError(f"{Path(directory) / 'meta.json'}: field 'robot_joints': the episode recorded joints "
+                       f"{', '.join(meta.robot_joints) or '(none)'}, but robot '{robot.id}' of the catalog has "
+                       f"{', '.join(expected)}; export it with the catalog it was recorded with (--catalog)")
+    return robot_layout(robot)
 
 
 def task_text(catalog: Catalog, meta: EpisodeMeta, front_kind: str) -> str:
@@ -105,29 +149,38 @@ def episode_frames(catalog: Catalog, source: EpisodeSource, cameras: Sequence[st
     """(meta, task, frame dicts for ``add_frame`` without the task, frame count) of one episode."""
     from rik.render.streams import read_frame
     from rik.sim.episode import read_episode, states
-    from rik.sim.observation import state_observation
+    from rik.sim.observation import environment_state
     from rik.sim.replay import episode_scene
 
     meta, table = read_episode(source.directory)
+    layout = episode_layout(catalog, source.directory, meta)
     scene = episode_scene(catalog, source.directory, variants, meta)
     recorded = states(table)
-    actions = cast("pa.ListArray", table.column("action").combine_chunks()).values.to_numpy().reshape(len(recorded), -1)
+    actions = _rows(table, "action", len(recorded))
     if actions.shape[1] != len(ACTION_NAMES):
         raise RikError(f"{source.directory / 'states.parquet'}: column 'action' has {actions.shape[1]} numbers "
                        f"per row; rik exports {len(ACTION_NAMES)} ({', '.join(ACTION_NAMES)})")
+    # an arm's action is what its servos were commanded: the recorded joint targets (format 3 episodes)
+    targets = np.zeros((len(recorded), 0)) if layout.is_pose else _rows(table, "robot_targets", len(recorded))
     picks = resample_indices(len(recorded), meta.fps, fps)
     task = task_text(catalog, meta, scene.front.kind)
 
     def frames() -> Iterator[dict[str, np.ndarray]]:
         for k in picks:
             scene.restore(recorded[k])
-            state = state_observation(scene)
-            frame: dict[str, np.ndarray] = {"observation.state": state["agent_pos"],
-                                            "observation.environment_state": state["environment_state"],
-                                            "action": actions[k].astype(np.float32)}
+            frame: dict[str, np.ndarray] = {"observation.state": layout.state(scene).astype(np.float32)}
+            if layout.ee_pose:
+                frame[EE_POSE] = layout.ee(scene).astype(np.float32)
+            frame["observation.environment_state"] = environment_state(scene).astype(np.float32)
+            frame["action"] = layout.action(actions[k], targets[k]).astype(np.float32)
             for stream, folder in source.streams.items():
                 for cam in cameras:
                     frame[image_key(cam, stream)] = read_frame(folder, cam, int(k))
             yield frame
 
     return meta, task, frames(), len(picks)
+
+
+def _rows(table: pa.Table, column: str, rows: int) -> np.ndarray:
+    """A vector column of ``states.parquet`` as a (rows, width) array."""
+    return cast("pa.ListArray", table.column(column).combine_chunks()).values.to_numpy().reshape(rows, -1)
