@@ -165,47 +165,10 @@ def test_preprocess_observation_maps_ee_pose(variants: Path) -> None:
 
 
 # ---- the policy loop with the SO-100 --------------------------------------------------------------------------
-def _arm_dataset(episodes: Path, root: Path, repo_id: str, variants: Path) -> None:
-    """A state-only LeRobot dataset of arm episodes in the arm's layout (what ``rik export-lerobot --streams none``
-    is to write for arms), through lerobot's own ``LeRobotDataset.create`` and ``add_frame``."""
-    from lerobot.datasets.lerobot_dataset import LeRobotDataset
-
-    from rik.sim.episode import find_episodes, read_episode, states
-    from rik.sim.observation import ENV_STATE_NAMES, environment_state, instruction
-    from rik.sim.replay import episode_scene
-    from rik.sim.robot_layout import robot_layout
-
-    dataset = None
-    for directory in find_episodes([episodes]):
-        meta, table = read_episode(directory)
-        scene = episode_scene(CAT, directory, variants, meta)
-        layout = robot_layout(scene.robot)
-        if dataset is None:
-            features = {
-                "observation.state": {"dtype": "float32", "shape": (len(layout.state_names),),
-                                      "names": list(layout.state_names)},
-                "observation.environment_state": {"dtype": "float32", "shape": (len(ENV_STATE_NAMES),),
-                                                  "names": list(ENV_STATE_NAMES)},
-                "action": {"dtype": "float32", "shape": (len(layout.action_names),),
-                           "names": list(layout.action_names)}}
-            dataset = LeRobotDataset.create(repo_id, int(meta.fps), root=root, robot_type=layout.robot_type,
-                                            features=features, use_videos=False)
-        actions = np.asarray(table.column("action").to_pylist())
-        targets = np.asarray(table.column("robot_targets").to_pylist())
-        task = instruction(CAT, meta.handle, scene.front.kind)
-        for k, state in enumerate(states(table)):
-            scene.restore(state)
-            dataset.add_frame({"observation.state": layout.state(scene).astype(np.float32),
-                               "observation.environment_state": environment_state(scene).astype(np.float32),
-                               "action": layout.action(actions[k], targets[k]).astype(np.float32), "task": task})
-        dataset.save_episode()
-    assert dataset is not None, f"no episodes in {episodes}"
-    dataset.finalize()
-
-
 @pytest.fixture(scope="module")
 def so100_policy(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> dict[str, Path | int]:
-    """Two scripted SO-100 demonstrations, a dataset in its layout and a tiny ACT trained on it for 4 steps by
+    """Two scripted SO-100 demonstrations, their state-only export (rik export-lerobot, in the arm's layout) and a
+    tiny ACT trained on it for 4 steps by
     lerobot-train, which evaluates it once in rik's environment with the SO-100."""
     from rik.sim.record import record
 
@@ -213,7 +176,12 @@ def so100_policy(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> di
     # rik record VARIANT -s grasp_vertical --robot so100 -n 2, in the library: 3 s episodes keep it short
     record(CAT, VARIANT, "grasp_vertical", episodes=2, front=FRONT, out=root / "episodes", variants=variants,
            robot=CAT.robot("so100"), max_seconds=3.0)
-    _arm_dataset(root / "episodes", root / "dataset", "local/so100", variants)
+    # rik export-lerobot EPISODES --out dataset --repo-id local/so100 --streams none, in the library
+    from rik.exporters.lerobot_export import ExportSpec, export_lerobot
+    from rik.sim.episode import find_episodes
+
+    export_lerobot(CAT, find_episodes([root / "episodes"]), root / "dataset", ExportSpec("local/so100", streams=()),
+                   variants=variants)
     info = json.loads((root / "dataset" / "meta" / "info.json").read_text())
     assert info["robot_type"] == "so_follower" and info["features"]["action"]["shape"] == [6]
     res = _run(str(BIN / "lerobot-train"), "--dataset.repo_id=local/so100", "--dataset.root=dataset",

@@ -183,7 +183,8 @@ def test_so100_dataset_holds_joints_in_degrees_and_servo_targets(so100: Path) ->
     card = (so100 / "ds" / "README.md").read_text()
     assert "**Robot: SO-100 arm (SO-ARM100)** (rik catalog robot `so100`, `robot_type` `so_follower`)" in card
     assert "Joint zeros." in card and "not LeRobot's calibration" in card and "licence Apache-2.0" in card
-    assert "grip force 17 N (measured in rik's scene" in card and "pad friction 0.35 (assumed" in card
+    grip = CAT.robot("so100").gripper.grip_force.value
+    assert f"grip force {grip:g} N (measured in rik's scene" in card and "pad friction 0.35 (assumed" in card
     assert "| so_arm100_left/Rotation | `shoulder_pan.pos` | -2.2 .. 2.2 | 1.91 | 5.45 | 14 | 0.3 |" in card
     assert "`gripper.pos` (percent of the opening: 100 open, 0 closed)" in card
 
