@@ -15,10 +15,13 @@ time for the same frame (the floor: the station cannot stream faster than it ren
 
 Target: at least 15 frames/s at 320x240 on this machine's 2 CPU cores (MuJoCo on llvmpipe through EGL).
 
-Run: ``uv run python benchmarks/teleop_latency.py [--seconds 8] [--taps 15]`` (about 2 minutes with the variant
-built; building it first takes up to a minute). ``--floor-only --model FILE.mjb`` measures the floor alone from a
-saved model with only mujoco, numpy and Pillow installed (how the GPU figures in docs/benchmarks.md were taken on
-a machine without rik).
+``--robot panda-2f85`` (or ``so100``) measures the station with that arm (``rik teleop --web --robot``): its
+scene renders the arm's links too, and each control step runs one IK step.
+
+Run: ``uv run python benchmarks/teleop_latency.py [--seconds 8] [--taps 15] [--robot ID]`` (about 2 minutes with
+the variant built; building it first takes up to a minute). ``--floor-only --model FILE.mjb`` measures the floor
+alone from a saved model with only mujoco, numpy and Pillow installed (how the GPU figures in docs/benchmarks.md
+were taken on a machine without rik).
 """
 
 from __future__ import annotations
@@ -41,7 +44,8 @@ SIZES = ((320, 240), (640, 480))
 JPEG_QUALITY = 80
 
 
-def floor(model_path: Path | None, sizes: tuple[tuple[int, int], ...], frames: int = 60) -> list[dict[str, float]]:
+def floor(model_path: Path | None, sizes: tuple[tuple[int, int], ...], frames: int = 60,
+          robot: str = "hand-e") -> list[dict[str, float]]:
     """Offscreen render and JPEG encode time per frame (ms) of the ``front`` camera at each size."""
     import mujoco
     import numpy as np
@@ -52,7 +56,7 @@ def floor(model_path: Path | None, sizes: tuple[tuple[int, int], ...], frames: i
         data = mujoco.MjData(model)
         mujoco.mj_forward(model, data)
     else:
-        model, data = demo_scene()
+        model, data = demo_scene(robot)
     rows = []
     for w, h in sizes:
         renderer = mujoco.Renderer(model, h, w)
@@ -84,13 +88,17 @@ def floor(model_path: Path | None, sizes: tuple[tuple[int, int], ...], frames: i
     return rows
 
 
-def demo_scene():
-    """The demo variant's scene (built into a temporary folder if needed), as the station builds it."""
+def demo_scene(robot: str = "hand-e"):
+    """The demo variant's scene with ``robot`` (built into ``$RIK_BENCH_VARIANTS`` or ``variants`` if needed), as
+    the station builds it."""
     from rik.registry import load_catalog
     from rik.sim.record import variant_dir
     from rik.sim.scene import build_scene
 
-    scene = build_scene(variant_dir(load_catalog(), VARIANT, Path(os.environ.get("RIK_BENCH_VARIANTS", "variants"))))
+    catalog = load_catalog()
+    entry = catalog.robot(robot)
+    scene = build_scene(variant_dir(catalog, VARIANT, Path(os.environ.get("RIK_BENCH_VARIANTS", "variants"))),
+                        robot=None if entry.kind.value == "floating" else entry)
     return scene.model, scene.data
 
 
@@ -162,9 +170,10 @@ def station(url: str, size: tuple[int, int], seconds: float, taps: int) -> dict[
             "taps": len(latencies)}
 
 
-def start_station(work: Path) -> tuple[subprocess.Popen, str]:
+def start_station(work: Path, robot: str = "hand-e") -> tuple[subprocess.Popen, str]:
     proc = subprocess.Popen([sys.executable, "-m", "rik", "teleop", VARIANT, "--web", "--port", "0", "--out",
-                             str(work / "episodes"), "--variants", os.environ.get("RIK_BENCH_VARIANTS", "variants")],
+                             str(work / "episodes"), "--variants", os.environ.get("RIK_BENCH_VARIANTS", "variants"),
+                             "--robot", robot],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "COLUMNS": "200"})
     assert proc.stdout is not None
@@ -182,17 +191,18 @@ def main() -> None:
     parser.add_argument("--taps", type=int, default=15, help="inputs timed for the latency")
     parser.add_argument("--floor-only", action="store_true", help="measure the render floor alone")
     parser.add_argument("--model", type=Path, help="with --floor-only: a saved model (.mjb) instead of the demo")
+    parser.add_argument("--robot", default="hand-e", help="the robot of the scene and the station (a catalog id)")
     args = parser.parse_args()
     print(f"machine: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}, "
-          f"MUJOCO_GL={os.environ.get('MUJOCO_GL', '(unset)')}")
-    floors = floor(args.model, SIZES)
+          f"MUJOCO_GL={os.environ.get('MUJOCO_GL', '(unset)')}; robot {args.robot}")
+    floors = floor(args.model, SIZES, robot=args.robot)
     if args.floor_only:
         for f in floors:
             print(f"{f['width']}x{f['height']}: render {f['render_ms']:.1f} ms ({f['floor_fps']:.0f} fps floor), "
                   f"JPEG {f['encode_ms']:.1f} ms; with shadows and reflections {f['shadows_ms']:.1f} ms")
         return
     with tempfile.TemporaryDirectory() as tmp:
-        proc, url = start_station(Path(tmp))
+        proc, url = start_station(Path(tmp), args.robot)
         try:
             rows = [(f, station(url, (f["width"], f["height"]), args.seconds, args.taps)) for f in floors]
         finally:

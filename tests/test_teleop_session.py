@@ -86,6 +86,33 @@ def test_a_held_key_moves_the_target_at_most_its_speed_and_never_far_ahead(varia
     assert steps.max() <= LINEAR_SPEED / s.scene.control_fps + 1e-9
 
 
+def test_an_arm_turned_past_its_angles_wrap_follows_the_keys_without_a_jump(variants: Path, tmp_path: Path) -> None:
+    """An arm's pose gives principal Euler angles (roll wraps at +-180 deg; past a yaw of 90 deg pitch and roll flip
+    by 180 deg), while a held key moves the target on: rolling the Panda past 180 deg and yawing it past 90 deg
+    moves the target at the keys' speed and no faster, the gripper follows within a few degrees and comes back to
+    rest where it started, and its episode id names the robot."""
+    from rik.sim.scene import gripper_rotation
+    from rik.sim.teleop_keys import ANGULAR_SPEED
+
+    s = TeleopSession(build_scene(variants / BOW, robot=CAT.robot("panda-2f85")), tmp_path)
+    assert ".panda-2f85__" in s.episode and s.status()["robot"] == "panda-2f85"
+    start = s.scene.pose()
+
+    def lag() -> float:  # the angle between the gripper's rotation and the target's, rad
+        r = s.scene.gripper_rotation().T @ gripper_rotation(s.target[3:6])
+        return float(np.arccos(np.clip((np.trace(r) - 1) / 2, -1.0, 1.0)))
+
+    for key, steps in (("KeyQ", 100), ("ArrowLeft", 60), (None, 20)):  # 4.0 rad of roll, 2.4 rad of yaw, rest
+        s.set_input(velocity({key} if key else set()))
+        for _ in range(steps):
+            before = s.target.copy()
+            assert s.tick()
+            assert np.abs(s.target[:6] - before[:6]).max() <= ANGULAR_SPEED / s.scene.control_fps + 1e-9
+            assert lag() < 0.1, (key, s.target, s.scene.pose())
+    assert s.target[5] > np.pi and s.target[4] > np.pi / 2  # the target went on past both wraps
+    assert lag() < 0.01 and np.linalg.norm(s.scene.pose()[:3] - start[:3]) < 0.005
+
+
 def test_every_episode_gets_a_new_id_and_nothing_is_overwritten(variants: Path, tmp_path: Path) -> None:
     first = _session(variants, tmp_path, seed=3)
     first.set_input([0, -1, 0, 0, 0, 0])

@@ -74,11 +74,12 @@ def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
 class Teleop:
     """``rik teleop VARIANT`` running in a window on ``display``; its stdout read line by line in a thread."""
 
-    def __init__(self, display: str, out: Path, variants: Path) -> None:
+    def __init__(self, display: str, out: Path, variants: Path, *options: str) -> None:
         self.env = {**os.environ, "DISPLAY": display, "MUJOCO_GL": "glfw", "PYTHONUNBUFFERED": "1"}
         rik = Path(sys.executable).parent / "rik"
-        self.proc = subprocess.Popen([str(rik), "teleop", VARIANT, "--out", str(out), "--variants", str(variants)],
-                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=self.env)
+        self.proc = subprocess.Popen([str(rik), "teleop", VARIANT, "--out", str(out), "--variants", str(variants),
+                                      *options], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                     env=self.env)
         self.lines: queue.Queue[tuple[float, str]] = queue.Queue()
         self.seen: list[str] = []
         threading.Thread(target=self._read, daemon=True).start()
@@ -229,6 +230,36 @@ def test_quit_discards_and_sessions_take_new_ids(display: str, variants: Path, t
         finally:
             t.kill()
     assert ids[0] != ids[1] and [p.name for p in episodes(out)] == sorted(ids)
+
+
+def test_the_window_opens_with_an_arm_and_esc_closes_it(display: str, variants: Path, tmp_path: Path) -> None:
+    """``--robot so100``: the window opens on the arm's scene (the status names it in the episode id), shows the
+    arm's wrist camera (2) and the free camera (3) while the loop goes on, and Esc closes it, nothing saved."""
+    t = Teleop(display, tmp_path / "episodes", variants, "--robot", "so100")
+    try:
+        assert f"{VARIANT}__drawer-1__keyboard.so100__s0000" == t.status()["episode"]
+        t.press("2")
+        t.press("3")
+        assert t.status(after=time.monotonic())["state"] == "waiting for input"
+        text = t.quit()
+    finally:
+        t.kill()
+    assert t.proc.returncode == 0 and "no episode saved" in text, text
+
+
+def test_an_arms_wrist_camera_is_found_under_its_prefix(variants: Path) -> None:
+    """The arm's wrist camera comes with its model (``robot/wrist``): keys 2 and the station's wrist stream find it
+    (an id of -1 would render a fixed camera that is not there)."""
+    import mujoco
+
+    from rik.registry import load_catalog
+    from rik.sim.scene import build_scene
+    from rik.sim.teleop_window import scene_camera
+
+    model = build_scene(variants / VARIANT, robot=load_catalog().robot("so100")).model
+    assert scene_camera(model, "wrist") == "robot/wrist" and scene_camera(model, "front") == "front"
+    assert all(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, scene_camera(model, c)) >= 0
+               for c in ("front", "wrist"))
 
 
 def test_a_display_without_an_x_server_is_one_line(rik, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:

@@ -1,6 +1,6 @@
 """The catalog in the web app: its JSON API (TestClient) and the page in a real Chromium (Playwright): every handle
 listed with a loaded picture, filters by type, size and finish, one handle's dimensions, heatmap and mesh
-statistics, and a pairing button linking to the teleop station of a valid variant."""
+statistics, and a pairing button linking to the teleop station of a valid variant with the robot picked."""
 
 from __future__ import annotations
 
@@ -152,6 +152,9 @@ def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
         href = page.get_attribute("#teleop-link", "href")
         assert href == "/teleop/" + variant_id(DEMO_BASE, DEMO_HANDLE, "normal")
         assert parse_variant_id(catalog, href.removeprefix("/teleop/")).base == DEMO_BASE
+        assert page.input_value("#pair-robot") == "hand-e"  # the server's robot: the link names none
+        page.select_option("#pair-robot", "panda-2f85")  # another robot: its own station
+        assert page.get_attribute("#teleop-link", "href") == href + "?robot=panda-2f85"
         page.click("#f-reset")
         count_is(page, total)
         page.screenshot(path=str(tmp_path / "catalog.png"))

@@ -1,11 +1,21 @@
 """The browser teleop station driven by a real Chromium (Debian's, through Playwright): keys held on the page (and a
-gamepad through the page's test hook) open the demo drawer, the saved episode replays exactly; a second tab
-watches; a lost connection keeps a draft; an unknown variant gets a 404 page with the one-line message."""
+gamepad through the page's test hook) open the demo drawer, the saved episode replays exactly, with the Hand-E and
+with the Panda (``rik teleop --web --robot panda-2f85`` in its own process); a second tab watches; a lost
+connection keeps a draft; an unknown variant or robot gets a 404 page with the one-line message."""
 
 from __future__ import annotations
 
+import os
+import queue
+import re
 import shutil
+import signal
+import subprocess
+import sys
+import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -46,8 +56,17 @@ class Driver:
         return float(self.page.evaluate(f"{STATION}.{name}"))
 
     def wait(self, condition: str) -> None:
-        """Wait (bounded) until the JS ``condition`` on ``d`` (the station's data attributes) holds."""
-        self.page.wait_for_function(f"(() => {{ const d = {STATION}; return {condition}; }})()", timeout=WAIT_MS)
+        """Wait (bounded: :data:`WAIT_MS`) until the JS ``condition`` on ``d`` (the station's data attributes)
+        holds; past the bound, fail with the condition and the station's last status."""
+        from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+        try:
+            self.page.wait_for_function(f"(() => {{ const d = {STATION}; return {condition}; }})()",
+                                        timeout=WAIT_MS)
+        except PlaywrightTimeout:
+            last = self.page.evaluate("JSON.stringify(window.rikTest.status())")
+            raise AssertionError(f"the station never reached {condition} in {WAIT_MS / 1000:.0f} s; its last "
+                                 f"status: {last}") from None
 
     def hold(self, key: str, condition: str) -> None:
         self.page.keyboard.down(key)
@@ -193,3 +212,84 @@ def test_on_screen_button_moves_and_a_server_shut_down_mid_episode_keeps_a_draft
         episode = page.evaluate(f"{STATION}.episode")
     assert (episodes / ".drafts" / episode / "meta.json").is_file()
     assert not (episodes / episode).exists()
+
+
+@contextmanager
+def station_process(*args: str, cwd: Path) -> Iterator[str]:
+    """``rik ARGS`` (a ``teleop ... --web --port 0``) in its own process, as a user runs it: yields the station's
+    printed address once it is printed; then Ctrl+C stops it (a kill after 60 s). Every wait is bounded."""
+    env = {**os.environ, "COLUMNS": "200"}
+    proc = subprocess.Popen([sys.executable, "-m", "rik", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env, cwd=cwd)
+    lines: queue.Queue[str] = queue.Queue()
+    err: list[str] = []
+    assert proc.stdout is not None and proc.stderr is not None
+    threading.Thread(target=lambda: [lines.put(x) for x in proc.stdout], daemon=True).start()  # type: ignore[union-attr]
+    threading.Thread(target=lambda: err.extend(proc.stderr), daemon=True).start()  # type: ignore[arg-type]
+    try:
+        deadline = time.monotonic() + WAIT_MS / 1000
+        url = None
+        while url is None:
+            try:
+                found = re.search(r"http://localhost:(\d+)(/teleop/\S+)", lines.get(timeout=0.5))
+                url = found and f"http://127.0.0.1:{found.group(1)}{found.group(2)}"
+            except queue.Empty:
+                assert proc.poll() is None, f"rik {' '.join(args)} ended with {proc.returncode}: {''.join(err)}"
+                assert time.monotonic() < deadline, f"rik {' '.join(args)} printed no address in {WAIT_MS} ms"
+        yield url
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(timeout=30)
+
+
+def test_the_panda_opens_the_demo_drawer_from_the_keyboard_and_its_episode_replays_exactly(
+        variants: Path, tmp_path: Path) -> None:
+    """``rik teleop BOW --web --robot panda-2f85``: the same held keys drive the Panda's gripper frame through its
+    IK: roll ~90 deg (Q), approach (W) until the pads reach the bar, grip (Space), pull (S) until the drawer is 90 %
+    open, save (Enter). The episode names the Panda, records its 7 joints and its gripper, and replays exactly. A
+    robot the catalog lacks gets a 404 page with the one-line message."""
+    from rik.sim.episode import read_episode, read_meta
+    from rik.sim.replay import verify_episode
+
+    episodes = tmp_path / "episodes"
+    with station_process("teleop", BOW, "--web", "--port", "0", "--robot", "panda-2f85", "--variants",
+                         str(variants), "--out", str(episodes), cwd=tmp_path) as url, browser() as b:
+        page = b.new_page(viewport={"width": 1400, "height": 1000})
+        page.goto(url)
+        drive = Driver(page)
+        drive.wait("d.ready === 'true' && document.getElementById('cam-front').dataset.step !== '' && "
+                   "document.getElementById('cam-wrist').dataset.step !== ''")  # the arm's own wrist camera
+        assert page.evaluate(f"{STATION}.robot") == "panda-2f85" and page.inner_text("#st-robot") == "panda-2f85"
+        drive.hold("q", "Number(d.roll) >= 1.50")  # jaws across the bow's bar
+        drive.hold("w", "Number(d.ahead) <= 0.0")  # towards the front until the pads' centre reaches the bar
+        steps = drive.value("steps")
+        drive.press("Space")  # close, and let the 2F-85 close for 1 s
+        drive.wait(f"d.grip === 'closed' && Number(d.steps) >= {steps + 20}")
+        drive.hold("s", "Number(d.opening) >= 0.9")
+        simulated = drive.value("steps") / 20
+        page.select_option("#size", "640x480")  # the picture in docs/teleop.md: the cameras and the status
+        drive.wait("document.getElementById('cam-front').naturalWidth === 640 && "
+                   "document.getElementById('cam-wrist').naturalWidth === 640")
+        page.locator("section.views").screenshot(path=str(tmp_path / "station-panda.png"))
+        drive.press("Enter")
+        drive.wait("d.lastSaved !== ''")
+        saved = page.evaluate(f"{STATION}.lastSaved")
+        response = page.goto(url.split("/teleop/")[0] + f"/teleop/{BOW}?robot=so10")
+        assert response is not None and response.status == 404
+        assert page.inner_text("#error") == "rik: error: no robot 'so10' in the catalog; did you mean 'so100'?"
+    episode = episodes / saved
+    meta = read_meta(episode)
+    assert saved == f"{BOW}__drawer-1__browser.panda-2f85__s0000" and meta.robot == "panda-2f85"
+    assert meta.robot_joints == (*(f"joint{i}" for i in range(1, 8)), "gripper")
+    assert meta.max_opening >= 0.9 and meta.operator == "browser", meta
+    _, table = read_episode(episode)
+    assert len(table.column("robot_joints")[0]) == 8
+    check = verify_episode(CAT, episode, variants)
+    assert check.exact, check
+    print(f"\nPanda drive: {drive.presses} key presses, {drive.held:.1f} s of key holding, {simulated:.1f} s "
+          f"simulated (final opening {meta.final_opening:.0%}); screenshot {tmp_path / 'station-panda.png'}")

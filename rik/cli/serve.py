@@ -8,7 +8,7 @@ from typing import Annotated
 
 import typer
 
-from rik.cli.common import CatalogOption, console, overlays
+from rik.cli.common import DEFAULT_ROBOT, CatalogOption, RobotOpt, console, overlays
 
 
 def serve(port: Annotated[int, typer.Option("--port", help="Port to listen on (0: a free one).")] = 8765,
@@ -20,16 +20,17 @@ def serve(port: Annotated[int, typer.Option("--port", help="Port to listen on (0
           = Path("variants"),
           max_seconds: Annotated[float | None, typer.Option("--max-seconds", help="Time limit of a teleoperated "
                                                             "episode, simulated s (default: none).")] = None,
-          catalog: CatalogOption = None) -> None:
+          robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """Serve the web app: browse the catalog (thumbnails, filters, fidelity) and teleoperate any pairing in the
-    browser (keyboard, gamepad), recording episodes into --out."""
+    browser (keyboard, gamepad) with any robot of the catalog (--robot: the stations' default; a station page
+    takes ?robot=), recording episodes into --out."""
     from rik.registry.load import load_catalog
     from rik.web.app import AppConfig
     from rik.web.app import serve as serve_app
 
     con = console()
     config = AppConfig(load_catalog(overlays(catalog)), variants=variants, episodes=out,
-                       overlays=tuple(overlays(catalog)), max_seconds=max_seconds)
+                       overlays=tuple(overlays(catalog)), max_seconds=max_seconds, robot=robot)
 
     def ready(url: str) -> None:
         p = url.rsplit(":", 1)[1].split("/")[0]

@@ -120,13 +120,15 @@ def teleop(variant: VariantArg,
                                              "with no episode in --out, so nothing is overwritten.")] = 0,
            max_seconds: Annotated[float | None, typer.Option("--max-seconds", help="Time limit of an episode, "
                                                              "simulated s (default: none).")] = None,
-           catalog: CatalogOption = None) -> None:
+           robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """Teleoperate a variant and record episodes: in a window (keymap on screen and in docs/teleop.md) or, with
-    --web, in the browser."""
+    --web, in the browser; --robot picks the robot that opens it (an arm that cannot reach the handle is refused
+    before anything opens)."""
     from rik.registry.load import load_catalog
 
     con = console()
     cat = load_catalog(overlays(catalog))
+    arm: Any = robot_entry(cat, robot)  # an unknown robot fails here, before any window or port
     if web:
         from rik.web.app import AppConfig, serve_station
 
@@ -134,7 +136,7 @@ def teleop(variant: VariantArg,
             raise RikError(f"--device {device}: the browser station takes the browser's keyboard and gamepads; "
                            "--device is for the viewer window")
         config = AppConfig(cat, variants=variants, episodes=out, overlays=tuple(overlays(catalog)),
-                           max_seconds=max_seconds, seed=seed, front=front)
+                           max_seconds=max_seconds, seed=seed, front=front, robot=robot)
         serve_station(config, variant, host=host, port=port,
                       on_ready=lambda url: con.print(f"teleop station: [bold]{url}[/] (Ctrl+C to stop; from another "
                                                      f"machine: ssh -L {url.rsplit(':', 1)[1].split('/')[0]}:"
@@ -143,7 +145,7 @@ def teleop(variant: VariantArg,
     from rik.sim.teleop import teleoperate
 
     saved = teleoperate(cat, variant, device, out=out, variants=variants, front=front, seed=seed,
-                        max_seconds=max_seconds, on_message=con.print)
+                        max_seconds=max_seconds, on_message=con.print, robot=arm)
     if not saved:
         con.print("no episode saved")
     for meta in saved:

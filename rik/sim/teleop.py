@@ -43,6 +43,7 @@ from rik.errors import RikError
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
+    from rik.schemas.robots import Robot
     from rik.sim.teleop_session import TeleopSession
     from rik.sim.teleop_window import TeleopWindow
 
@@ -201,7 +202,7 @@ def overlays(session: TeleopSession, camera: str, fps: float, show_keys: bool = 
 
     st = session.status()
     state = st["state"] + (": Enter saves, Backspace discards" if st["state"] == "time up" else "")
-    status = [("episode", st["episode"]), ("state", state), ("time", time_text(st)),
+    status = [("robot", st["robot"]), ("episode", st["episode"]), ("state", state), ("time", time_text(st)),
               ("opening", f"{st['opening']:.0%} (most {st['max_opening']:.0%})"), ("grip", st["grip"]),
               ("handle", handle_text(st)), ("gripper", gripper_angles(session))]
     if st["message"]:
@@ -219,10 +220,12 @@ def _print(line: str) -> None:
 
 def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, variants: Path = Path("variants"),
                 front: str | None = None, seed: int = 0, max_seconds: float | None = None,
-                on_message: Callable[[str], None] | None = None) -> list[EpisodeMeta]:
-    """Teleoperate ``variant`` in a window with a device, episode after episode (see the module docstring):
-    Enter saves an episode to ``out/<id>`` (each with its own id: nothing is overwritten), Backspace discards it,
-    Esc or closing the window quits and discards the unsaved one. Returns the saved episodes' metas."""
+                on_message: Callable[[str], None] | None = None, robot: Robot | None = None) -> list[EpisodeMeta]:
+    """Teleoperate ``variant`` in a window with a device, episode after episode (see the module docstring), with
+    the Hand-E or the arm ``robot`` (a catalog entry; one that cannot reach the handle is refused before the
+    window opens): Enter saves an episode to ``out/<id>`` (each with its own id: nothing is overwritten),
+    Backspace discards it, Esc or closing the window quits and discards the unsaved one. Returns the saved
+    episodes' metas."""
     from rik.sim.record import check_seeds
     from rik.sim.teleop_session import check_time_limit
 
@@ -236,15 +239,23 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
     if "mujoco" not in sys.modules:
         os.environ["MUJOCO_GL"] = "glfw"  # the window's own OpenGL context, not an offscreen one
     from rik.sim.record import variant_dir
+    from rik.sim.robot_checks import require_reach
     from rik.sim.scene import build_scene
     from rik.sim.teleop_session import TeleopSession
     from rik.sim.teleop_window import TeleopWindow, open_display
 
     open_display()  # before the (slow) scene: a display that cannot take a window fails at once
-    scene = build_scene(variant_dir(catalog, variant, variants), front)
+    try:
+        scene = build_scene(variant_dir(catalog, variant, variants), front, robot=robot)
+        require_reach(scene)  # an arm that cannot reach the handle: refused before the window opens
+    except BaseException:
+        import glfw
+
+        glfw.terminate()
+        raise
     session = TeleopSession(scene, out, operator=device_name, seed=seed, max_seconds=max_seconds)
     controls = Controls(session, device, say)
-    window = TeleopWindow(scene, f"rik teleop: {variant}", controls.press)
+    window = TeleopWindow(scene, f"rik teleop: {variant} ({scene.robot_id})", controls.press)
     controls.window = window
     say(f"teleop window open: episode {session.episode}; hold W/A/S/D/R/F to move, arrows and Q/E to turn, Space "
         "grips, Enter saves, Backspace discards, Esc quits")

@@ -78,12 +78,12 @@ class TeleopSession:
     def episode(self) -> str:
         from rik.sim.episode import episode_id
 
-        return episode_id(self.scene.info["id"], self.scene.front.id, self.operator, self.seed)
+        return episode_id(self.scene.info["id"], self.scene.front.id, self.operator, self.seed, self.scene.robot_id)
 
     def _taken(self, seed: int) -> bool:
         from rik.sim.episode import episode_id
 
-        name = episode_id(self.scene.info["id"], self.scene.front.id, self.operator, seed)
+        name = episode_id(self.scene.info["id"], self.scene.front.id, self.operator, seed, self.scene.robot_id)
         return (self.out / name).exists() or (self.out / DRAFTS / name).exists()
 
     def _start(self) -> None:
@@ -171,21 +171,24 @@ class TeleopSession:
         dt = 1.0 / self.scene.control_fps
         speed = np.array([LINEAR_SPEED] * 3 + [ANGULAR_SPEED] * 3)
         pose = self.scene.pose()
+        pose[3:] = nearest_angles(pose[3:], self.target[3:6])
         target = self.target[:6] + self.command * speed * dt
-        lead = target[:3] - pose[:3]
-        norm = float(np.linalg.norm(lead))
-        if norm > LEAD[0]:
-            target[:3] = pose[:3] + lead * (LEAD[0] / norm)
-        target[3:] = pose[3:] + np.clip(target[3:] - pose[3:], -LEAD[1], LEAD[1])
+        if np.any(self.command[:3]):  # a target left behind while not moving stays: the servos pull back to it
+            lead = target[:3] - pose[:3]
+            norm = float(np.linalg.norm(lead))
+            if norm > LEAD[0]:
+                target[:3] = pose[:3] + lead * (LEAD[0] / norm)
+        if np.any(self.command[3:]):
+            target[3:] = pose[3:] + np.clip(target[3:] - pose[3:], -LEAD[1], LEAD[1])
         self.target = np.concatenate([target, [self.grip]])
         self.recorder.step(self.target.copy())
         return True
 
     # ---- what the operator sees -------------------------------------------------------------------------------
     def status(self) -> dict[str, Any]:
-        """The live status: episode id, state, time (s) and time left, opening (fraction), grip, where the handle is
-        from the pads' centre (m: ahead, left, up as the operator faces the front), the gripper base's pose (x, y, z
-        m; pitch, yaw, roll rad)."""
+        """The live status: episode id, robot (catalog id), state, time (s) and time left, opening (fraction), grip,
+        where the handle is from the pads' centre (m: ahead, left, up as the operator faces the front), the gripper
+        base's pose (x, y, z m; pitch, yaw, roll rad)."""
         from rik.sim.outcome import classify
 
         s = self.scene
@@ -194,7 +197,8 @@ class TeleopSession:
         offset = s.grasp_point() - s.tcp()
         state = "time up" if self.time_up else "recording" if self.recording else "waiting for input"
         return {
-            "episode": self.episode, "variant": s.info["id"], "front": s.front.id, "seed": self.seed,
+            "episode": self.episode, "variant": s.info["id"], "front": s.front.id, "robot": s.robot_id,
+            "seed": self.seed,
             "state": state, "steps": self.recorder.steps, "time": round(elapsed, 2),
             "time_left": None if self.max_seconds is None else round(max(0.0, self.max_seconds - elapsed), 2),
             "opening": round(s.opening(), 4), "max_opening": round(self.recorder.max_opening, 4),
@@ -212,6 +216,25 @@ class TeleopSession:
         st = self.status()
         return (f"{st['episode']} | {st['state']} | {time_text(st)} | open {st['opening']:.0%} | grip {st['grip']} | "
                 f"handle {handle_text(st)}")
+
+
+def nearest_angles(angles: np.ndarray, near: np.ndarray) -> np.ndarray:
+    """The pitch, yaw, roll (rad) of the same gripper rotation as ``angles`` that lie nearest ``near``.
+
+    An arm's pose gives its angles as principal Euler angles (:func:`rik.sim.drive.angles_of`: roll wraps at
+    +-pi, and past a yaw of +-pi/2 pitch and roll flip by pi), while a held key moves the target's angles on
+    without a wrap: compared as they are, a roll past pi would read as a lead of -2 pi. Every triple
+    ``(p, y, r) + 2 pi k`` and ``(p + pi, pi - y, r + pi) + 2 pi k`` is the same rotation
+    (:func:`rik.sim.scene.gripper_rotation`); this picks the one nearest ``near``. The Hand-E's pose is its
+    joints' values, which lie within the lead of its target: they come back unchanged."""
+    a = np.asarray(angles, np.float64)
+    ref = np.asarray(near, np.float64)
+    best = a
+    for c in (a, a + np.array([np.pi, np.pi - 2 * a[1], np.pi])):
+        c = ref + (c - ref + np.pi) % (2 * np.pi) - np.pi
+        if np.abs(c - ref).max() < np.abs(best - ref).max() - 1e-9:
+            best = c
+    return best
 
 
 def time_text(status: dict[str, Any]) -> str:

@@ -7,7 +7,7 @@ import errno
 import socket
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
 
@@ -36,6 +36,8 @@ class AppConfig:
     """First seed of teleoperated episodes; each new episode takes the next free one."""
     front: str | None = None
     """Front to operate (None: each variant's first)."""
+    robot: str = "hand-e"
+    """Robot of a station whose page names none (``?robot=`` picks another): a catalog robot id."""
 
     def check(self) -> None:
         """Settings a user gave that cannot work fail here, before the server starts."""
@@ -44,6 +46,7 @@ class AppConfig:
 
         check_seeds(self.seed, 1)
         check_time_limit(self.max_seconds)
+        self.catalog.robot(self.robot)  # an unknown robot: one line with close ids
 
 
 def bind_socket(host: str, port: int) -> socket.socket:
@@ -66,19 +69,25 @@ def bind_socket(host: str, port: int) -> socket.socket:
 
 def serve_station(config: AppConfig, variant: str, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
                   on_ready: object = None) -> None:
-    """``rik teleop VARIANT --web``: build the variant first (an unknown or rejected one fails here, before any
-    port is taken), then serve the app with the station of ``variant`` as the printed address."""
+    """``rik teleop VARIANT --web``: build the variant and the scene with ``config.robot`` first (an unknown or
+    rejected variant, an unknown robot, an arm that cannot reach the handle fail here, before any port is taken),
+    then serve the app with the station of ``variant`` as the printed address; the station starts from that
+    scene."""
     from urllib.parse import quote
 
-    from rik.sim.record import variant_dir
+    from rik.combinator.ids import parse_variant_id
+    from rik.web.station import build_station_scene
 
     config.check()
-    variant_dir(config.catalog, variant, config.variants)
-    serve(config, host=host, port=port, path=f"/teleop/{quote(variant)}", on_ready=on_ready)
+    vid = parse_variant_id(config.catalog, variant).id
+    scene = build_station_scene(config, vid, config.robot)
+    serve(config, host=host, port=port, path=f"/teleop/{quote(vid)}", on_ready=on_ready,
+          scenes={(vid, config.robot): scene})
 
 
-def create_app(config: AppConfig) -> FastAPI:
-    """The application: the catalog's and the teleop station's routes, and the static files."""
+def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = None) -> FastAPI:
+    """The application: the catalog's and the teleop station's routes, and the static files; ``scenes``: scenes
+    already built, by (variant id, robot id), that those stations start from."""
     from fastapi import FastAPI
     from fastapi.responses import RedirectResponse
     from fastapi.staticfiles import StaticFiles
@@ -91,7 +100,7 @@ def create_app(config: AppConfig) -> FastAPI:
     app.state.config = config
     app.include_router(catalog_routes.router)
     app.include_router(teleop_routes.router)
-    teleop_routes.install(app)
+    teleop_routes.install(app, scenes)
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
 
     @app.get("/", include_in_schema=False)
@@ -102,7 +111,7 @@ def create_app(config: AppConfig) -> FastAPI:
 
 
 def serve(config: AppConfig, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, path: str = "/",
-          on_ready: object = None) -> None:
+          on_ready: object = None, scenes: dict[tuple[str, str], Any] | None = None) -> None:
     """Serve the app until interrupted (Ctrl+C, a normal stop: the function returns). The socket is bound first (a
     port in use fails here); the URL of ``path`` is given to ``on_ready(url)`` once it listens."""
     import uvicorn
@@ -110,7 +119,7 @@ def serve(config: AppConfig, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PO
     config.check()
     sock = bind_socket(host, port)
     bound = sock.getsockname()[1]
-    app = create_app(config)
+    app = create_app(config, scenes)
     server = uvicorn.Server(uvicorn.Config(app, log_level="warning", ws="websockets-sansio", lifespan="on"))
     if callable(on_ready):
         shown = "localhost" if host in ("127.0.0.1", "::1", "localhost") else host

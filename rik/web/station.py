@@ -25,6 +25,7 @@ import numpy as np
 from rik.sim.teleop_keys import FINE_FACTOR
 
 if TYPE_CHECKING:
+    from rik.sim.scene import SimScene
     from rik.sim.teleop_session import TeleopSession
     from rik.web.app import AppConfig
 
@@ -85,12 +86,30 @@ def encode_jpeg(rgb: np.ndarray, quality: int = JPEG_QUALITY) -> bytes:
     return buf.getvalue()
 
 
-class Station:
-    """One variant's teleop session shared by every tab that opens it; one tab controls, the others watch."""
+def build_station_scene(config: AppConfig, variant: str, robot: str) -> SimScene:
+    """The scene of a station: ``variant`` (built into ``config.variants`` when needed) operated by the catalog
+    robot ``robot``; an arm that cannot reach the operated handle is refused (one line naming the handle)."""
+    from rik.sim.record import variant_dir
+    from rik.sim.robot_checks import require_reach
+    from rik.sim.scene import build_scene
 
-    def __init__(self, config: AppConfig, variant: str) -> None:
+    c = config
+    entry = c.catalog.robot(robot)
+    arm = None if entry.kind.value == "floating" else entry
+    scene = build_scene(variant_dir(c.catalog, variant, c.variants), c.front, robot=arm)
+    require_reach(scene)
+    return scene
+
+
+class Station:
+    """One variant's teleop session with one robot, shared by every tab that opens it; one tab controls, the
+    others watch. ``scene``: the scene already built (``rik teleop --web`` builds it to check it first)."""
+
+    def __init__(self, config: AppConfig, variant: str, robot: str = "hand-e", scene: SimScene | None = None) -> None:
         self.config = config
         self.variant = variant
+        self.robot = robot
+        self._scene = scene
         self.lock = threading.Lock()
         self.clients: list[Client] = []
         self.controller: Client | None = None
@@ -111,7 +130,7 @@ class Station:
         self.fps = 0.0
         self.session: TeleopSession | None = None
         self.stop = threading.Event()
-        self.thread = threading.Thread(target=self._run, name=f"rik-station-{variant}", daemon=True)
+        self.thread = threading.Thread(target=self._run, name=f"rik-station-{variant}-{robot}", daemon=True)
         self.thread.start()
 
     # ---- called from the event loop ---------------------------------------------------------------------------
@@ -193,13 +212,12 @@ class Station:
     # ---- the station thread -----------------------------------------------------------------------------------
     def _build(self) -> None:
         from rik.errors import RikError
-        from rik.sim.record import variant_dir
-        from rik.sim.scene import build_scene
         from rik.sim.teleop_session import TeleopSession
 
         c = self.config
         try:
-            scene = build_scene(variant_dir(c.catalog, self.variant, c.variants), c.front)
+            scene = self._scene if self._scene is not None else build_station_scene(c, self.variant, self.robot)
+            self._scene = None
             self.session = TeleopSession(scene, c.episodes, operator=OPERATOR, seed=c.seed, max_seconds=c.max_seconds)
         except RikError as exc:
             self.error = str(exc)
@@ -232,18 +250,19 @@ class Station:
         try:
             while not self.stop.is_set():
                 self._step(replay_data)
-                with self.lock:
-                    clients = list(self.clients)
+                with self.lock:  # each tab's size as it is now: a tab may ask for another while this renders
+                    sizes = [(c, c.size) for c in self.clients]
+                    clients = [c for c, _ in sizes]
                 data = replay_data if self.replay is not None else session.scene.data
                 key = (session.episode, session.recorder.steps, float(data.time), self.replay and self.replay["row"])
-                for size in {c.size for c in clients}:
+                for size in {size for _, size in sizes}:
                     if size not in frames or frames[size][0] != key:
                         frames[size] = (key, self._render(renderers, size, data, session))
                         sent.append(time.monotonic())
-                for c in clients:
-                    if c.sent_key != (key, c.size):
-                        c.sent_key = (key, c.size)
-                        for cam, payload in zip(CAMERAS, frames[c.size][1], strict=True):
+                for c, size in sizes:
+                    if c.sent_key != (key, size):
+                        c.sent_key = (key, size)
+                        for cam, payload in zip(CAMERAS, frames[size][1], strict=True):
                             c.push(cam, payload)
                 self._push_status(clients)
                 if len(sent) > 1:
@@ -255,6 +274,11 @@ class Station:
                     self.stop.wait(delay)
                 else:
                     next_tick = time.monotonic()  # behind: no catching up in a burst
+        except Exception as exc:  # noqa: BLE001 -- shown on the page instead of a station that says nothing
+            self.error = f"the station stopped: {type(exc).__name__}: {exc}"
+            self.ready = False
+            while not self.stop.wait(0.2):
+                self._push_status()
         finally:
             for r in renderers.values():
                 r.close()
@@ -344,6 +368,8 @@ class Station:
                 session: TeleopSession) -> list[bytes]:
         import mujoco
 
+        from rik.sim.teleop_window import scene_camera
+
         if size not in renderers:
             r = mujoco.Renderer(session.scene.model, size[1], size[0])
             r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
@@ -353,7 +379,7 @@ class Station:
         out = []
         step = session.recorder.steps if self.replay is None else self.replay["row"]
         for cam in CAMERAS:
-            renderer.update_scene(data, camera=cam)
+            renderer.update_scene(data, camera=scene_camera(session.scene.model, cam))
             jpeg = encode_jpeg(renderer.render())
             header = {"camera": cam, "step": step, "seq": self.applied_seq, "t": round(float(data.time), 4),
                       "sent": time.time(), "width": size[0], "height": size[1], "replay": self.replay is not None}
@@ -363,7 +389,8 @@ class Station:
     def status(self) -> dict[str, Any]:
         """The station's status without the per-tab fields (see :mod:`rik.web.teleop`)."""
         s = self.session
-        st: dict[str, Any] = {"type": "status", "variant": self.variant, "ready": self.ready, "error": self.error,
+        st: dict[str, Any] = {"type": "status", "variant": self.variant, "robot": self.robot, "ready": self.ready,
+                              "error": self.error,
                               "paused": self.paused, "draft": self.draft, "seq": self.applied_seq,
                               "fps": round(self.fps, 1), "controlled": self.controller is not None,
                               "replay": None, "session": None, "message": self.message}
@@ -396,19 +423,23 @@ class Station:
 
 
 class Stations:
-    """Every station of the app, one per variant id, created on first use and kept while the server runs."""
+    """Every station of the app, one per variant id and robot, created on first use and kept while the server
+    runs; ``scenes``: scenes already built, by (variant id, robot id), that those stations start from."""
 
-    def __init__(self, config: AppConfig) -> None:
+    def __init__(self, config: AppConfig, scenes: dict[tuple[str, str], SimScene] | None = None) -> None:
         self.config = config
         self.lock = threading.Lock()
-        self.stations: dict[str, Station] = {}
+        self.stations: dict[tuple[str, str], Station] = {}
+        self.scenes = dict(scenes or {})
 
-    def get(self, variant: str) -> Station:
-        """The station of ``variant`` (a canonical variant id), started (and its variant built) on first use."""
+    def get(self, variant: str, robot: str | None = None) -> Station:
+        """The station of ``variant`` (a canonical variant id) with ``robot`` (a catalog robot id; None: the
+        app's), started (and its variant built) on first use."""
+        key = (variant, robot or self.config.robot)
         with self.lock:
-            if variant not in self.stations:
-                self.stations[variant] = Station(self.config, variant)
-            return self.stations[variant]
+            if key not in self.stations:
+                self.stations[key] = Station(self.config, *key, scene=self.scenes.pop(key, None))
+            return self.stations[key]
 
     def shutdown(self) -> list[Path]:
         with self.lock:

@@ -1,6 +1,13 @@
 """The browser teleop station: ``GET /teleop/{variant}`` serves the page, ``WS /teleop/{variant}/ws`` streams
 the cameras and the status and takes the operator's input; the sessions live in :mod:`rik.web.station`.
 
+Both take ``?robot=<catalog robot id>`` (``hand-e``, ``panda-2f85``, ``so100``, or a user catalog's): the robot
+that operates the front; without it, the app's (``rik serve --robot``, default ``hand-e``). Each variant and robot
+is a station of its own, so the catalog's pairing picker links one address per furniture and robot, which a user
+can bookmark or share. An unknown robot gets a 404 page with the one-line message; an arm that cannot reach the
+handle gets the page, whose banner says why (the station's ``error``). ``GET /teleop/robots.json`` lists the
+catalog's robots for the catalog's picker.
+
 Protocol of ``WS /teleop/{variant}/ws``
 ---------------------------------------
 Server -> browser, binary (a camera frame)::
@@ -11,7 +18,7 @@ Server -> browser, binary (a camera frame)::
              "sent": server wall clock at render (s since the epoch), "width", "height", "replay": bool}
     rest:    the JPEG image (no shadows or reflections; quality 80)
 
-Server -> browser, text: JSON status {"type": "status", "variant", "ready" (variant built and session up),
+Server -> browser, text: JSON status {"type": "status", "variant", "robot", "ready" (variant built and session up),
 "error" (why it cannot run, or null), "role" ("controller" | "watcher"), "notice" (a message for this tab),
 "message" (the station's last message), "controlled" (whether a tab controls), "paused" and "draft" (a draft
 kept after the controlling tab's connection was lost: the page offers Continue / Save / Discard), "replay"
@@ -64,6 +71,20 @@ def _variant(app: Any, text: str) -> str:
     return parse_variant_id(app.state.config.catalog, text).id
 
 
+def _robot(app: Any, robot: str | None) -> str:
+    """The robot id a page asks for (None: the app's), or a RikError with the catalog's one-line message."""
+    config = app.state.config
+    return config.catalog.robot(robot).id if robot else config.robot
+
+
+@router.get("/teleop/robots.json", include_in_schema=False)
+def robots(request: Request) -> JSONResponse:
+    """The catalog's robots (id, name, kind) and the app's default, for the catalog's pairing picker."""
+    config = request.app.state.config
+    rows = [{"id": r.id, "name": r.name, "kind": r.kind.value} for r in config.catalog.robots.values()]
+    return JSONResponse({"default": config.robot, "robots": rows})
+
+
 @router.get("/teleop/keymap.json", include_in_schema=False)
 def keymap() -> JSONResponse:
     """The keymap shared with the viewer (:mod:`rik.sim.teleop_keys`), for the page's keyboard and its table."""
@@ -87,29 +108,31 @@ def error_page(message: str, status: int = 404) -> HTMLResponse:
 
 
 @router.get("/teleop/{variant}", include_in_schema=False, response_model=None)
-async def page(request: Request, variant: str) -> FileResponse | HTMLResponse:
+async def page(request: Request, variant: str, robot: str | None = None) -> FileResponse | HTMLResponse:
     """The station's page; opening it starts the station (building the variant in its thread when needed)."""
     try:
         vid = _variant(request.app, variant)
+        rid = _robot(request.app, robot)
     except RikError as exc:
         return error_page(str(exc))
-    _stations(request.app).get(vid)
+    _stations(request.app).get(vid, rid)
     return FileResponse(STATIC / "teleop.html", headers={"Cache-Control": "no-store"})
 
 
 @router.websocket("/teleop/{variant}/ws")
-async def stream(websocket: WebSocket, variant: str) -> None:
+async def stream(websocket: WebSocket, variant: str, robot: str | None = None) -> None:
     """One tab's connection: frames and status out, input and commands in (see the module docstring)."""
     from rik.web.station import Client
 
     await websocket.accept()
     try:
         vid = _variant(websocket.app, variant)
+        rid = _robot(websocket.app, robot)
     except RikError as exc:
         await websocket.send_text(json.dumps({"type": "status", "ready": False, "error": str(exc)}))
         await websocket.close(code=1008)
         return
-    station = _stations(websocket.app).get(vid)
+    station = _stations(websocket.app).get(vid, rid)
     client = Client(asyncio.get_running_loop())
     station.connect(client)
 
@@ -140,13 +163,14 @@ async def stream(websocket: WebSocket, variant: str) -> None:
         station.disconnect(client)
 
 
-def install(app: FastAPI) -> None:
-    """The stations of ``app``; on shut-down their threads stop and episodes in progress are kept as drafts."""
+def install(app: FastAPI, scenes: dict[tuple[str, str], Any] | None = None) -> None:
+    """The stations of ``app`` (``scenes``: scenes already built, by variant and robot id); on shut-down their
+    threads stop and episodes in progress are kept as drafts."""
     from contextlib import asynccontextmanager
 
     from rik.web.station import Stations
 
-    stations = Stations(app.state.config)
+    stations = Stations(app.state.config, scenes)
     app.state.stations = stations
     inner = app.router.lifespan_context
 

@@ -4,7 +4,7 @@
 "use strict";
 
 const TYPE_LABEL = {knob: "Knob", two_point: "Two-point", finger_pull: "Finger pull"};
-const state = {handles: [], bases: [], byId: {}, baseById: {}};
+const state = {handles: [], bases: [], byId: {}, baseById: {}, robots: {default: "hand-e", robots: []}};
 const $ = (selector) => document.querySelector(selector);
 const path = (id) => id.split("/").map(encodeURIComponent).join("/");
 
@@ -121,6 +121,10 @@ function picker(pairings, noun, grouped) {
   }
   other.append(...Object.values(groups));
   const preset = el("select", {id: "pair-preset", "aria-label": "resistance preset"});
+  // the robot that opens it: the station at /teleop/<variant>?robot=<id> (none: the server's --robot)
+  const robot = el("select", {id: "pair-robot", "aria-label": "robot"},
+                   ...state.robots.robots.map((r) => el("option", {value: r.id}, `${r.id} (${r.name})`)));
+  robot.value = pickedRobot || state.robots.default;
   const link = el("a", {id: "teleop-link", class: "go"}, "Build and teleoperate");
   const shownId = el("code", {id: "variant-id"});
   const update = () => {
@@ -128,15 +132,20 @@ function picker(pairings, noun, grouped) {
     const chosen = preset.value in variants ? preset.value : Object.keys(variants)[0];
     preset.replaceChildren(...Object.keys(variants).map((p) => el("option", {value: p}, p)));
     preset.value = chosen;
-    link.href = `/teleop/${encodeURIComponent(variants[chosen])}`;
+    pickedRobot = robot.value;
+    const query = robot.value && robot.value !== state.robots.default ? `?robot=${encodeURIComponent(robot.value)}`
+      : "";
+    link.href = `/teleop/${encodeURIComponent(variants[chosen])}${query}`;
     shownId.textContent = variants[chosen];
   };
   other.addEventListener("change", update);
   preset.addEventListener("change", update);
+  robot.addEventListener("change", update);
   update();
   return el("div", {class: "pairing"}, el("label", {}, `${noun} `, other), el("label", {}, "preset ", preset),
-            link, shownId);
+            state.robots.robots.length ? el("label", {}, "robot ", robot) : null, link, shownId);
 }
+let pickedRobot = null; // the robot last picked, kept from one entry to the next
 
 // ---- detail panel -----------------------------------------------------------------------------------------
 function showDetail(...children) {
@@ -248,7 +257,9 @@ function fail(err) {
 }
 
 async function start() {
-  const [h, b] = await Promise.all([getJSON("/api/catalog/handles"), getJSON("/api/catalog/bases")]);
+  const [h, b, r] = await Promise.all([getJSON("/api/catalog/handles"), getJSON("/api/catalog/bases"),
+                                       getJSON("/teleop/robots.json")]);
+  state.robots = r;
   state.handles = h.handles;
   state.bases = b.bases;
   $("#n-handles").textContent = `(${h.count})`;

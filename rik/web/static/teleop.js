@@ -4,6 +4,7 @@
 
 (function () {
   const variant = decodeURIComponent(location.pathname.replace(/\/+$/, "").split("/").pop());
+  const robotParam = new URLSearchParams(location.search).get("robot"); // null: the server's robot
   const $ = (id) => document.getElementById(id);
   const root = $("station");
   const DEADZONE = 0.15;
@@ -80,7 +81,8 @@
 
   function connect() {
     const proto = location.protocol === "https:" ? "wss:" : "ws:";
-    ws = new WebSocket(proto + "//" + location.host + "/teleop/" + encodeURIComponent(variant) + "/ws");
+    const query = robotParam ? "?robot=" + encodeURIComponent(robotParam) : "";
+    ws = new WebSocket(proto + "//" + location.host + "/teleop/" + encodeURIComponent(variant) + "/ws" + query);
     ws.binaryType = "arraybuffer";
     ws.onopen = () => {
       $("conn").textContent = "connected";
@@ -125,6 +127,7 @@
     d.draft = st.draft || "";
     d.seq = st.seq;
     d.replaying = String(!!st.replay);
+    if (st.robot) { d.robot = st.robot; $("robot").textContent = "with " + st.robot; $("st-robot").textContent = st.robot; }
     const role = $("role");
     role.textContent = st.role === "controller" ? "you control this session" : st.role === "watcher" ? "watching" : "";
     role.className = "role " + (st.role || "");
