@@ -183,7 +183,8 @@ def robots_table(variants: list[str], robots: list[str], repeats: int, seconds: 
                   f"{r['control_ms']:>10.2f} {r['ik_ms']:>6.2f} {r['ik_share']:>8.0%} {r['rtf']:>5.1f}")
     print()
     for rid, rtf in worst.items():
-        print(f"{rid}: lowest real-time factor {rtf:.1f} ({'met' if rtf >= 20 else 'MISSED'}, target >= 20 on one core)")
+        verdict = "met" if rtf >= 20 else "MISSED"
+        print(f"{rid}: lowest real-time factor {rtf:.1f} ({verdict}, target >= 20 on one core)")
 
 
 def main() -> None:

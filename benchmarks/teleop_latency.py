@@ -30,12 +30,14 @@ import argparse
 import io
 import json
 import os
+import queue
 import re
 import statistics
 import struct
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -177,7 +179,12 @@ def start_station(work: Path, robot: str = "hand-e") -> tuple[subprocess.Popen, 
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "COLUMNS": "200"})
     assert proc.stdout is not None
-    line = proc.stdout.readline()
+    lines: queue.Queue[str] = queue.Queue()  # the address line, read with a deadline: a station that hangs ends the run
+    threading.Thread(target=lambda: lines.put(proc.stdout.readline() if proc.stdout else ""), daemon=True).start()
+    try:
+        line = lines.get(timeout=300)
+    except queue.Empty:
+        line = "(no address printed in 300 s)\n"
     found = re.search(r"(http://localhost:\d+/\S+)", line)
     if not found:
         proc.kill()

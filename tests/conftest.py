@@ -40,6 +40,20 @@ def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     mp.undo()
 
 
+def read_line(stream, timeout: float = 120.0) -> str:
+    """The next line of a child process's text ``stream``, waiting at most ``timeout`` s (an assertion error past
+    it: a test never blocks on a child that stops talking). Reads on a daemon thread, which ends with the stream."""
+    import queue
+    import threading
+
+    lines: queue.Queue[str] = queue.Queue()
+    threading.Thread(target=lambda: lines.put(stream.readline()), daemon=True).start()
+    try:
+        return lines.get(timeout=timeout)
+    except queue.Empty:
+        raise AssertionError(f"no line from the child process in {timeout:.0f} s") from None
+
+
 @dataclass
 class Result:
     code: int

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from conftest import read_line
 
 from rik.errors import RikError
 from rik.paths import inside
@@ -239,7 +240,7 @@ def test_second_export_into_the_same_out_is_refused(rik, episode: Path, work: Pa
         "with exclusive(Path(sys.argv[1]), 'rik export-lerobot'):\n"
         "    print('held', flush=True); time.sleep(60)\n"), str(out)], stdout=subprocess.PIPE, text=True)
     try:
-        assert holder.stdout.readline().strip() == "held"
+        assert read_line(holder.stdout).strip() == "held"
         msg = one_line(_export(rik, episode, work, out))
         assert msg == (f"{out}: another rik export-lerobot (pid {holder.pid}) is writing it now; wait for it to "
                        "finish, or choose another --out")
@@ -347,7 +348,7 @@ def test_two_renders_of_one_stream_render_it_once(episode: Path, work: Path, tmp
         "    _render_stream(load_catalog(), ep, spec, final, variants, None, None)\n"),
         str(episode), str(renders), str(work / "variants")], stdout=subprocess.PIPE, text=True)
     try:
-        assert holder.stdout.readline().strip() == "held"
+        assert read_line(holder.stdout).strip() == "held"
         result = render_episode(CAT, episode, StreamSpec("sim", 16, 16), renders=renders, variants=work / "variants")
         assert holder.wait(timeout=120) == 0
     finally:

@@ -15,6 +15,8 @@ import time
 import urllib.request
 from pathlib import Path
 
+from conftest import read_line
+
 BOW = "drawer-chest-80__two_point-bow-128__normal"
 
 
@@ -55,7 +57,7 @@ def test_rik_serve_answers_and_stops_on_ctrl_c(tmp_path: Path) -> None:
                             text=True, env=env, cwd=tmp_path)
     try:
         assert proc.stdout is not None
-        line = proc.stdout.readline()  # blocks until the address is printed (or the process ends)
+        line = read_line(proc.stdout)  # the address, once the server listens (or "" when the process ends)
         found = re.search(r"http://localhost:(\d+)/", line)
         assert found, (line, proc.stderr.read() if proc.poll() is not None else "")
         url = f"http://127.0.0.1:{found.group(1)}"

@@ -94,7 +94,9 @@ def robot_spec(robot: Robot, *, kinematic: bool = False) -> mujoco.MjSpec:
     (its geometry stays, rigid)."""
     import mujoco
 
-    assert robot.joints is not None and robot.gripper.actuation is not None and robot.gripper.frame is not None
+    g = robot.gripper
+    act, tcp = g.actuation, g.frame
+    assert robot.joints is not None and act is not None and tcp is not None  # an arm's entry has them (schema)
     spec = source_spec(robot)
     root = spec.body(robot.model.root_body)
     if root is None:
@@ -104,8 +106,6 @@ def robot_spec(robot: Robot, *, kinematic: bool = False) -> mujoco.MjSpec:
     for kind in (spec.sensors, spec.cameras, spec.keys, spec.lights):
         for element in list(kind):
             spec.delete(element)
-    g = robot.gripper
-    act = g.actuation
     for a in list(spec.actuators):
         if kinematic or a.name != act.actuator:
             spec.delete(a)
@@ -113,11 +113,10 @@ def robot_spec(robot: Robot, *, kinematic: bool = False) -> mujoco.MjSpec:
     for name in arm_joints | {act.opening_joint}:
         if spec.joint(name) is None:
             raise RikError(f"robot {robot.id}: the model has no joint '{name}'")
-    frame_body = spec.body(g.frame.body)
+    frame_body = spec.body(tcp.body)
     if frame_body is None:
-        raise RikError(f"robot {robot.id}: the model has no body '{g.frame.body}' (gripper.frame.body)")
-    frame_body.add_site(name=TCP_SITE, pos=list(g.frame.pos), quat=list(g.frame.quat), size=[0.004, 0.004, 0.004],
-                        group=4)
+        raise RikError(f"robot {robot.id}: the model has no body '{tcp.body}' (gripper.frame.body)")
+    frame_body.add_site(name=TCP_SITE, pos=list(tcp.pos), quat=list(tcp.quat), size=[0.004, 0.004, 0.004], group=4)
     if kinematic:
         for e in list(spec.equalities):
             spec.delete(e)

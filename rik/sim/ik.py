@@ -58,7 +58,7 @@ class ArmIK:
         self.home = np.array(robot.mount.home, float)
         self.posture.set_target(self.home)
         speeds = {ROBOT_PREFIX + j.name: j.speed for j in robot.joints.joints}
-        root = self.model.body(ROBOT_PREFIX + robot.model.root_body).id
+        root = self.model.body(ROBOT_PREFIX + str(robot.model.root_body)).id
         links = [g for g in range(self.model.ngeom) if self.model.geom_bodyid[g] != root
                  and self.model.geom_bodyid[g] != 0 and self.model.geom_contype[g] | self.model.geom_conaffinity[g]]
         self.limits = [mink.ConfigurationLimit(self.model), mink.VelocityLimit(self.model, speeds),

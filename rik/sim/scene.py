@@ -381,10 +381,10 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
         gripper_geoms = frozenset(g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in gripper_bodies)
         arm_ctrl = np.array([_ctrl_adr(model, GRIPPER_PREFIX + j) for j in BASE_JOINTS])
         jaw_ctrl = _ctrl_adr(model, GRIPPER_PREFIX + "jaw")
-        drive = FloatingDrive(base_qpos, finger_qpos, arm_ctrl, jaw_ctrl)
         scene = SimScene(model, data, info, front_info, gripper, Path(variant_dir), control_fps, base_qpos,
                          finger_qpos, gripper_geoms, front_bodies,
-                         name2id(mujoco.mjtObj.mjOBJ_SITE, GRIPPER_PREFIX + "tcp"), arm_ctrl, jaw_ctrl, effects, drive)
+                         name2id(mujoco.mjtObj.mjOBJ_SITE, GRIPPER_PREFIX + "tcp"), arm_ctrl, jaw_ctrl, effects,
+                         FloatingDrive(base_qpos, finger_qpos, arm_ctrl, jaw_ctrl))
     scene.reset()
     return scene
 
