@@ -113,7 +113,8 @@ class Mount(Frozen):
     """With a sideways ``offset`` (x not 0): the base stands at least this far outside the furniture's side, m, so
     that the fronts, drawers and their boxes pass it by."""
     mirror: bool = False
-    """With a sideways ``offset``: stand on the furniture's side nearer the handle (x and yaw mirrored there)."""
+    """With a sideways ``offset``: stand on the furniture's side nearer the handle (x and yaw mirrored there, and a
+    parallel gripper held half a turn round about its approach: the same grasp, the wrist in the same range)."""
     home: tuple[Real, ...]
     """Joint positions (rad, one per joint) from which the start pose is solved."""
     start_distance: Length = 0.25

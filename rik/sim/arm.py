@@ -179,6 +179,9 @@ class Placement:
     """World position of the base's origin, m."""
     yaw: float
     """Heading about +z, rad."""
+    mirrored: bool = False
+    """Standing on the mirror side of its mount (:class:`Mount`'s ``mirror``): its parallel jaws are used turned half
+    a turn about the approach (the same grasp), which keeps its wrist in the range the mount was chosen for."""
 
     def quat(self) -> list[float]:
         from rik.schemas.robots import yaw_quat
@@ -197,16 +200,17 @@ def placement(robot: Robot, grasp_point: np.ndarray, footprint: tuple[float, flo
     offset = np.asarray(mount.offset, float).copy()
     yaw = float(mount.yaw)
     side = float(np.sign(offset[0]))
+    mirrored = False
     if footprint is not None and side != 0.0:
         lo, hi = footprint
         if mount.mirror and (grasp_point[0] - (lo + hi) / 2) * side < -1e-9:
-            offset[0], yaw, side = -offset[0], math.pi - yaw, -side
+            offset[0], yaw, side, mirrored = -offset[0], math.pi - yaw, -side, True
     pos = np.asarray(grasp_point, float) + offset
     if footprint is not None and side != 0.0:
         lo, hi = footprint
         pos[0] = max(pos[0], hi + mount.clearance) if side > 0 else min(pos[0], lo - mount.clearance)
     pos[2] = max(pos[2], 0.0)
-    return Placement(pos, math.remainder(yaw, 2 * math.pi))
+    return Placement(pos, math.remainder(yaw, 2 * math.pi), mirrored)
 
 
 def footprint(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[float, float]:

@@ -23,6 +23,8 @@ from rik.sim.gripper import GripperSpec, jaw_target
 PROBE_ITERATIONS = 40
 """IK steps a planner's collision probe of an arm takes towards the probed pose (the floor is then checked by
 collision, not by the IK's limit)."""
+HALF_TURN = np.diag([-1.0, -1.0, 1.0])
+"""Half a turn about the gripper frame's z (the approach): how a mirrored arm holds its parallel jaws."""
 TRACKING_GAIN = 0.5
 """An arm's servos sag under gravity and lag under load: each control step the IK aims past the target by this
 fraction of the gap between the gripper frame where the servos aim and where it is (0: plain open-loop IK)."""
@@ -167,10 +169,14 @@ class ArmDrive:
         from rik.sim.scene import gripper_rotation
 
         rot = gripper_rotation(np.asarray(pose[3:6], float))
+        if self.placement.mirrored:
+            rot = rot @ HALF_TURN
         return np.asarray(pose[:3], float) + rot[:, 2] * scene.gripper.tcp_offset, rot
 
     def pose(self, scene: SimScene) -> np.ndarray:
         rot = scene.gripper_rotation()
+        if self.placement.mirrored:
+            rot = rot @ HALF_TURN
         return np.concatenate([scene.tcp() - rot[:, 2] * scene.gripper.tcp_offset, angles_of(rot)])
 
     # ---- placing and commanding -------------------------------------------------------------------------------
