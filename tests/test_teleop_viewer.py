@@ -247,19 +247,20 @@ def test_the_window_opens_with_an_arm_and_esc_closes_it(display: str, variants: 
     assert t.proc.returncode == 0 and "no episode saved" in text, text
 
 
-def test_an_arms_wrist_camera_is_found_under_its_prefix(variants: Path) -> None:
-    """The arm's wrist camera comes with its model (``robot/wrist``): keys 2 and the station's wrist stream find it
-    (an id of -1 would render a fixed camera that is not there)."""
+def test_an_arms_wrist_camera_rides_on_its_wrist(variants: Path) -> None:
+    """Key 2 and the station's wrist stream ask for the camera ``wrist``: an arm's is called that too (not
+    ``robot/wrist``, as attaching its model would name it; an id of -1 would render a fixed camera that is not
+    there), and it moves with the arm's gripper."""
     import mujoco
 
     from rik.registry import load_catalog
     from rik.sim.scene import build_scene
-    from rik.sim.teleop_window import scene_camera
 
-    model = build_scene(variants / VARIANT, robot=load_catalog().robot("so100")).model
-    assert scene_camera(model, "wrist") == "robot/wrist" and scene_camera(model, "front") == "front"
-    assert all(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, scene_camera(model, c)) >= 0
-               for c in ("front", "wrist"))
+    scene = build_scene(variants / VARIANT, robot=load_catalog().robot("so100"))
+    model = scene.model
+    cam = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, "wrist")
+    assert cam >= 0 and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, "front") >= 0
+    assert model.body(int(model.cam_bodyid[cam])).name == "robot/so_arm100_left/Fixed_Jaw"
 
 
 def test_a_display_without_an_x_server_is_one_line(rik, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:

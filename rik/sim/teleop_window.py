@@ -68,7 +68,7 @@ class TeleopWindow:
             cam.distance, cam.azimuth, cam.elevation = FREE_DISTANCE, -60.0, -20.0  # from the front, right, above
         else:
             cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
-            cam.fixedcamid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, scene_camera(model, name))
+            cam.fixedcamid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name)
         return cam
 
     # ---- input ------------------------------------------------------------------------------------------------
@@ -150,20 +150,6 @@ class TeleopWindow:
         self.context.free()
         glfw.destroy_window(self.window)
         glfw.terminate()
-
-
-def scene_camera(model: Any, name: str) -> str:
-    """The name in ``model`` of the scene's camera ``name`` (``front``, ``wrist``): an arm's wrist camera comes
-    with the arm's model and carries its prefix (``robot/wrist``)."""
-    import mujoco
-
-    from rik.sim.arm import ROBOT_PREFIX
-
-    if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name) < 0:
-        prefixed = ROBOT_PREFIX + name
-        if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, prefixed) >= 0:
-            return prefixed
-    return name
 
 
 def open_display() -> None:

@@ -368,7 +368,6 @@ class Station:
                 session: TeleopSession) -> list[bytes]:
         import mujoco
 
-        from rik.sim.teleop_window import scene_camera
 
         if size not in renderers:
             r = mujoco.Renderer(session.scene.model, size[1], size[0])
@@ -379,7 +378,7 @@ class Station:
         out = []
         step = session.recorder.steps if self.replay is None else self.replay["row"]
         for cam in CAMERAS:
-            renderer.update_scene(data, camera=scene_camera(session.scene.model, cam))
+            renderer.update_scene(data, camera=cam)
             jpeg = encode_jpeg(renderer.render())
             header = {"camera": cam, "step": step, "seq": self.applied_seq, "t": round(float(data.time), 4),
                       "sent": time.time(), "width": size[0], "height": size[1], "replay": self.replay is not None}
