@@ -334,14 +334,17 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     target = data.site_xpos[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, record["grasp_site"])].copy()
-    eye = target + FRONT_CAMERA_DISTANCE * np.array([0.35, 0.85, 0.40]) / math.hypot(0.35, 0.85, 0.40)
-    spec.worldbody.add_camera(name="front", pos=eye.tolist(), xyaxes=_look_at(eye, target), fovy=50)
+    view = np.array([0.35, 0.85, 0.40])
     if arm:
         from rik.sim.arm import attach_arm, footprint, placement
 
         assert robot is not None
         where = placement(robot, target, footprint(model, data))
         attach_arm(spec, robot, where)
+        if where.pos[0] - target[0] > 0.05:  # an arm standing on the camera's side would hide the handle
+            view[0] = -view[0]
+    eye = target + FRONT_CAMERA_DISTANCE * view / math.hypot(*view)
+    spec.worldbody.add_camera(name="front", pos=eye.tolist(), xyaxes=_look_at(eye, target), fovy=50)
     model = spec.compile()
     data = mujoco.MjData(model)
 
