@@ -83,7 +83,7 @@ def episode(directory: Path, front: str, seconds: float) -> dict[str, float]:
     from rik.sim.scene import build_scene
 
     scene = build_scene(directory, front)
-    m, d = scene.model, scene.data
+    m = scene.model
     op = make_operator("grasp_vertical")
     op.reset(scene, np.random.default_rng(0))
     acc = {"mj": 0.0, "steps": 0, "ncon": 0, "scene": 0.0}
@@ -98,19 +98,29 @@ def episode(directory: Path, front: str, seconds: float) -> dict[str, float]:
 
     mujoco.mj_step = timed
     try:
-        t0, start = d.time, clock()
-        while not op.done and d.time - t0 < seconds - 1e-9:
-            action = op.act(scene)
-            s = clock()
-            scene.step(action)
-            acc["scene"] += clock() - s
-        wall = clock() - start
+        sim, wall, acc["scene"], _ = run_episode(scene, op, seconds)
     finally:
         mujoco.mj_step = mj_step
     n = max(acc["steps"], 1)
     colliders = sum(1 for g in range(m.ngeom) if m.geom_contype[g] or m.geom_conaffinity[g])
-    return {"rtf": (d.time - t0) / wall, "sim": d.time - t0, "scene_us": 1e6 * acc["scene"] / n,
+    return {"rtf": sim / wall, "sim": sim, "scene_us": 1e6 * acc["scene"] / n,
             "mj_us": 1e6 * acc["mj"] / n, "geoms": colliders, "ncon": acc["ncon"] / n, "opening": scene.opening()}
+
+
+def run_episode(scene, op, seconds: float) -> tuple[float, float, float, int]:  # type: ignore[no-untyped-def]
+    """Run the operator ``op`` (reset) on ``scene`` for at most ``seconds`` of simulated time; (simulated s, wall s,
+    wall s inside ``scene.step``, control steps)."""
+    clock = time.perf_counter
+    d = scene.data
+    in_steps, steps = 0.0, 0
+    t0, start = d.time, clock()
+    while not op.done and d.time - t0 < seconds - 1e-9:
+        action = op.act(scene)
+        s = clock()
+        scene.step(action)
+        in_steps += clock() - s
+        steps += 1
+    return d.time - t0, clock() - start, in_steps, steps
 
 
 def robot_episode(directory: Path, front: str, seconds: float, robot: object | None) -> dict[str, float]:
@@ -118,41 +128,38 @@ def robot_episode(directory: Path, front: str, seconds: float, robot: object | N
     with the arm's IK steps timed apart."""
     import numpy as np
 
-    from rik.sim import ik
+    from rik.sim import drive, ik
     from rik.sim.operators import make_operator
     from rik.sim.scene import build_scene
 
     scene = build_scene(directory, front, robot=robot)  # type: ignore[arg-type]
-    d = scene.data
     op = make_operator("grasp_vertical")
     op.reset(scene, np.random.default_rng(0))
-    acc = {"ik": 0.0, "ik_calls": 0, "control": 0.0, "steps": 0}
-    step, clock = ik.ArmIK.step, time.perf_counter
+    ik_time, commanding = [0.0], [False]
+    command, step, clock = drive.ArmDrive.command, ik.ArmIK.step, time.perf_counter
 
-    def timed(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+    def timed_command(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+        commanding[0] = True  # only the IK of control steps counts (a planner's probes solve it too)
+        try:
+            command(self, *args, **kwargs)
+        finally:
+            commanding[0] = False
+
+    def timed_step(self, *args, **kwargs):  # type: ignore[no-untyped-def]
         s = clock()
         out = step(self, *args, **kwargs)
-        acc["ik"] += clock() - s
-        acc["ik_calls"] += 1
+        if commanding[0]:
+            ik_time[0] += clock() - s
         return out
 
-    ik.ArmIK.step = timed  # type: ignore[method-assign]
+    drive.ArmDrive.command, ik.ArmIK.step = timed_command, timed_step  # type: ignore[method-assign]
     try:
-        t0, start = d.time, clock()
-        while not op.done and d.time - t0 < seconds - 1e-9:
-            action = op.act(scene)
-            s = clock()
-            scene.step(action)
-            acc["control"] += clock() - s
-            acc["steps"] += 1
-        wall = clock() - start
+        sim, wall, control, steps = run_episode(scene, op, seconds)
     finally:
-        ik.ArmIK.step = step  # type: ignore[method-assign]
-    n = max(acc["steps"], 1)
-    in_steps = acc["ik"] if acc["ik_calls"] <= acc["steps"] else acc["ik"] * acc["steps"] / acc["ik_calls"]
-    return {"rtf": (d.time - t0) / wall, "sim": d.time - t0, "control_ms": 1e3 * acc["control"] / n,
-            "ik_ms": 1e3 * in_steps / n, "ik_share": in_steps / max(acc["control"], 1e-12),
-            "opening": scene.opening(), "nq": scene.model.nq}
+        drive.ArmDrive.command, ik.ArmIK.step = command, step  # type: ignore[method-assign]
+    n = max(steps, 1)
+    return {"rtf": sim / wall, "sim": sim, "control_ms": 1e3 * control / n, "ik_ms": 1e3 * ik_time[0] / n,
+            "ik_share": ik_time[0] / max(control, 1e-12), "opening": scene.opening(), "nq": scene.model.nq}
 
 
 def robots_table(variants: list[str], robots: list[str], repeats: int, seconds: float) -> None:
@@ -172,8 +179,7 @@ def robots_table(variants: list[str], robots: list[str], repeats: int, seconds: 
         best: dict[str, dict[str, float]] = {}
         for _ in range(repeats):
             for rid in robots:
-                entry = catalog.robot(rid)
-                r = robot_episode(src, front, seconds, entry if entry.kind.value == "arm" else None)
+                r = robot_episode(src, front, seconds, catalog.robot(rid).as_arm)
                 if rid not in best or r["rtf"] > best[rid]["rtf"]:
                     best[rid] = r
         for rid in robots:

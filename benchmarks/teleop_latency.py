@@ -100,7 +100,7 @@ def demo_scene(robot: str = "hand-e"):
     catalog = load_catalog()
     entry = catalog.robot(robot)
     scene = build_scene(variant_dir(catalog, VARIANT, Path(os.environ.get("RIK_BENCH_VARIANTS", "variants"))),
-                        robot=None if entry.kind.value == "floating" else entry)
+                        robot=entry.as_arm)
     return scene.model, scene.data
 
 

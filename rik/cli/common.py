@@ -34,7 +34,7 @@ def robot_entry(catalog: object, robot: str) -> object | None:
     from rik.registry.robots import usable_robot
 
     entry = usable_robot(catalog, robot)  # type: ignore[arg-type]
-    return None if entry.kind.value == "floating" else entry
+    return entry.as_arm
 
 
 DEFAULT_WORKERS = max(1, min(8, os.cpu_count() or 1))

@@ -195,7 +195,7 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
     from rik.sim import bench as b
 
     cat = load_catalog(overlays(catalog))
-    cat.robot(robot)  # an unknown robot: one line with suggestions, before any work
+    robot_entry(cat, robot)  # an unknown robot (or its model's package missing): one line, before any work
     grip_forces: tuple[Any, ...] = (None,)
     if sweep is not None:
         if sweep != "grip-force":

@@ -143,7 +143,6 @@ def _states_intact(episode: Path, sha256: object) -> bool:
 def run_record(catalog: Catalog, arg: tuple[Folders, EpisodeUnit, float]) -> dict[str, Any]:
     """Record one episode (a job); returns its marker record."""
     from rik.paths import inside
-    from rik.schemas.robots import RobotKind
     from rik.sim.record import record_one
 
     folders, unit, max_seconds = arg
@@ -151,7 +150,7 @@ def run_record(catalog: Catalog, arg: tuple[Folders, EpisodeUnit, float]) -> dic
     robot = catalog.robot(unit.robot)
     meta = record_one(inside(folders.variants, unit.variant, what="variant id"), unit.operator.strategy, unit.seed,
                       folders.episodes, front=unit.front, max_seconds=max_seconds, params=unit.operator.params,
-                      label=unit.operator.label, robot=robot if robot.kind is RobotKind.arm else None)
+                      label=unit.operator.label, robot=robot.as_arm)
     return _mark(folders, "record", unit.key, {
         "output": f"episodes/{meta.id}", "episode": meta.id, "outcome": meta.outcome, "steps": meta.steps,
         "states_sha256": meta.states_sha256, "seconds": time.perf_counter() - t0})
@@ -416,12 +415,11 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
     quiet_encoders()
     _aggregate(plan.spec.repo_id, roots, merged)
     _order_stats(merged)
-    from rik.schemas.robots import RobotKind
     from rik.sim.robot_layout import robot_layout
 
     robot = catalog.robot(plan.spec.robot)
     checks = check_dataset(merged, plan.spec.repo_id, len(plan.episodes),
-                           robot_layout(robot if robot.kind is RobotKind.arm else None))
+                           robot_layout(robot.as_arm))
     fps = int(checks["fps"])
     write_card(catalog, merged, schedule.xspec, fps, checks, extra=_card_text(plan), robot=plan.spec.robot)
     result.episodes, result.dataset_frames = int(checks["episodes"]), int(checks["frames"])

@@ -82,7 +82,7 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     from rik.evaluation.load import policy_needs
     from rik.sim.robot_layout import robot_layout
 
-    layout = robot_layout(None if robot.kind.value == "floating" else robot)
+    layout = robot_layout(robot.as_arm)
     needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered, layout=layout)
     label = spec.label or f"{needs.policy_type}:{run_name(Path(spec.operator))}"
     return EvalSpec(**{**asdict(spec), "label": label, "needs": asdict(needs)})

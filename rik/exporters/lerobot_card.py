@@ -134,10 +134,9 @@ and for diffusion (its defaults normalise state and action by min and max)
 def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str, Any], info: dict[str, Any],
                  robot: Robot) -> str:
     import rik
-    from rik.schemas.robots import RobotKind
     from rik.sim.robot_layout import robot_layout
 
-    layout = robot_layout(robot if robot.kind is RobotKind.arm else None)
+    layout = robot_layout(robot.as_arm)
     images = [k for k, f in info["features"].items() if f.get("dtype") == "video"]
     sim_only = [k for k in images if not k.endswith("_rerendered")]
     from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES

@@ -96,11 +96,10 @@ def episode_robot(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> Robot
 def episode_layout(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> RobotLayout:
     """The LeRobot layout of an episode's robot (:func:`rik.sim.robot_layout.robot_layout`); an arm's recorded
     joints must be its catalog entry's, as the layout reads them by name."""
-    from rik.schemas.robots import RobotKind
     from rik.sim.robot_layout import robot_layout
 
     robot = episode_robot(catalog, directory, meta)
-    if robot.kind is not RobotKind.arm:
+    if robot.as_arm is None:
         return robot_layout(None)
     expected = (*robot.joint_names, "gripper")
     if tuple(meta.robot_joints) != expected:

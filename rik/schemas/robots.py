@@ -309,6 +309,12 @@ class Robot(Frozen):
         return self
 
     @property
+    def as_arm(self) -> Robot | None:
+        """This entry when it is an arm, None for the floating Hand-E: what ``build_scene``'s ``robot=`` and
+        ``robot_layout`` take."""
+        return self if self.kind is RobotKind.arm else None
+
+    @property
     def joint_names(self) -> tuple[str, ...]:
         return tuple(j.name for j in self.joints.joints) if self.joints else ()
 

@@ -18,7 +18,6 @@ base would collide with its first link: those pairs are excluded.
 
 from __future__ import annotations
 
-import importlib.util
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -43,12 +42,14 @@ PEDESTAL_WIDTH = 0.16
 def package_dir(robot: Robot) -> Path:
     """The folder of the installed package that ships the robot's model (found without importing it: the
     packages' own code pulls in dependencies rik does not install)."""
+    from rik.registry.robots import installed_package_dir
+
     name = robot.model.package
-    spec = importlib.util.find_spec(name) if name else None
-    if spec is None or not spec.submodule_search_locations:
+    folder = installed_package_dir(name) if name else None
+    if folder is None:
         raise RikError(f"robot {robot.id}: its model comes from the Python package '{name}', which is not installed "
                        "(run scripts/setup.sh, or uv sync)")
-    return Path(next(iter(spec.submodule_search_locations)))
+    return folder
 
 
 def _absolute_meshes(spec: mujoco.MjSpec, folder: Path) -> None:

@@ -67,7 +67,7 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
     for p in presets:
         if p not in catalog.presets:
             raise RikError(f"unknown preset '{p}' (presets: {', '.join(catalog.presets)})")
-    if catalog.robot(robot).kind.value == "arm" and any(g is not None for g in grip_forces):
+    if catalog.robot(robot).as_arm is not None and any(g is not None for g in grip_forces):
         raise RikError(f"--sweep grip-force varies the Hand-E's grip; robot {robot}'s gripper is its model's")
     compatible = {k.id for k in select_variants(catalog, handle_types=types, presets=presets)}
     tasks = []
@@ -93,8 +93,7 @@ def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) 
 
     task = BenchTask(**json.loads(encoded))
     gripper = HAND_E if task.grip_force is None else HAND_E.with_(grip_force=task.grip_force)
-    entry = catalog.robot(task.robot)
-    arm = entry if entry.kind.value == "arm" else None
+    arm = catalog.robot(task.robot).as_arm
     scene = build_scene(variants / task.variant, task.front, gripper, robot=arm)
     gripper = scene.gripper
     reach = 1.0

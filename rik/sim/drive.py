@@ -301,7 +301,7 @@ def gripper_spec(robot: Robot) -> GripperSpec:
                         pad_friction=g.pad_friction.value, finger_speed=g.finger_speed.value,
                         finger_length=g.finger_length, finger_width=g.finger_width,
                         finger_thickness=g.finger_thickness, pad_length=g.pad_length)
-    if robot.kind.value == "arm":
+    if robot.as_arm is not None:
         spec = spec.with_(tcp_distance=g.tcp_offset, fixed_jaw=g.fixed_jaw)
     return spec
 

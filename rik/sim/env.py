@@ -86,10 +86,10 @@ class OpenFrontEnv(gym.Env):
             raise RikError(f"episode_length {episode_length}: must be at least 1 control step")
         self._catalog = load_catalog([Path(p) for p in catalog_paths])
         entry = self._catalog.robot(robot)  # an unknown id: one line with suggestions
-        self._robot = None if entry.kind.value == "floating" else entry
+        self._robot = entry.as_arm
         self.layout = robot_layout(self._robot)
         if action_mode == "joints" and self.layout.is_pose:
-            arms = ", ".join(r for r, e in self._catalog.robots.items() if e.kind.value == "arm")
+            arms = ", ".join(r for r, e in self._catalog.robots.items() if e.as_arm is not None)
             raise RikError(f"action_mode 'joints': robot {robot} takes a target pose (action_mode 'delta' or "
                            f"'absolute'); joint actions are for arms ({arms})")
         self._variants = Path(variants_dir)

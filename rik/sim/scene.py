@@ -314,7 +314,7 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     from rik.joints.runtime import front_effects
     from rik.sim.drive import FloatingDrive
 
-    arm = robot is not None and robot.kind.value == "arm"
+    arm = robot is not None and robot.as_arm is not None
     file = Path(variant_dir) / "model.xml"
     if not file.is_file():
         raise RikError(f"{file}: no such variant file; build the variant with rik variants build")

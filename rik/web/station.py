@@ -95,7 +95,7 @@ def build_station_scene(config: AppConfig, variant: str, robot: str) -> SimScene
 
     c = config
     entry = c.catalog.robot(robot)
-    arm = None if entry.kind.value == "floating" else entry
+    arm = entry.as_arm
     scene = build_scene(variant_dir(c.catalog, variant, c.variants), c.front, robot=arm)
     require_reach(scene)
     return scene

@@ -49,7 +49,7 @@ def robot_layout_of(robot: str) -> RobotLayout:
     from rik.registry.load import load_catalog
 
     entry = load_catalog().robot(robot)
-    return robot_layout(None if entry.kind.value == "floating" else entry)
+    return robot_layout(entry.as_arm)
 
 
 def _names(text: str) -> tuple[str, ...]:
