@@ -114,9 +114,8 @@ def _torque_use(scene: SimScene, q: np.ndarray, force: float) -> tuple[float, st
 def reach_profile(scene: SimScene, openings: tuple[float, ...] = OPENINGS) -> list[ReachPoint]:
     """The natural pinch at each opening, solved as the arm would follow the pull (see the module docstring); the
     scene is left as it was."""
-    import mujoco
-
     from rik.sim.drive import ArmDrive
+    from rik.sim.scene import base_for_tcp
 
     drive = scene.drive
     if not isinstance(drive, ArmDrive):
@@ -129,21 +128,13 @@ def reach_profile(scene: SimScene, openings: tuple[float, ...] = OPENINGS) -> li
         for opening in openings:
             _set_opening(scene, opening)
             tcp, angles = _grasp(scene)
-            position, rotation = drive._frame_target(scene, np.concatenate([tcp - _tcp_axis(angles) *
-                                                                             scene.gripper.tcp_offset, angles]))
+            position, rotation = drive._frame_target(scene, base_for_tcp(scene.gripper, tcp, angles))
             q, dp, da = drive.ik.solve(position, rotation, q)
             use, joint = _torque_use(scene, q, force)
             points.append(ReachPoint(float(opening), dp, da, tuple(float(v) for v in q), use, joint))
     finally:
-        scene.restore(saved)
-        mujoco.mj_forward(scene.model, scene.data)
+        scene.restore(saved)  # positions, velocities and everything derived from them (mj_forward)
     return points
-
-
-def _tcp_axis(angles: np.ndarray) -> np.ndarray:
-    from rik.sim.scene import gripper_rotation
-
-    return gripper_rotation(angles)[:, 2]
 
 
 def reached(point: ReachPoint) -> bool:
