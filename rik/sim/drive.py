@@ -67,7 +67,9 @@ def angles_of(rotation: np.ndarray) -> np.ndarray:
     :func:`rik.sim.scene.gripper_rotation` (yaw in [-pi/2, pi/2], the others in (-pi, pi])."""
     from scipy.spatial.transform import Rotation
 
-    base = Rotation.from_quat([0.7071067811865476, 0.0, 0.0, 0.7071067811865476], scalar_first=False)
+    from rik.sim.scene import GRIPPER_BASE_QUAT
+
+    base = Rotation.from_quat(GRIPPER_BASE_QUAT, scalar_first=False)
     return (base.inv() * Rotation.from_matrix(rotation)).as_euler("XYZ")
 
 
@@ -163,6 +165,8 @@ class ArmDrive:
         assert self.robot.joints is not None
         self.robot_id = self.robot.id
         self.joint_names = (*self.robot.joint_names, "gripper")
+        self._lower = np.array([j.range[0] for j in self.robot.joints.joints])
+        self._upper = np.array([j.range[1] for j in self.robot.joints.joints])
 
     # ---- the gripper frame ------------------------------------------------------------------------------------
     def _frame_target(self, scene: SimScene, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -218,13 +222,10 @@ class ArmDrive:
     def set_targets(self, scene: SimScene, q: np.ndarray) -> None:
         """Servo targets ``q`` (rad), held within the joints' ranges and within :attr:`lead` of where the joints
         are."""
-        assert self.robot.joints is not None
         d = scene.data
         now = d.qpos[self.qpos]
         q = np.clip(np.asarray(q, float), now - self.lead, now + self.lead)
-        lo = np.array([j.range[0] for j in self.robot.joints.joints])
-        hi = np.array([j.range[1] for j in self.robot.joints.joints])
-        d.ctrl[self.arm_ctrl] = np.clip(q, lo, hi)
+        d.ctrl[self.arm_ctrl] = np.clip(q, self._lower, self._upper)
 
     def jaw(self, scene: SimScene, command: float) -> tuple[float, float]:
         act = self.robot.gripper.actuation

@@ -46,6 +46,9 @@ IMPRATIO = 10.0
 FRONT_CAMERA_DISTANCE = 0.9
 """Distance from the operated handle to the front camera, m."""
 FINGERS = ("left", "right")
+GRIPPER_BASE_QUAT = [0.7071067811865476, 0.0, 0.0, 0.7071067811865476]
+"""The gripper frame's rotation at zero pitch, yaw and roll (x, y, z, w: a quarter turn about world x), which
+:func:`gripper_rotation` composes with the angles and :func:`rik.sim.drive.angles_of` takes back out."""
 
 
 @dataclass(frozen=True)
@@ -430,7 +433,7 @@ def gripper_rotation(angles: np.ndarray) -> np.ndarray:
     """World rotation of the gripper frame for pitch, yaw, roll (the base chain's composition)."""
     from scipy.spatial.transform import Rotation
 
-    base = Rotation.from_quat([0.7071067811865476, 0.0, 0.0, 0.7071067811865476], scalar_first=False)
+    base = Rotation.from_quat(GRIPPER_BASE_QUAT, scalar_first=False)
     pitch, yaw, roll = angles
     # joints are applied in the base frame, in chain order: about x, then the (pitched) y, then the approach z
     chain = Rotation.from_euler("XYZ", [pitch, yaw, roll])
