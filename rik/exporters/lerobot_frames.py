@@ -30,7 +30,6 @@ if TYPE_CHECKING:
 
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
-    from rik.schemas.robots import Robot
     from rik.sim.robot_layout import RobotLayout
 
 ACTION_NAMES = ("target_x", "target_y", "target_z", "target_pitch", "target_yaw", "target_roll", "gripper")
@@ -81,21 +80,10 @@ def features(cameras: Sequence[str], streams: Sequence[str], width: int, height:
     return out
 
 
-def episode_robot(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> Robot:
-    """The catalog entry of the robot an episode was recorded with (``meta.robot``); an id the catalog lacks is one
-    line naming the episode's meta.json."""
-    from rik.errors import UnknownIdError
-
-    try:
-        return catalog.robot(meta.robot)
-    except UnknownIdError as exc:
-        raise RikError(f"{Path(directory) / 'meta.json'}: field 'robot': {exc} (give the catalog it was recorded "
-                       "with, --catalog)") from None
-
-
 def episode_layout(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> RobotLayout:
     """The LeRobot layout of an episode's robot (:func:`rik.sim.robot_layout.robot_layout`); an arm's recorded
     joints must be its catalog entry's, as the layout reads them by name."""
+    from rik.sim.replay import episode_robot
     from rik.sim.robot_layout import robot_layout
 
     robot = episode_robot(catalog, directory, meta)

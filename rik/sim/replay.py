@@ -16,6 +16,7 @@ if TYPE_CHECKING:
 
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
+    from rik.schemas.robots import Robot
     from rik.sim.scene import SimScene
 
 
@@ -27,6 +28,18 @@ class ReplayCheck:
     """Largest absolute difference between a re-simulated and a recorded state."""
 
 
+def episode_robot(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> Robot:
+    """The catalog entry of the robot an episode was recorded with (``meta.robot``); an id the catalog lacks is one
+    line naming the episode's meta.json."""
+    from rik.errors import UnknownIdError
+
+    try:
+        return catalog.robot(meta.robot)
+    except UnknownIdError as exc:
+        raise EpisodeError(f"{Path(directory) / 'meta.json'}: field 'robot': {exc} (give the catalog it was "
+                           "recorded with, --catalog)") from None
+
+
 def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: EpisodeMeta) -> SimScene:
     """The scene an episode was recorded in (its variant is built first if missing), with its gripper."""
     from rik.sim.gripper import HAND_E
@@ -36,15 +49,7 @@ def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: Episo
     g = meta.gripper
     gripper = HAND_E.with_(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
                            arm_force=g.arm_force)
-    robot = None
-    if meta.robot != "hand-e":
-        from rik.errors import UnknownIdError
-
-        try:
-            robot = catalog.robot(meta.robot)
-        except UnknownIdError as exc:
-            raise EpisodeError(f"{Path(directory) / 'meta.json'}: field 'robot': {exc} (give the catalog it was "
-                               "recorded with, --catalog)") from None
+    robot = episode_robot(catalog, directory, meta).as_arm if meta.robot != "hand-e" else None
     scene = build_scene(variant_dir(catalog, meta.variant, variants), meta.front, gripper, meta.fps, robot=robot)
     collision = scene.info.get("collision", "coacd")
     if collision != meta.collision:
