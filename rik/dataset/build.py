@@ -214,10 +214,9 @@ class _Schedule:
         self.result, self.progress = result, progress
         self.done: dict[str, dict[str, Any]] = {}
         self.attempts: dict[str, int] = {}
-        self.renders_of: dict[str, list[RenderUnit]] = {}
-        for r in plan.renders:
-            self.renders_of.setdefault(r.episode.key, []).append(r)
         self.shard_of = {e.key: s for s in plan.shards for e in s.episodes}
+        self.missing = [len(s.episodes) * (1 + len(plan.streams)) for s in plan.shards]
+        """Per shard, its episodes and renders not yet done: a countdown, so a finished unit costs O(1) here."""
         self.totals = {"record": len(plan.episodes), "render": len(plan.renders), "shard": len(plan.shards)}
         self.counts = dict.fromkeys(STAGES, 0)
         self.ready: deque[Job] = deque()
@@ -237,7 +236,7 @@ class _Schedule:
             return Job(unit.key, stage, run_render, (f, unit, self.plan.stream_spec(unit.stream),
                                                      self.plan.spec.cameras), renders=True)
         streams = {f"{e.key}/{r.stream}": self.done[r.key]["output"] for e in unit.episodes
-                   for r in self.renders_of.get(e.key, [])}
+                   for r in self.plan.episode_renders(e)}
         return Job(unit.key, stage, run_shard, (f, unit, self.xspec, streams))
 
     def _finish(self, stage: str, unit: Any, record: dict[str, Any], reused: bool) -> None:
@@ -248,16 +247,16 @@ class _Schedule:
             self.result.frames[stage] += int(record.get("frames", record.get("steps", 0)))
         self._tick(stage)
         if stage == "record":
-            for r in self.renders_of.get(unit.key, []):
+            for r in self.plan.episode_renders(unit):
                 self._offer("render", r)
-            self._offer_shard(self.shard_of[unit.key])
+            self._input_done(self.shard_of[unit.key])
         elif stage == "render":
-            self._offer_shard(self.shard_of[unit.episode.key])
+            self._input_done(self.shard_of[unit.episode.key])
 
-    def _offer_shard(self, shard: ShardUnit) -> None:
-        needed = [e.key for e in shard.episodes] + [r.key for e in shard.episodes
-                                                     for r in self.renders_of.get(e.key, [])]
-        if all(k in self.done for k in needed):
+    def _input_done(self, shard: ShardUnit) -> None:
+        """One of the shard's episodes or renders is done (each reports once); the last one offers the shard."""
+        self.missing[shard.index] -= 1
+        if not self.missing[shard.index]:
             self._offer("shard", shard)
 
     def _offer(self, stage: str, unit: Any) -> None:

@@ -18,6 +18,10 @@ if TYPE_CHECKING:
 
 SAMPLE_STREAM = 0xDA7A_5E7
 """Second word of the seed sequence that draws ``variants.sample`` (apart from the episodes' own seeds)."""
+MAX_EPISODES = 1_000_000
+"""Most episodes one spec may make. A plan is held in memory (about 0.7 kB per episode with two streams, measured:
+70 MB for 100,000 episodes) and a build keeps a record per unit beside it; a spec that selects more (counted on
+the selected variants, before any is built or checked) is refused with one line: split it into several specs."""
 
 
 @dataclass(frozen=True)
@@ -85,6 +89,12 @@ class Plan:
         w, h = self.spec.size
         r = self.spec.render
         return StreamSpec(stream, w, h, spp=r.spp, denoise=r.denoise, variant=r.variant)  # type: ignore[arg-type]
+
+    def episode_renders(self, episode: EpisodeUnit) -> list[RenderUnit]:
+        """The render units of ``episode``, one per stream in the spec's order: the plan lays them out episode by
+        episode, so they are a slice (O(streams), no search)."""
+        n = len(self.spec.streams)
+        return self.renders[episode.index * n:(episode.index + 1) * n]
 
     def summary(self) -> dict[str, Any]:
         """Counts, as ``rik dataset plan`` prints them and meta/rik_dataset.json keeps them."""
@@ -183,19 +193,30 @@ def check_cameras(spec: DatasetSpec, source: str) -> None:
                            f"{', '.join(CAMERAS)})")
 
 
+def check_size(spec: DatasetSpec, variants: int, source: str) -> None:
+    """A spec that would make more than :data:`MAX_EPISODES` episodes from ``variants`` selected variants is refused
+    before anything is built (its plan would not fit in memory)."""
+    total = variants * len(spec.operators) * spec.episodes_per_variant
+    if total > MAX_EPISODES:
+        raise RikError(f"{source}, field 'episodes_per_variant': {variants:,} selected variants x "
+                       f"{len(spec.operators):,} operators x {spec.episodes_per_variant:,} episodes = {total:,} "
+                       f"episodes, more than the {MAX_EPISODES:,} one spec may make (its plan is held in memory); "
+                       "split it into several specs (by variants, operators or seed)")
+
+
 def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", variants_dir: Path = Path("variants"),
               workers: int = 1, overlays: Sequence[Path] = ()) -> Plan:
     """Expand ``spec``: select its variants, build the ones missing into ``variants_dir`` (their checks decide
     which can be simulated), and lay out its units. Bad input raises one line naming ``source`` and the field."""
     from rik.combinator.build import rejected_variants, resolve_collision, spec_hash
     from rik.combinator.ids import parse_variant_id
-    from rik.dataset.spec import library_versions
     from rik.dataset.spec import spec_hash as hash_of_spec
 
     check_robot(catalog, spec, source)
     check_operators(spec, source)
     check_cameras(spec, source)
     chosen = select_variants(catalog, spec, source)
+    check_size(spec, len(chosen), source)
     collision = resolve_collision(variants_dir)
     rejected = {r.id: f"check {r.failed_check} failed: {r.reason}"
                 for r in rejected_variants(catalog, chosen, variants_dir, workers=workers,
@@ -208,9 +229,19 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
     keys = {v: parse_variant_id(catalog, v) for v in kept}
     plan = Plan(spec, hash_of_spec(spec), source, {v: spec_hash(catalog, k, collision) for v, k in keys.items()},
                 rejected, collision)
+    lay_out_units(plan, {v: catalog.base_units[k.base].fronts[0].id for v, k in keys.items()})
+    return plan
+
+
+def lay_out_units(plan: Plan, fronts: dict[str, str]) -> None:
+    """Fill ``plan``'s episodes, renders and shards, with their keys, for its variants (``fronts``: variant id ->
+    the front its episodes operate, in plan order). Linear in the episodes: each shard takes its renders by index
+    (:meth:`Plan.episode_renders`), never by a search."""
+    from rik.dataset.spec import library_versions
+
+    spec = plan.spec
     record_versions = library_versions("mujoco")
-    for v in kept:
-        front = catalog.base_units[keys[v].base].fronts[0].id
+    for v, front in fronts.items():
         for op in spec.operators:
             for k in range(spec.episodes_per_variant):
                 seed = spec.seed + k
@@ -220,20 +251,22 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
                                    "versions": record_versions})  # the robot ("gripper" since the Hand-E's days)
                 plan.episodes.append(EpisodeUnit(len(plan.episodes), v, front, op, seed, key, spec.robot))
     render_versions = library_versions("mujoco", "mitsuba")
+    stream_keys = {s: plan.stream_spec(s).key for s in spec.streams}
+    cameras = list(spec.cameras)
     for e in plan.episodes:
         for s in spec.streams:
-            key = json_sha256({"stage": "render", "record": e.key, "stream": plan.stream_spec(s).key,
-                               "cameras": list(spec.cameras), "versions": render_versions})
+            key = json_sha256({"stage": "render", "record": e.key, "stream": stream_keys[s],
+                               "cameras": cameras, "versions": render_versions})
             plan.renders.append(RenderUnit(e, s, key))
     export_versions = library_versions("lerobot", "av")
+    export = export_settings(spec)
     size = spec.shard_episodes
     for i in range(0, len(plan.episodes), size):
         chunk = tuple(plan.episodes[i:i + size])
         key = json_sha256({"stage": "shard", "episodes": [e.key for e in chunk],
-                           "renders": [r.key for r in plan.renders if r.episode in chunk],
-                           "export": export_settings(spec), "versions": export_versions})
+                           "renders": [r.key for e in chunk for r in plan.episode_renders(e)],
+                           "export": export, "versions": export_versions})
         plan.shards.append(ShardUnit(len(plan.shards), chunk, key))
-    return plan
 
 
 def export_settings(spec: DatasetSpec) -> dict[str, Any]:

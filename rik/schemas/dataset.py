@@ -113,9 +113,12 @@ class DatasetSpec(Frozen):
 
     @model_validator(mode="after")
     def _labels_unique(self) -> DatasetSpec:
+        from collections import Counter
+
         labels = [o.label for o in self.operators]
+        counts = Counter(labels)  # not list.count per label: a spec may list thousands of operators
         for label in labels:
-            if labels.count(label) > 1:
+            if counts[label] > 1:
                 raise ValueError(f"two operators are labelled '{label}'; give each a distinct 'name'")
         if not self.streams and self.cameras:
             raise ValueError("a state-only dataset (streams: []) has no cameras; drop 'cameras'")
