@@ -8,14 +8,14 @@ import textwrap
 from pathlib import Path
 
 import pytest
-from web_fixtures import browser, served
+from web_fixtures import browser, served, signed, app_client
 
 from rik.combinator.ids import parse_variant_id, variant_id
 from rik.registry.doc import csv_rows
 from rik.registry.index import build_index
 from rik.registry.load import load_catalog
 from rik.registry.stats import catalog_stats
-from rik.web.app import AppConfig, create_app
+from rik.web.app import AppConfig
 from rik.web.catalog_view import REPO_ROOT
 
 DEMO_HANDLE, DEMO_BASE = "two_point/bow-128", "drawer/chest-80"
@@ -39,9 +39,7 @@ def catalog():
 
 @pytest.fixture(scope="module")
 def client(catalog):
-    from fastapi.testclient import TestClient
-
-    with TestClient(create_app(AppConfig(catalog))) as c:
+    with app_client(AppConfig(catalog)) as c:
         yield c
 
 
@@ -86,11 +84,10 @@ def test_unknown_ids_are_a_404_with_one_line(client, url: str, message: str) -> 
 
 
 def test_user_handle_without_pictures_gets_a_placeholder(tmp_path: Path) -> None:
-    from fastapi.testclient import TestClient
 
     overlay = tmp_path / "mine.yaml"
     overlay.write_text(textwrap.dedent(OVERLAY_HANDLE))
-    with TestClient(create_app(AppConfig(load_catalog([overlay])))) as client:
+    with app_client(AppConfig(load_catalog([overlay]))) as client:
         row = client.get("/api/catalog/handles/knob/mushroom-40").json()
         assert row["origin"] == "overlay" and row["pictures"] == {"thumbnail": False, "fidelity": False}
         assert row["mesh"] is None and row["fidelity"] is None
@@ -119,7 +116,7 @@ def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
         page = chromium.new_page(viewport={"width": 1400, "height": 900})
         errors: list[str] = []
         page.on("pageerror", lambda exc: errors.append(str(exc)))
-        page.goto(f"{url}/catalog")
+        page.goto(signed(f"{url}/catalog"))
         count_is(page, total)
         assert page.locator("#handle-grid .card img").count() == total
         page.wait_for_function("() => [...document.querySelectorAll('#handle-grid img')]"

@@ -12,9 +12,11 @@ import socket
 import subprocess
 import sys
 import time
+import urllib.error
 import urllib.request
 from pathlib import Path
 
+import pytest
 from conftest import read_line
 
 BOW = "drawer-chest-80__two_point-bow-128__normal"
@@ -49,8 +51,10 @@ def test_an_unknown_variant_fails_before_any_port_is_taken(rik, tmp_path: Path) 
 
 
 def test_rik_serve_answers_and_stops_on_ctrl_c(tmp_path: Path) -> None:
-    """The real command in its own process, as a user runs it: the printed address answers, Ctrl+C stops it with
-    exit 0 and no traceback."""
+    """The real command in its own process, as a user runs it: the printed address (with its launch token) answers
+    and opens the catalog, the same address without the token is refused, Ctrl+C stops it with exit 0 and no
+    traceback."""
+    import http.cookiejar
     env = {**os.environ, "COLUMNS": "200"}
     proc = subprocess.Popen([sys.executable, "-m", "rik", "serve", "--port", "0", "--out", str(tmp_path / "ep"),
                              "--variants", str(tmp_path / "v")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -58,19 +62,27 @@ def test_rik_serve_answers_and_stops_on_ctrl_c(tmp_path: Path) -> None:
     try:
         assert proc.stdout is not None
         line = read_line(proc.stdout)  # the address, once the server listens (or "" when the process ends)
-        found = re.search(r"http://localhost:(\d+)/", line)
+        found = re.search(r"(http://localhost:(\d+)/)\?token=([\w-]{40,}) ", line)
         assert found, (line, proc.stderr.read() if proc.poll() is not None else "")
-        url = f"http://127.0.0.1:{found.group(1)}"
-        assert f"ssh -L {found.group(1)}:localhost:{found.group(1)}" in line
+        url = f"http://127.0.0.1:{found.group(2)}"
+        assert f"ssh -L {found.group(2)}:localhost:{found.group(2)}" in line
+        browser = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(http.cookiejar.CookieJar()))
         deadline = time.monotonic() + 60
         while True:
             try:
-                with urllib.request.urlopen(url + "/api/docs", timeout=10) as page:
+                with browser.open(f"{url}/?token={found.group(3)}", timeout=10) as page:  # the cookie, then /catalog
+                    assert page.status == 200 and page.url == f"{url}/catalog"
+                with browser.open(url + "/api/docs", timeout=10) as page:
                     assert page.status == 200
                     break
+            except urllib.error.HTTPError:
+                raise
             except OSError:
                 assert time.monotonic() < deadline, "rik serve never answered"
                 time.sleep(0.2)
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(url + "/api/docs", timeout=10)
+        assert refused.value.code == 403
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=60)
     finally:
@@ -122,14 +134,14 @@ def test_a_robot_that_cannot_reach_the_handle_is_refused_before_the_station_open
     assert short and 1100 <= int(short.group(1)) <= 1300, lines  # the 1.2 m it was moved away, near enough
     assert not (tmp_path / "ep").exists()
     # the app's station page with ?robot=so100-far: the same line as the station's error, for the page's banner
-    from web_fixtures import served
+    from web_fixtures import TOKEN, served
     from websockets.sync.client import connect
 
     from rik.registry.load import load_catalog
     from rik.web.app import AppConfig
 
     config = AppConfig(load_catalog([overlay]), variants=tmp_path / "v", episodes=tmp_path / "ep")
-    with served(config) as url, connect(url.replace("http", "ws") + f"/teleop/{BOW}/ws?robot=so100-far",
+    with served(config) as url, connect(url.replace("http", "ws") + f"/teleop/{BOW}/ws?robot=so100-far&token={TOKEN}",
                                         open_timeout=60) as ws:
         deadline = time.monotonic() + 120
         status: dict = {}

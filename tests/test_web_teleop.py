@@ -5,28 +5,17 @@ connection keeps a draft; an unknown variant or robot gets a 404 page with the o
 
 from __future__ import annotations
 
-import os
-import queue
-import re
 import shutil
-import signal
-import subprocess
-import sys
-import threading
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
-from web_fixtures import browser, served
+from web_fixtures import WAIT_MS, browser, served, signed, station_process
 
 from rik.registry import load_catalog
 
 CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"
-WAIT_MS = 90_000
-"""Bound of every wait for the station (a loaded 2-core machine steps the simulation slowly)."""
 STATION = "document.getElementById('station').dataset"
 
 pytestmark = pytest.mark.skipif(shutil.which("chromium") is None, reason="Debian's chromium is not installed")
@@ -85,7 +74,7 @@ class Driver:
 
 def open_station(b, url: str):
     page = b.new_page(viewport={"width": 1400, "height": 1000})
-    page.goto(f"{url}/teleop/{BOW}")
+    page.goto(signed(f"{url}/teleop/{BOW}"))
     page.wait_for_function(f"{STATION}.ready === 'true' && document.getElementById('cam-front').dataset.step !== ''",
                            timeout=WAIT_MS)
     return page
@@ -195,7 +184,7 @@ def test_second_tab_watches_and_a_lost_connection_keeps_a_draft(variants: Path, 
 def test_unknown_variant_gets_a_404_page_with_the_message(variants: Path, tmp_path: Path) -> None:
     with served(config(variants, tmp_path / "episodes")) as url, browser() as b:
         page = b.new_page()
-        response = page.goto(f"{url}/teleop/drawer-chest-80__two_point-bow-999__normal")
+        response = page.goto(signed(f"{url}/teleop/drawer-chest-80__two_point-bow-999__normal"))
         assert response is not None and response.status == 404
         assert "rik: error: no handle 'two_point-bow-999' in the catalog" in page.inner_text("#error")
 
@@ -212,39 +201,6 @@ def test_on_screen_button_moves_and_a_server_shut_down_mid_episode_keeps_a_draft
         episode = page.evaluate(f"{STATION}.episode")
     assert (episodes / ".drafts" / episode / "meta.json").is_file()
     assert not (episodes / episode).exists()
-
-
-@contextmanager
-def station_process(*args: str, cwd: Path) -> Iterator[str]:
-    """``rik ARGS`` (a ``teleop ... --web --port 0``) in its own process, as a user runs it: yields the station's
-    printed address once it is printed; then Ctrl+C stops it (a kill after 60 s). Every wait is bounded."""
-    env = {**os.environ, "COLUMNS": "200"}
-    proc = subprocess.Popen([sys.executable, "-m", "rik", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=env, cwd=cwd)
-    lines: queue.Queue[str] = queue.Queue()
-    err: list[str] = []
-    assert proc.stdout is not None and proc.stderr is not None
-    threading.Thread(target=lambda: [lines.put(x) for x in proc.stdout], daemon=True).start()  # type: ignore[union-attr]
-    threading.Thread(target=lambda: err.extend(proc.stderr), daemon=True).start()  # type: ignore[arg-type]
-    try:
-        deadline = time.monotonic() + WAIT_MS / 1000
-        url = None
-        while url is None:
-            try:
-                found = re.search(r"http://localhost:(\d+)(/teleop/\S+)", lines.get(timeout=0.5))
-                url = found and f"http://127.0.0.1:{found.group(1)}{found.group(2)}"
-            except queue.Empty:
-                assert proc.poll() is None, f"rik {' '.join(args)} ended with {proc.returncode}: {''.join(err)}"
-                assert time.monotonic() < deadline, f"rik {' '.join(args)} printed no address in {WAIT_MS} ms"
-        yield url
-    finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=60)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(timeout=30)
 
 
 def test_the_panda_opens_the_demo_drawer_from_the_keyboard_and_its_episode_replays_exactly(

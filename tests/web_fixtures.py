@@ -3,11 +3,18 @@ Playwright for Python through its ``executable_path`` (Playwright's own browser 
 
 from __future__ import annotations
 
+import os
+import queue
+import re
 import shutil
+import signal
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
@@ -15,17 +22,51 @@ CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-
                  "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage"]
 """Flags for a root, headless, offline machine (no sandbox as root; no background connections that this
 machine's closed network would refuse)."""
+WAIT_MS = 90_000
+"""Bound of every wait for the station (a loaded 2-core machine steps the simulation slowly)."""
+TOKEN = "rik-web-tests-launch-token"
+"""The launch token of every app :func:`served` serves (a real launch makes a random one)."""
+
+
+def signed(url: str) -> str:
+    """``url`` with the launch token, as rik prints it: the first page a browser context opens needs it."""
+    from rik.web.guard import with_token
+
+    return with_token(url, TOKEN)
+
+
+def app_client(config: Any) -> Any:
+    """A TestClient of ``create_app(config)`` that shows the launch token's cookie and a localhost Host."""
+    from fastapi.testclient import TestClient
+
+    from rik.web.app import create_app
+    from rik.web.guard import cookie_name
+
+    config.token = TOKEN
+    client = TestClient(create_app(config), base_url="http://localhost")
+    client.cookies.set(cookie_name(TOKEN), TOKEN)
+    return client
 
 
 @contextmanager
 def served(config: Any) -> Iterator[str]:
-    """Serve ``create_app(config)`` with uvicorn in a thread on a free localhost port; yields the base URL."""
-    import uvicorn
+    """Serve ``create_app(config)`` with rik's server settings in a thread on a free localhost port, with the launch
+    token :data:`TOKEN`; yields the base URL (without the token: see :func:`signed`)."""
+    from rik.web.app import create_app
 
-    from rik.web.app import bind_socket, create_app
+    config.token = TOKEN
+    with served_app(create_app(config)) as url:
+        yield url
+
+
+@contextmanager
+def served_app(app: Any) -> Iterator[str]:
+    """Serve ``app`` (from ``create_app``) with rik's server settings in a thread on a free localhost port; yields
+    the base URL."""
+    from rik.web.app import bind_socket, make_server
 
     sock = bind_socket("127.0.0.1", 0)
-    server = uvicorn.Server(uvicorn.Config(create_app(config), log_level="warning", ws="websockets-sansio"))
+    server = make_server(app)
     thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
     thread.start()
     deadline = time.monotonic() + 60
@@ -42,12 +83,49 @@ def served(config: Any) -> Iterator[str]:
 
 
 @contextmanager
-def browser() -> Iterator[Any]:
-    """A headless Debian Chromium (Playwright gives it a fresh temporary profile), through Playwright."""
+def station_process(*args: str, cwd: Path, procs: list[subprocess.Popen] | None = None) -> Iterator[str]:
+    """``rik ARGS`` (a ``teleop ... --web --port 0``) in its own process, as a user runs it: yields the station's
+    printed address (with its token) once it is printed; then Ctrl+C stops it (a kill after 60 s). Every wait is
+    bounded. ``procs``: a list the process is appended to (to read its pid)."""
+    env = {**os.environ, "COLUMNS": "200"}
+    proc = subprocess.Popen([sys.executable, "-m", "rik", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env, cwd=cwd)
+    if procs is not None:
+        procs.append(proc)
+    lines: queue.Queue[str] = queue.Queue()
+    err: list[str] = []
+    assert proc.stdout is not None and proc.stderr is not None
+    threading.Thread(target=lambda: [lines.put(x) for x in proc.stdout], daemon=True).start()  # type: ignore[union-attr]
+    threading.Thread(target=lambda: err.extend(proc.stderr), daemon=True).start()  # type: ignore[arg-type]
+    try:
+        deadline = time.monotonic() + WAIT_MS / 1000
+        url = None
+        while url is None:
+            try:
+                found = re.search(r"http://localhost:(\d+)(/teleop/\S+)", lines.get(timeout=0.5))
+                url = found and f"http://127.0.0.1:{found.group(1)}{found.group(2)}"
+            except queue.Empty:
+                assert proc.poll() is None, f"rik {' '.join(args)} ended with {proc.returncode}: {''.join(err)}"
+                assert time.monotonic() < deadline, f"rik {' '.join(args)} printed no address in {WAIT_MS} ms"
+        yield url
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(timeout=30)
+
+
+@contextmanager
+def browser(*args: str) -> Iterator[Any]:
+    """A headless Debian Chromium (Playwright gives it a fresh temporary profile), through Playwright; ``args``:
+    more command-line flags."""
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        b = p.chromium.launch(executable_path=CHROMIUM, args=[*CHROMIUM_ARGS, *args])
         try:
             yield b
         finally:

@@ -140,7 +140,8 @@ def teleop(variant: VariantArg,
         serve_station(config, variant, host=host, port=port,
                       on_ready=lambda url: con.print(f"teleop station: [bold]{url}[/] (Ctrl+C to stop; from another "
                                                      f"machine: ssh -L {url.rsplit(':', 1)[1].split('/')[0]}:"
-                                                     f"localhost:{url.rsplit(':', 1)[1].split('/')[0]} THIS_HOST)"))
+                                                     f"localhost:{url.rsplit(':', 1)[1].split('/')[0]} THIS_HOST)",
+                                                     soft_wrap=True))
         return
     from rik.sim.teleop import teleoperate
 

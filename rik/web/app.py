@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import errno
 import socket
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.web.guard import new_token, with_token
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
@@ -20,6 +21,9 @@ STATIC = Path(__file__).parent / "static"
 """Pages, scripts and styles of the app (no build step: plain HTML, CSS and JavaScript)."""
 DEFAULT_PORT = 8765
 DEFAULT_HOST = "127.0.0.1"
+DEFAULT_MAX_STATIONS = 4
+MAX_STATIONS_LIMIT = 64
+DEFAULT_IDLE_RELEASE = 600.0
 
 
 @dataclass
@@ -38,6 +42,14 @@ class AppConfig:
     """Front to operate (None: each variant's first)."""
     robot: str = "hand-e"
     """Robot of a station whose page names none (``?robot=`` picks another): a catalog robot id."""
+    token: str = field(default_factory=new_token)
+    """The launch token every request must show (:mod:`rik.web.guard`): in the printed address, then a cookie."""
+    allowed_hosts: tuple[str, ...] = ()
+    """Host names the app answers to besides localhost's, the ``--host`` it listens on and IP literals."""
+    max_stations: int = DEFAULT_MAX_STATIONS
+    """Teleop stations alive at once (each holds a scene and renderers: 100-300 MB)."""
+    idle_release: float = DEFAULT_IDLE_RELEASE
+    """A station no tab has watched for this long (s) is released; its episode in progress is kept as a draft."""
 
     def check(self) -> None:
         """Settings a user gave that cannot work fail here, before the server starts."""
@@ -47,6 +59,13 @@ class AppConfig:
         check_seeds(self.seed, 1)
         check_time_limit(self.max_seconds)
         self.catalog.robot(self.robot)  # an unknown robot: one line with close ids
+        if not 1 <= self.max_stations <= MAX_STATIONS_LIMIT:
+            raise RikError(f"--max-stations {self.max_stations}: give 1 to {MAX_STATIONS_LIMIT} (each station holds "
+                           "a scene and its renderers)")
+        if not 1.0 <= self.idle_release <= 7 * 24 * 3600:
+            raise RikError(f"--idle-release {self.idle_release}: give 1 s to a week")
+        if len(self.token) < 16:
+            raise RikError("the launch token must be at least 16 characters")
 
 
 def bind_socket(host: str, port: int) -> socket.socket:
@@ -85,9 +104,11 @@ def serve_station(config: AppConfig, variant: str, *, host: str = DEFAULT_HOST, 
           scenes={(vid, config.robot): scene})
 
 
-def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = None) -> FastAPI:
-    """The application: the catalog's and the teleop station's routes, and the static files; ``scenes``: scenes
-    already built, by (variant id, robot id), that those stations start from."""
+def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = None, *,
+               host: str = DEFAULT_HOST) -> FastAPI:
+    """The application: the catalog's and the teleop station's routes, and the static files, behind the gate of
+    :mod:`rik.web.guard` (``host``: the address it listens on, a name it answers to); ``scenes``: scenes already
+    built, by (variant id, robot id), that those stations start from."""
     from fastapi import FastAPI
     from fastapi.responses import RedirectResponse
     from fastapi.staticfiles import StaticFiles
@@ -95,8 +116,10 @@ def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = No
     from rik import __version__
     from rik.web import catalog as catalog_routes
     from rik.web import teleop as teleop_routes
+    from rik.web.guard import Guard
 
     app = FastAPI(title="rik", version=__version__, docs_url="/api/docs", redoc_url=None)
+    app.add_middleware(Guard, token=config.token, host=host, allowed_hosts=config.allowed_hosts)
     app.state.config = config
     app.include_router(catalog_routes.router)
     app.include_router(teleop_routes.router)
@@ -110,20 +133,31 @@ def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = No
     return app
 
 
+WS_MAX_MESSAGE = 64 * 1024
+"""Largest websocket message a tab may send, bytes (the protocol's messages are under 300): a larger one closes the
+connection with code 1009 before it is read whole."""
+
+
+def make_server(app: Any) -> Any:
+    """A uvicorn server of ``app`` with rik's settings (websocket message bound, quiet log, lifespan on)."""
+    import uvicorn
+
+    return uvicorn.Server(uvicorn.Config(app, log_level="warning", ws="websockets-sansio", lifespan="on",
+                                         ws_max_size=WS_MAX_MESSAGE))
+
+
 def serve(config: AppConfig, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, path: str = "/",
           on_ready: object = None, scenes: dict[tuple[str, str], Any] | None = None) -> None:
     """Serve the app until interrupted (Ctrl+C, a normal stop: the function returns). The socket is bound first (a
-    port in use fails here); the URL of ``path`` is given to ``on_ready(url)`` once it listens."""
-    import uvicorn
-
+    port in use fails here); the URL of ``path``, with the launch token, is given to ``on_ready(url)`` once it
+    listens."""
     config.check()
     sock = bind_socket(host, port)
     bound = sock.getsockname()[1]
-    app = create_app(config, scenes)
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", ws="websockets-sansio", lifespan="on"))
+    server = make_server(create_app(config, scenes, host=host))
     if callable(on_ready):
         shown = "localhost" if host in ("127.0.0.1", "::1", "localhost") else host
-        on_ready(f"http://{shown}:{bound}{path}")
+        on_ready(f"http://{shown}:{bound}{with_token(path, config.token)}")
     try:
         server.run(sockets=[sock])
     except KeyboardInterrupt:  # Ctrl+C is how a server is stopped: uvicorn has shut down, re-raising the signal

@@ -40,6 +40,7 @@ JPEG_QUALITY = 80
 WATCHING = "another tab controls this session; you are watching"
 LEFT = "the controlling tab left; press Take control to drive"
 BUILDING = "building the variant..."
+KEPT_IN_MEMORY = "the episode is kept in memory: free some space and press Save again"
 PAUSED = "a draft was kept: Continue, Save or Discard first"
 
 
@@ -72,6 +73,15 @@ class Client:
         return items
 
 
+def write_failure(exc: OSError) -> str:
+    """Why a write failed, in a few words: ``No space left on device (ENOSPC): episodes/x/states.parquet``."""
+    import errno
+
+    code = errno.errorcode.get(exc.errno or 0, "")
+    where = f": {exc.filename}" if exc.filename else ""
+    return f"{exc.strerror or exc}{f' ({code})' if code else ''}{where}"
+
+
 def frame_message(header: dict[str, Any], jpeg: bytes) -> bytes:
     """A binary frame: 4-byte big-endian header length, the JSON header, the JPEG bytes."""
     head = json.dumps(header, separators=(",", ":")).encode()
@@ -84,6 +94,30 @@ def encode_jpeg(rgb: np.ndarray, quality: int = JPEG_QUALITY) -> bytes:
     buf = io.BytesIO()
     Image.fromarray(rgb).save(buf, "JPEG", quality=quality)
     return buf.getvalue()
+
+
+MAX_SEQ = 2**53
+"""Input sequence numbers are integers in 0 .. 2**53 (what a browser's numbers hold exactly)."""
+BAD_INPUT = ("ignored an input: axes must be 6 finite numbers in -1..1, grip a number in 0..1 or null, seq an "
+             f"integer in 0..{MAX_SEQ}")
+
+
+def parse_input(msg: dict[str, Any]) -> tuple[np.ndarray, float | None, int] | str:
+    """An ``input`` message's axes (6, clipped to -1..1), grip (0..1 or None) and seq, or the notice saying why it
+    is ignored (a wrong type, a non-finite number, a seq that is not an integer in range)."""
+    try:
+        axes = np.asarray(msg.get("axes"), np.float64).reshape(6)
+        grip = msg.get("grip")
+        grip = None if grip is None else float(grip)
+        seq = msg.get("seq", 0)
+        if isinstance(seq, bool) or not isinstance(seq, (int, float)) or not math.isfinite(seq) or seq != int(seq):
+            return BAD_INPUT
+        seq = int(seq)
+    except (TypeError, ValueError, OverflowError):
+        return BAD_INPUT
+    if not np.all(np.isfinite(axes)) or (grip is not None and not math.isfinite(grip)) or not 0 <= seq <= MAX_SEQ:
+        return BAD_INPUT
+    return np.clip(axes, -1.0, 1.0), (None if grip is None else min(max(grip, 0.0), 1.0)), seq
 
 
 def build_station_scene(config: AppConfig, variant: str, robot: str) -> SimScene:
@@ -129,6 +163,8 @@ class Station:
         self.replay: dict[str, Any] | None = None
         self.fps = 0.0
         self.session: TeleopSession | None = None
+        self.last_seen = time.monotonic()
+        """When a tab last left (or the station started), monotonic s: what the idle release measures from."""
         self.stop = threading.Event()
         self.thread = threading.Thread(target=self._run, name=f"rik-station-{variant}-{robot}", daemon=True)
         self.thread.start()
@@ -148,6 +184,7 @@ class Station:
 
     def disconnect(self, client: Client) -> None:
         with self.lock:
+            self.last_seen = time.monotonic()
             if client in self.clients:
                 self.clients.remove(client)
             if self.controller is client:
@@ -156,6 +193,11 @@ class Station:
                 self.commands.append((client, "_lost"))
                 for c in self.clients:
                     c.notice = LEFT
+
+    def idle_for(self) -> float | None:
+        """Seconds since the last tab left, or None while a tab is connected."""
+        with self.lock:
+            return None if self.clients else time.monotonic() - self.last_seen
 
     def receive(self, client: Client, msg: Any) -> None:
         """One JSON message from a tab (see :mod:`rik.web.teleop`); bad ones are answered with a notice."""
@@ -188,14 +230,11 @@ class Station:
                 return
             client.notice = ""
             if kind == "input":
-                try:
-                    axes = np.clip(np.nan_to_num(np.asarray(msg.get("axes"), np.float64).reshape(6)), -1.0, 1.0)
-                    grip = msg.get("grip")
-                    grip = None if grip is None else float(np.clip(float(grip), 0.0, 1.0))
-                    seq = int(msg.get("seq", 0))
-                except (TypeError, ValueError):
-                    client.notice = "ignored an input: axes must be 6 numbers in -1..1, grip a number in 0..1 or null"
+                parsed = parse_input(msg)
+                if isinstance(parsed, str):
+                    client.notice = parsed
                     return
+                axes, grip, seq = parsed
                 if self.paused and (np.any(axes) or grip is not None):
                     client.notice = PAUSED
                 self.axes = axes * (FINE_FACTOR if msg.get("fine") else 1.0)
@@ -311,9 +350,13 @@ class Station:
         assert session is not None
         if name == "_lost":
             if session.recording:
-                path = session.keep_draft()
-                self.draft = None if path is None else str(path)
                 self.paused = True
+                try:
+                    path = session.keep_draft()
+                except OSError as exc:
+                    self.message = f"could not keep a draft ({write_failure(exc)}); {KEPT_IN_MEMORY}"
+                else:
+                    self.draft = None if path is None else str(path)
             return
         if self.replay is not None and name != "replay":
             self.message = "replaying the last saved episode: wait until it ends"
@@ -322,7 +365,11 @@ class Station:
         if name == "toggle_grip" and not self.paused:
             session.toggle_grip()
         elif name == "save":
-            session.save()
+            try:
+                session.save()
+            except OSError as exc:  # a full disk, a quota: the episode stays recorded, and Save works again later
+                self.message = f"could not save {session.episode} ({write_failure(exc)}); {KEPT_IN_MEMORY}"
+                return
             self.draft, self.paused = None, False
         elif name == "discard":
             session.discard()
@@ -417,30 +464,82 @@ class Station:
         self.thread.join(timeout=30)
         s = self.session
         if s is not None and self.ready and s.recording and not self.thread.is_alive():
-            return s.keep_draft()
+            try:
+                return s.keep_draft()
+            except OSError as exc:
+                import sys
+
+                print(f"rik: error: could not keep the draft of {s.episode} ({write_failure(exc)}); "
+                      f"{s.recorder.steps} steps lost", file=sys.stderr)
         return None
 
 
 class Stations:
-    """Every station of the app, one per variant id and robot, created on first use and kept while the server
-    runs; ``scenes``: scenes already built, by (variant id, robot id), that those stations start from."""
+    """Every station of the app, one per variant id and robot, created when a tab's websocket asks for it; at most
+    ``config.max_stations`` at once, and one that no tab has watched for ``config.idle_release`` s is released
+    (its thread stopped, its renderers and scene freed, its episode in progress kept as a draft). ``scenes``:
+    scenes already built, by (variant id, robot id), that those stations start from."""
 
     def __init__(self, config: AppConfig, scenes: dict[tuple[str, str], SimScene] | None = None) -> None:
         self.config = config
         self.lock = threading.Lock()
         self.stations: dict[tuple[str, str], Station] = {}
         self.scenes = dict(scenes or {})
+        self.released: list[tuple[tuple[str, str], Path | None]] = []
+        """Stations released so far (key, draft kept), oldest first."""
+        self._stop = threading.Event()
+        self._reaper = threading.Thread(target=self._reap, name="rik-stations-reaper", daemon=True)
+        self._reaper.start()
 
-    def get(self, variant: str, robot: str | None = None) -> Station:
+    def get(self, variant: str, robot: str | None = None, client: Client | None = None) -> Station:
         """The station of ``variant`` (a canonical variant id) with ``robot`` (a catalog robot id; None: the
-        app's), started (and its variant built) on first use."""
+        app's), started (and its variant built) on first use, with ``client`` connected to it (under the lock, so
+        the idle release never takes a station between its lookup and its tab). At the bound, the station with no
+        tab that was left longest ago is released first; when every station has a tab, a RikError says so.
+        Blocks while a station is released (its thread stops within seconds): call it off the event loop."""
+        from rik.errors import RikError
+
         key = (variant, robot or self.config.robot)
         with self.lock:
-            if key not in self.stations:
-                self.stations[key] = Station(self.config, *key, scene=self.scenes.pop(key, None))
-            return self.stations[key]
+            if key in self.stations:
+                if client is not None:
+                    self.stations[key].connect(client)
+                return self.stations[key]
+            victim = None
+            if len(self.stations) >= self.config.max_stations:
+                idle = [(t, k) for k, st in self.stations.items() if (t := st.idle_for()) is not None]
+                if not idle:
+                    raise RikError(f"{len(self.stations)} teleop stations are open, each with a tab (the bound is "
+                                   f"{self.config.max_stations}: rik serve --max-stations): close one's tabs first")
+                victim = max(idle)[1]
+                old = self.stations.pop(victim)
+            station = self.stations[key] = Station(self.config, *key, scene=self.scenes.pop(key, None))
+            if client is not None:
+                station.connect(client)
+        if victim is not None:
+            self._release(victim, old)
+        return station
+
+    def _release(self, key: tuple[str, str], station: Station) -> None:
+        draft = station.shutdown()
+        with self.lock:
+            self.released.append((key, draft))
+
+    def _reap(self) -> None:
+        """Release stations idle past the bound, checking a few times per bound (at most every 5 s)."""
+        period = min(5.0, max(0.2, self.config.idle_release / 4))
+        while not self._stop.wait(period):
+            with self.lock:
+                stale = [(k, st) for k, st in self.stations.items()
+                         if (t := st.idle_for()) is not None and t >= self.config.idle_release]
+                for k, _ in stale:
+                    del self.stations[k]
+            for k, st in stale:
+                self._release(k, st)
 
     def shutdown(self) -> list[Path]:
+        self._stop.set()
         with self.lock:
             stations = list(self.stations.values())
+            self.stations.clear()
         return [p for s in stations if (p := s.shutdown()) is not None]

@@ -1,6 +1,11 @@
 """The browser teleop station: ``GET /teleop/{variant}`` serves the page, ``WS /teleop/{variant}/ws`` streams
 the cameras and the status and takes the operator's input; the sessions live in :mod:`rik.web.station`.
 
+Every request passes the gate of :mod:`rik.web.guard` first (this server's Host, the launch token, the app's
+own Origin on the websocket). Opening the page starts nothing; opening its websocket starts the station, within
+the app's bound (``max_stations``; the least recently watched station with no tab is released first, its episode
+kept as a draft), and a station no tab watches for ``idle_release`` seconds is released the same way.
+
 Both take ``?robot=<catalog robot id>`` (``hand-e``, ``panda-2f85``, ``so100``, or a user catalog's): the robot
 that operates the front; without it, the app's (``rik serve --robot``, default ``hand-e``). Each variant and robot
 is a station of its own, so the catalog's pairing picker links one address per furniture and robot, which a user
@@ -26,7 +31,9 @@ kept after the controlling tab's connection was lost: the page offers Continue /
 "session": :meth:`rik.sim.teleop_session.TeleopSession.status` (with "pose": gripper base x, y, z m, pitch, yaw,
 roll rad) plus "roll_deg"}.
 
-Browser -> server, text JSON:
+Browser -> server, text JSON (anything else: a binary frame, text that is not JSON or holds ``NaN``/``Infinity``,
+an unknown type or field of the wrong type, gets a notice in this tab's next status and changes nothing; a message
+over 64 KiB closes the connection with code 1009):
 
 - ``{"type": "input", "seq": n, "axes": [6 numbers in -1..1: x (left), y (away), z (up), pitch, yaw, roll],
   "grip": 0..1 or null (null: keep the grip), "fine": bool}``; an input older than 0.5 s without a newer one
@@ -109,32 +116,49 @@ def error_page(message: str, status: int = 404) -> HTMLResponse:
 
 @router.get("/teleop/{variant}", include_in_schema=False, response_model=None)
 async def page(request: Request, variant: str, robot: str | None = None) -> FileResponse | HTMLResponse:
-    """The station's page; opening it starts the station (building the variant in its thread when needed)."""
+    """The station's page. Only the ids are checked here (the catalog's one line on a 404 page): a GET starts no
+    work; the station starts when the page opens its websocket."""
     try:
-        vid = _variant(request.app, variant)
-        rid = _robot(request.app, robot)
+        _variant(request.app, variant)
+        _robot(request.app, robot)
     except RikError as exc:
         return error_page(str(exc))
-    _stations(request.app).get(vid, rid)
     return FileResponse(STATIC / "teleop.html", headers={"Cache-Control": "no-store"})
+
+
+def parse_message(text: str) -> tuple[Any, str]:
+    """A tab's text message as JSON, or (None, the notice saying why it was ignored): not JSON, nested too deeply,
+    or holding a non-finite number (``NaN``, ``Infinity``: JSON has none, Python's parser reads them)."""
+
+    def non_finite(name: str) -> Any:
+        raise ValueError(f"non-finite number {name}")
+
+    try:
+        return json.loads(text, parse_constant=non_finite), ""
+    except RecursionError:
+        return None, "ignored a message nested too deeply"
+    except ValueError as exc:
+        if "non-finite" in str(exc):
+            return None, "ignored a message holding NaN or Infinity: numbers must be finite"
+        return None, "ignored a message that is not JSON"
 
 
 @router.websocket("/teleop/{variant}/ws")
 async def stream(websocket: WebSocket, variant: str, robot: str | None = None) -> None:
-    """One tab's connection: frames and status out, input and commands in (see the module docstring)."""
+    """One tab's connection: frames and status out, input and commands in (see the module docstring). Opening it
+    starts the station (building the variant in its thread when needed), within the app's bound on stations."""
     from rik.web.station import Client
 
     await websocket.accept()
     try:
         vid = _variant(websocket.app, variant)
         rid = _robot(websocket.app, robot)
+        client = Client(asyncio.get_running_loop())
+        station = await asyncio.to_thread(_stations(websocket.app).get, vid, rid, client)
     except RikError as exc:
         await websocket.send_text(json.dumps({"type": "status", "ready": False, "error": str(exc)}))
         await websocket.close(code=1008)
         return
-    station = _stations(websocket.app).get(vid, rid)
-    client = Client(asyncio.get_running_loop())
-    station.connect(client)
 
     async def sender() -> None:
         while True:
@@ -149,11 +173,16 @@ async def stream(websocket: WebSocket, variant: str, robot: str | None = None) -
     task = asyncio.create_task(sender())
     try:
         while True:
-            text = await websocket.receive_text()
-            try:
-                msg = json.loads(text)
-            except ValueError:
-                client.notice = "ignored a message that is not JSON"
+            message = await websocket.receive()
+            if message["type"] == "websocket.disconnect":
+                break
+            text = message.get("text")
+            if text is None:
+                client.notice = "ignored a binary message: send JSON text (input, command or size)"
+                continue
+            msg, notice = parse_message(text)
+            if notice:
+                client.notice = notice
                 continue
             station.receive(client, msg)
     except (WebSocketDisconnect, RuntimeError):
