@@ -84,13 +84,17 @@
     const query = robotParam ? "?robot=" + encodeURIComponent(robotParam) : "";
     ws = new WebSocket(proto + "//" + location.host + "/teleop/" + encodeURIComponent(variant) + "/ws" + query);
     ws.binaryType = "arraybuffer";
+    let opened = false;
     ws.onopen = () => {
+      opened = true;
       $("conn").textContent = "connected";
       root.dataset.connected = "true";
       sendSize();
     };
     ws.onclose = () => {
-      $("conn").textContent = "disconnected: reconnecting...";
+      // a handshake refused (a restarted server has a new launch token) or a server that is gone: keep trying
+      $("conn").textContent = opened ? "disconnected: reconnecting..." : "cannot connect: if rik was restarted, " +
+        "open the address it printed (its token is new); retrying...";
       root.dataset.connected = "false";
       setTimeout(connect, 1000);
     };
