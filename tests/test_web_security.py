@@ -283,3 +283,21 @@ def test_a_save_on_a_full_disk_keeps_the_episode_and_the_station(variants: Path,
 
     meta = read_meta(episodes / episode)
     assert meta.steps >= 12 and not draft.exists()
+
+
+def test_a_replay_of_an_episode_removed_meanwhile_is_a_message_not_a_dead_station(variants: Path,
+                                                                                   tmp_path: Path) -> None:
+    """The saved episode's folder is removed (by the person, in a file manager) before Replay: the station says why
+    and goes on recording."""
+    episodes = tmp_path / "ep"
+    app = make_app(variants, episodes)
+    with served_app(app) as url, connect(ws_url(url), open_timeout=WAIT) as ws:
+        record_steps(ws, 3)
+        ws.send(json.dumps({"type": "command", "name": "save"}))
+        st = statuses(ws, lambda s: bool((s.get("session") or {}).get("last_saved")), "the save")
+        shutil.rmtree(episodes / st["session"]["last_saved"])
+        ws.send(json.dumps({"type": "command", "name": "replay"}))
+        st = statuses(ws, lambda s: (s.get("message") or "").startswith("replay failed: "), "the replay's failure")
+        assert st["ready"] and st["error"] is None
+        st = record_steps(ws, 3, seq=50)
+        assert st["session"]["steps"] >= 3

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rik.errors import RikError
 from rik.sim.teleop_keys import FINE_FACTOR
 
 if TYPE_CHECKING:
@@ -250,7 +251,6 @@ class Station:
 
     # ---- the station thread -----------------------------------------------------------------------------------
     def _build(self) -> None:
-        from rik.errors import RikError
         from rik.sim.teleop_session import TeleopSession
 
         c = self.config
@@ -335,7 +335,10 @@ class Station:
             grip, self.grip = self.grip, None
             seq = self.seq
         for _, name in commands:
-            self._command(name, replay_data)
+            try:
+                self._command(name, replay_data)
+            except (RikError, OSError) as exc:  # a saved episode removed before its replay...: said, never fatal
+                self.message = f"{name.lstrip('_')} failed: {exc}"
         if self.replay is not None:
             self._replay_row(replay_data)
             return
