@@ -2,8 +2,9 @@
 program, and a robot nobody uses may name a package this machine lacks), checked once a command asks for a robot.
 
 An arm's model comes from an installed Python package (never downloaded). Such a package that is missing, or
-that lacks the entry's files, is a one-line :class:`rik.errors.CatalogError` naming the catalog file and line, the
-entry and the field (``model.package``, ``model.files.N``), as the loader's own errors do.
+that lacks the entry's files, or whose files lead out of it (a symbolic link; the schema already refuses absolute
+paths and ``..``), is a one-line :class:`rik.errors.CatalogError` naming the catalog file and line, the entry and
+the field (``model.package``, ``model.files.N``), as the loader's own errors do.
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ if TYPE_CHECKING:
 def installed_package_dir(name: str) -> Path | None:
     """The folder of the installed package importable as ``name``, found without importing it (the packages'
     own code pulls in dependencies rik does not install); None when it is not installed."""
+    if not name.isidentifier():  # a dotted name imports its parent package (its code runs) to look inside it
+        return None
     try:
         spec = importlib.util.find_spec(name)
     except (ImportError, ValueError):  # a dotted name whose parent is missing; an empty or relative name
@@ -29,6 +32,13 @@ def installed_package_dir(name: str) -> Path | None:
     if spec is None or not spec.submodule_search_locations:
         return None
     return Path(next(iter(spec.submodule_search_locations)))
+
+
+def outside_package(folder: Path, file: str) -> Path | None:
+    """Where ``folder / file`` leads (symbolic links followed) when that is outside ``folder``; None when it
+    stays inside. A catalog's model file must be its package's own."""
+    real = (folder / file).resolve()
+    return None if real.is_relative_to(folder.resolve()) else real
 
 
 def entry_error(catalog: Catalog, section: str, entry_id: str, field: str | None, problem: str) -> CatalogError:
@@ -63,6 +73,10 @@ def usable_robot(catalog: Catalog, robot_id: str) -> Robot:
         raise entry_error(catalog, "robots", robot.id, "model.package",
                           f"the Python package '{name}' that ships the model is not installed ({remedy})")
     for i, file in enumerate(robot.model.files):
+        if (real := outside_package(folder, file)) is not None:
+            raise entry_error(catalog, "robots", robot.id, f"model.files.{i}",
+                              f"'{file}' leads to {real}, outside the installed package '{name}' ({folder}): a "
+                              "model file must be the package's own")
         if not (folder / file).is_file():
             raise entry_error(catalog, "robots", robot.id, f"model.files.{i}",
                               f"'{file}' is not in the installed package '{name}' ({folder})")

@@ -16,7 +16,9 @@ Units are SI: m, rad, N, N·m, rad/s; joint stiffness N·m/rad, damping N·m·s/
 from __future__ import annotations
 
 import math
+import re
 from enum import StrEnum
+from pathlib import PurePosixPath
 from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
@@ -41,6 +43,11 @@ class Sourced(Frozen):
     """A datasheet, a manual, a measurement (say how) or an assumption (say why)."""
 
 
+PACKAGE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+"""A top-level import name: rik finds its folder without importing anything (a dotted name would import its
+parent package to look inside it, running that package's code)."""
+
+
 class ModelSource(Frozen):
     """Where a robot's MJCF comes from."""
 
@@ -48,7 +55,9 @@ class ModelSource(Frozen):
     """Import name of the installed distribution that ships the files (``gym_hil``); None: rik builds the model."""
     files: tuple[Text, ...] = ()
     """MJCF files inside the package, relative to it. One file is a whole model; several are ``mujocoinclude``
-    fragments joined in order (the first holding assets and defaults, the rest bodies)."""
+    fragments joined in order (the first holding assets and defaults, the rest bodies). No absolute path and no
+    ``..``; where they resolve (symbolic links followed) is checked when the robot is used
+    (:func:`rik.registry.robots.usable_robot`)."""
     root_body: str | None = None
     """The body of the model that is attached to the scene (the arm's base)."""
     licence: Text
@@ -56,10 +65,23 @@ class ModelSource(Frozen):
     origin: Text
     """Where the model was made and how it reached the package."""
 
+    @field_validator("package")
+    @classmethod
+    def _top_level_name(cls, value: str | None) -> str | None:
+        if value is not None and not PACKAGE_NAME.fullmatch(value):
+            raise ValueError(f"{value!r} is not a top-level import name (letters, digits and '_', no '.'): rik finds "
+                             "the package's folder without importing any of it")
+        return value
+
     @model_validator(mode="after")
     def _package_needs_files(self) -> ModelSource:
         if self.package is not None and (not self.files or self.root_body is None):
             raise ValueError("a model from a package names its files and its root_body")
+        for i, file in enumerate(self.files):
+            path = PurePosixPath(file)
+            if path.is_absolute() or ".." in path.parts or "\\" in file or "\x00" in file:
+                raise FieldError(("files", i), f"{file!r} leads outside the package: model files are paths inside "
+                                 "it, relative to its folder, without '..'")
         return self
 
 

@@ -68,9 +68,14 @@ def source_spec(robot: Robot) -> mujoco.MjSpec:
     """The robot's model as its package ships it (one file, or ``mujocoinclude`` fragments joined)."""
     import mujoco
 
+    from rik.registry.robots import outside_package
+
     folder = package_dir(robot)
     files = [folder / f for f in robot.model.files]
-    for f in files:
+    for i, f in enumerate(files):
+        if (real := outside_package(folder, robot.model.files[i])) is not None:
+            raise RikError(f"robot {robot.id}: model.files.{i} '{robot.model.files[i]}' leads to {real}, outside the "
+                           f"installed package '{robot.model.package}' ({folder})")
         if not f.is_file():
             raise RikError(f"robot {robot.id}: {f} is missing from the installed package '{robot.model.package}'")
     try:
