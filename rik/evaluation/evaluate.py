@@ -80,10 +80,12 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
         make_operator(spec.strategy)
         return EvalSpec(**{**asdict(spec), "label": spec.label or spec.strategy})
     from rik.evaluation.load import policy_needs
+    from rik.evaluation.policy_files import check_policy_folder
     from rik.sim.robot_layout import robot_layout
 
     layout = robot_layout(robot.as_arm)
     needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered, layout=layout)
+    check_policy_folder(Path(spec.operator))  # processors and weights: before anything is built or written
     label = spec.label or f"{needs.policy_type}:{run_name(Path(spec.operator))}"
     return EvalSpec(**{**asdict(spec), "label": label, "needs": asdict(needs)})
 
@@ -127,6 +129,9 @@ def _context(spec: EvalSpec) -> dict[str, Any]:
         from lerobot.envs.factory import make_env_pre_post_processors
         from lerobot.policies.factory import make_policy, make_pre_post_processors
 
+        from rik.evaluation.policy_files import check_policy_folder
+
+        check_policy_folder(Path(spec.operator))  # LeRobot imports and calls what the folder names: check it first
         policy_cfg = PreTrainedConfig.from_pretrained(spec.operator)
         policy_cfg.pretrained_path = Path(spec.operator)
         policy = make_policy(cfg=policy_cfg, env_cfg=cfg)

@@ -1,7 +1,8 @@
 """A saved LeRobot policy, and what rik's environment must supply to run it.
 
 ``POLICY_DIR`` is a folder that ``lerobot-train`` wrote (``outputs/train/<run>/checkpoints/last/pretrained_model``)
-or any folder with a policy's ``config.json`` and weights; the policy may be of any type lerobot can load. Its
+or any folder with a policy's ``config.json``, processors and weights, of a type rik runs (``act``, ``diffusion``,
+``tdmpc``, ``vqbet``; :mod:`rik.evaluation.policy_files` checks the folder before LeRobot reads it). Its
 input features say what the environment renders: ``observation.images.<camera>`` asks for MuJoCo's image of that
 camera, ``observation.images.<camera>_rerendered`` for Mitsuba's (only when the re-render is allowed: it is slow
 without a GPU), at the size the policy was trained on. Its state and action must be those of the robot it runs
@@ -11,18 +12,17 @@ writes its joint targets.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.evaluation.policy_files import CONFIG
 from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, STREAM_SUFFIX
 
 if TYPE_CHECKING:
     from rik.sim.robot_layout import RobotLayout
 
-CONFIG = "config.json"
 OLD_STATE_WIDTH = 14
 """``observation.state`` of exports made before the state split (robot and front state in one vector)."""
 
@@ -39,20 +39,22 @@ class PolicyNeeds:
 
 
 def policy_config(policy_dir: Path) -> dict[str, Any]:
-    """The ``config.json`` of a saved policy, checked to be one."""
+    """The ``config.json`` of a saved policy, checked to be one: read only when small (a JSON file of a policy
+    folder is at most :data:`rik.evaluation.policy_files.MAX_JSON_BYTES`), of a policy type rik runs, its fields of
+    the types LeRobot declares (:func:`rik.evaluation.policy_files.parsed_config`)."""
+    from rik.evaluation.policy_files import parsed_config, read_json
+
     file = Path(policy_dir) / CONFIG
     if not Path(policy_dir).is_dir():
         raise RikError(f"{policy_dir}: no such folder (give a saved policy, e.g. "
                        "outputs/train/<run>/checkpoints/last/pretrained_model)")
-    if not file.is_file():
+    if not file.exists() and not file.is_symlink():
         raise RikError(f"{policy_dir}: no {CONFIG}: not a saved LeRobot policy (lerobot-train saves one in "
                        "<output_dir>/checkpoints/<step>/pretrained_model)")
-    try:
-        data = json.loads(file.read_text())
-    except (OSError, ValueError) as e:
-        raise RikError(f"{file}: not readable JSON ({e})") from None
+    data = read_json(Path(policy_dir), CONFIG)
     if not isinstance(data, dict) or not isinstance(data.get("type"), str):
         raise RikError(f"{file}: field 'type' (the policy type, e.g. act) is missing")
+    parsed_config(Path(policy_dir), data)
     return data
 
 
