@@ -30,6 +30,19 @@ if TYPE_CHECKING:
 
 DEFAULT_POINTS = 20_000
 """Measured points per surface (P, Q and Q' each)."""
+MAX_POINTS = 1_000_000
+"""Most surface samples per shell (``--points``): each sample costs a distance query against every convex part."""
+
+
+def check_points(points: int) -> int:
+    """``points`` when it lies in 1,000 .. :data:`MAX_POINTS`, else a one-line :class:`rik.errors.RikError`."""
+    from rik.errors import RikError
+
+    if not 1000 <= points <= MAX_POINTS:
+        raise RikError(f"--points {points}: give 1,000 to {MAX_POINTS:,} surface samples per shell")
+    return points
+
+
 REFERENCE_FACTOR = 10
 """Reference samples per measured point: distances are taken to the nearest of these."""
 INSIDE_TOLERANCE = 1e-7

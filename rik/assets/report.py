@@ -66,8 +66,9 @@ def fidelity_row(catalog: Catalog, handle_id: str, *, out: Path | None = None, p
     """Fidelity of one handle's collision (CoACD and convex-hull baseline); with ``out``, also write its
     ``thumbnail.png`` and ``fidelity.png`` there."""
     from rik.assets import figures
-    from rik.assets.fidelity import measure
+    from rik.assets.fidelity import check_points, measure
 
+    check_points(points)
     cache = cache or AssetCache()
     asset, _ = build_asset(catalog, handle_id, seed, cache)
     part = asset.part("handle")

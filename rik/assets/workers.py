@@ -19,6 +19,22 @@ _CATALOG: Catalog | None = None
 PARENT_POLL_S = 0.5
 """How often, in seconds, a worker's watch thread checks that its parent still lives."""
 
+WORKERS_PER_CORE = 4
+"""Most worker processes per core of the machine (:func:`check_workers`): each loads the catalog and its
+libraries (hundreds of MB), so ``--workers 10000`` would exhaust memory long before it helped."""
+
+
+def check_workers(workers: int) -> int:
+    """``workers`` when it lies in 1 .. :data:`WORKERS_PER_CORE` x this machine's cores, else a one-line
+    :class:`rik.errors.RikError`: checked before any process starts or any work is done."""
+    from rik.errors import RikError
+
+    most = WORKERS_PER_CORE * (os.cpu_count() or 1)
+    if not 1 <= workers <= most:
+        raise RikError(f"--workers {workers}: give 1 to {most} ({WORKERS_PER_CORE} per core of this machine's "
+                       f"{os.cpu_count() or 1}); each worker process holds the catalog and its libraries in memory")
+    return workers
+
 
 def exit_with_parent(parent: int) -> None:
     """Make this (worker) process exit when process ``parent`` dies, even by ``kill -9`` or the OOM killer, so
@@ -78,6 +94,8 @@ def worker_pool(workers: int, overlays: Sequence[Path] = ()) -> ProcessPoolExecu
     """``workers`` spawned processes that each load the catalog from ``overlays`` once and exit with this process
     (:func:`exit_with_parent`); calls run there with the catalog in :data:`_CATALOG`."""
     from concurrent.futures import ProcessPoolExecutor
+
+    check_workers(workers)
     from multiprocessing import get_context
 
     return ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_load,

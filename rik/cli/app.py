@@ -117,6 +117,13 @@ def main() -> None:
     except OSError as exc:  # the machine's fault, not the input's: one line and exit 1, never a traceback
         import errno
 
+        if exc.errno in (errno.ENOTDIR, errno.EISDIR, errno.EEXIST, errno.ENAMETOOLONG):
+            # a path the user gave: a file where a folder belongs (or the reverse), or a name too long to be one
+            name = str(exc.filename)
+            name = name if len(name) <= 200 else name[:200] + "..."
+            print(f"rik: error: {name}: {exc.strerror} ({errno.errorcode[exc.errno]}); give a path that is a folder "
+                  "where a folder is expected, a file where a file is", file=sys.stderr)
+            sys.exit(2)
         if exc.errno not in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS):
             raise
         where = f"{exc.filename}: " if exc.filename else ""

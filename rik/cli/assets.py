@@ -119,9 +119,13 @@ def fidelity(ids: IdsArg = None, everything: AllOpt = False,
 
     Writes OUT/fidelity.csv (merged with rows already there), and OUT/<id>/fidelity.png (heatmaps as in the
     paper's Figure 5) and thumbnail.png. The repository's pictures are made with --out docs/catalog."""
+    from rik.assets.fidelity import check_points
     from rik.assets.report import FIDELITY_COLUMNS, fidelity_row, handle_ids, merge_csv, run_rows, summarise_fidelity
+    from rik.errors import check_folder
     from rik.registry.load import load_catalog
 
+    check_points(points)
+    check_folder(out, "--out")
     cat = load_catalog(overlays(catalog))
     wanted = handle_ids(cat, ids or [], everything)
     with progress_bar() as progress:
@@ -163,7 +167,11 @@ def stats(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = 
           catalog: CatalogOption = None) -> None:
     """Mesh statistics per handle (paper Figure 3): vertices, faces, mean edge length, mean face area."""
     from rik.assets.report import STATS_COLUMNS, handle_ids, run_rows, stats_row, write_csv
+    from rik.errors import RikError
     from rik.registry.load import load_catalog
+
+    if out is not None and out.is_dir():
+        raise RikError(f"--out {out}: a folder is there; give the path of the CSV file to write")
 
     cat = load_catalog(overlays(catalog))
     wanted = handle_ids(cat, ids or [], everything)

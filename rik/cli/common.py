@@ -39,7 +39,17 @@ def robot_entry(catalog: object, robot: str) -> object | None:
 
 DEFAULT_WORKERS = max(1, min(8, os.cpu_count() or 1))
 """One process per core, at most eight."""
-WorkersOpt = Annotated[int, typer.Option("--workers", "-j", min=1, help="Parallel processes.")]
+
+
+def _check_workers(workers: int) -> int:
+    """``--workers``, refused (one line) above what the machine can hold, before the command does any work."""
+    from rik.assets.workers import check_workers
+
+    return check_workers(workers)
+
+
+WorkersOpt = Annotated[int, typer.Option("--workers", "-j", min=1, callback=_check_workers,
+                                         help="Parallel processes.")]
 
 
 class OutputFormat(StrEnum):

@@ -34,6 +34,7 @@ class _Quality(TypedDict, total=False):
 
 def _run(episodes: list[Path], kind: StreamKind, res: str, cameras: str | None, out: Path, variants: Path, workers: int,
          catalog: list[Path] | None, sheet: bool = False, **quality: Unpack[_Quality]) -> None:
+    from rik.errors import check_folder
     from rik.registry.load import load_catalog
     from rik.render.episodes import render_episodes
     from rik.render.streams import StreamSpec, parse_resolution
@@ -41,6 +42,8 @@ def _run(episodes: list[Path], kind: StreamKind, res: str, cameras: str | None, 
 
     width, height = parse_resolution(res)
     spec = StreamSpec(kind, width, height, **quality)
+    check_folder(out, "--out")
+    check_folder(variants, "--variants")
     if kind == "rerendered":
         from rik.render.backend import use_variant
 

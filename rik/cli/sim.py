@@ -191,10 +191,12 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
           robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """The resistance benchmark: randomised drawer-opening episodes, F/P/S per handle type, strategy and preset
     (the paper's Table 3), with the Hand-E or an arm (--robot)."""
+    from rik.errors import check_folder
     from rik.paths import write_atomic
     from rik.registry.load import load_catalog
     from rik.sim import bench as b
 
+    check_folder(out, "--out")  # before the episodes, not after them
     cat = load_catalog(overlays(catalog))
     robot_entry(cat, robot)  # an unknown robot (or its model's package missing): one line, before any work
     grip_forces: tuple[Any, ...] = (None,)

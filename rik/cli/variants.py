@@ -162,8 +162,10 @@ def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g
     """Build variants into --out/<id>/ (model.xml, scene.xml, meshes/, report.json); valid ones are skipped."""
     from rik.combinator.build import MANIFEST, build_variants, resolve_collision
     from rik.combinator.ids import parse_variant_id
+    from rik.errors import check_folder
     from rik.registry.load import load_catalog
 
+    check_folder(out, "--out")
     collision = resolve_collision(out, collision)  # a bad mode or a folder of the other mode: fail first
     cat = load_catalog(overlays(catalog))
     filters = any((base, handle_type, handle, preset))
@@ -245,6 +247,8 @@ def show(variant: Annotated[str, typer.Argument(metavar="ID", help="A variant id
     from rik.combinator.inspect import render_variant
     from rik.registry.load import load_catalog
 
+    if png.is_dir():
+        raise RikError(f"--png {png}: a folder is there; give the path of the PNG file to write")
     cat = load_catalog(overlays(catalog))
     path = render_variant(cat, parse_variant_id(cat, variant), png, out=directory, open_fraction=open_fraction,
                           width=width, height=height)

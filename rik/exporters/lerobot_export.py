@@ -25,7 +25,7 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rik.errors import RikError
+from rik.errors import RikError, check_folder
 from rik.exporters.lerobot_frames import (
     LAYOUT,
     LAYOUT_1_STATE_NAMES,
@@ -110,6 +110,11 @@ def parse_streams(text: str) -> tuple[str, ...]:
     return items
 
 
+MAX_FPS = 240
+"""Highest ``--fps`` of an export, Hz: SVT-AV1 (the default codec) encodes at most 240 frames per second (rik records
+at 20 Hz; resampling above it only repeats rows and frames)."""
+
+
 def _check_spec(spec: ExportSpec) -> None:
     for s in spec.streams:
         if s not in STREAMS:
@@ -121,8 +126,8 @@ def _check_spec(spec: ExportSpec) -> None:
         raise RikError(f"--codec: '{spec.codec}' is not offered (codecs: {', '.join(CODECS)})")
     if spec.repo_id.count("/") != 1 or not all(spec.repo_id.split("/")):
         raise RikError(f"--repo-id '{spec.repo_id}': give it as OWNER/NAME, e.g. local/rik-drawers")
-    if spec.fps is not None and spec.fps < 1:
-        raise RikError(f"--fps {spec.fps}: must be at least 1")
+    if spec.fps is not None and not 1 <= spec.fps <= MAX_FPS:
+        raise RikError(f"--fps {spec.fps}: give 1 to {MAX_FPS} Hz")
 
 
 def _episode_fps(metas: dict[Path, EpisodeMeta], spec: ExportSpec) -> int:
@@ -265,9 +270,13 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     """Export ``episodes`` (episode folders) to a LeRobot v3.0 dataset at ``out``; renders the image streams that
     are missing first. ``progress(stage, done, total)`` reports stages ``render:<stream>``, ``shards``. One export at a
     time writes ``out`` (a lock beside it, :mod:`rik.locks`); a second one is refused at once."""
+    from rik.assets.workers import check_workers
     from rik.locks import exclusive
 
     _check_spec(spec)
+    check_workers(workers)
+    check_folder(renders, "--renders")
+    check_folder(variants, "--variants")
     quiet_encoders()
     out = Path(out)
     _check_out_free(out, resume)

@@ -36,7 +36,7 @@ def check_image(path: Path) -> None:
     try:
         with Image.open(path) as im:
             im.verify()
-    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as exc:
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError, Image.DecompressionBombError) as exc:
         raise RikError(f"{path}: not a readable image ({exc})") from None
 
 
@@ -48,7 +48,7 @@ def load_image(path: Path, size: int) -> np.ndarray:
     try:
         with Image.open(path) as im:
             rgb = im.convert("RGB").resize((size, size), Image.Resampling.BICUBIC)
-    except (OSError, SyntaxError, ValueError) as exc:
+    except (OSError, SyntaxError, ValueError, Image.DecompressionBombError) as exc:
         raise RikError(f"{path}: not a readable image ({exc})") from None
     return np.asarray(rgb, dtype=np.float32) / 255.0
 

@@ -66,6 +66,10 @@ class MujocoFrames:
         import mujoco
 
         self.model, self.cameras, self.spec = model, cameras, spec
+        # MuJoCo renders into an offscreen buffer of the model's offwidth x offheight (1280 x 960 in rik's scenes):
+        # grow it for larger images (up to MAX_SIDE), leaving it as it is for the sizes it holds
+        vis = model.vis.global_
+        vis.offwidth, vis.offheight = max(vis.offwidth, spec.width), max(vis.offheight, spec.height)
         self.renderer = mujoco.Renderer(model, spec.height, spec.width)
         self.seconds = 0.0
 

@@ -28,6 +28,12 @@ MANIFEST = "stream.json"
 StreamKind = Literal["sim", "rerendered"]
 
 
+MIN_SIDE, MAX_SIDE = 8, 4096
+"""Smallest and largest side of a rendered image, px."""
+MAX_SPP = 4096
+"""Most samples per pixel of the re-render (as ``rik rerender --spp`` allows)."""
+
+
 @dataclass(frozen=True)
 class StreamSpec:
     """What a stream is: which renderer, at what size and, for the re-render, quality."""
@@ -42,6 +48,13 @@ class StreamSpec:
     variant: str = "auto"
     """Mitsuba variant (re-render only); ``auto`` picks the fastest that works here. Not part of the key:
     variants render the same image up to Monte Carlo noise."""
+
+    def __post_init__(self) -> None:
+        """Sizes and samples within what a renderer can hold, checked before any frame is rendered."""
+        if not all(MIN_SIDE <= side <= MAX_SIDE for side in (self.width, self.height)):
+            raise RikError(f"image size {self.width}x{self.height}: give {MIN_SIDE} to {MAX_SIDE} pixels a side")
+        if not 1 <= self.spp <= MAX_SPP:
+            raise RikError(f"--spp {self.spp}: give 1 to {MAX_SPP} samples per pixel")
 
     @property
     def key(self) -> str:
@@ -59,8 +72,8 @@ def parse_resolution(text: str) -> tuple[int, int]:
         parts = []
     if len(parts) == 1:
         parts = parts * 2
-    if len(parts) != 2 or min(parts) < 8 or max(parts) > 4096:
-        raise RikError(f"--res {text}: give a size like 256 or 320x240, 8 to 4096 pixels a side")
+    if len(parts) != 2 or min(parts) < MIN_SIDE or max(parts) > MAX_SIDE:
+        raise RikError(f"--res {text}: give a size like 256 or 320x240, {MIN_SIDE} to {MAX_SIDE} pixels a side")
     return parts[0], parts[1]
 
 

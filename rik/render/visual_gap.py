@@ -47,6 +47,10 @@ class VisualGapResult(RowTable):
     note: str = ""
 
 
+MAX_BOOTSTRAP = 10_000
+"""Most bootstrap resamples per row (``--bootstrap``): each computes FID, KID and EMD again."""
+
+
 def visual_gap(real: Path, sim: Path | None = None, rerendered: Path | None = None,
                encoder_spec: str = "resnet18", n: int | None = None, bootstrap: int = 200, seed: int = 0,
                level: float = 0.95, kid_subsets: int = 100, image_size: int | None = None,
@@ -63,6 +67,8 @@ def visual_gap(real: Path, sim: Path | None = None, rerendered: Path | None = No
     from rik.render.images import common_subsets, list_images
     from rik.render.metrics import split_half
 
+    if not 1 <= bootstrap <= MAX_BOOTSTRAP:
+        raise RikError(f"--bootstrap {bootstrap}: give 1 to {MAX_BOOTSTRAP:,} resamples")
     spec = parse_spec(encoder_spec)
     folders = {"real": real, "sim": sim, "rerendered": rerendered}
     given = {name: Path(p) for name, p in folders.items() if p is not None}

@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
@@ -48,6 +49,9 @@ class BenchTask:
 
 MAX_BENCH_SEED = (2**63 - 1) // 1_000_003 - 1
 """Largest ``rik bench --seed``: episode seeds are ``seed * 1_000_003 + ...`` and must stay below 2^63."""
+MAX_BENCH_EPISODES = 1_000_000
+"""Most episodes one benchmark runs (every handle type x preset x strategy x grip force x ``--episodes-per-cell``):
+more is a typo, refused before any episode is planned."""
 
 
 def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, presets: Sequence[str] = DEFAULT_PRESETS,
@@ -62,6 +66,15 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
     if not 0 <= seed <= MAX_BENCH_SEED:
         raise RikError(f"--seed {seed}: the benchmark's seed must lie in 0 .. {MAX_BENCH_SEED} (each episode's seed is "
                        "derived from it and must fit in 64 bits)")
+    cells = {"--types": len(types), "--presets": len(presets), "--strategies": len(strategies),
+             "grip forces": len(grip_forces)}
+    for option, count in cells.items():
+        if count == 0:
+            raise RikError(f"{option}: empty; give at least one")
+    total = per_cell * math.prod(cells.values())
+    if per_cell < 1 or total > MAX_BENCH_EPISODES:
+        raise RikError(f"--episodes-per-cell {per_cell}: {total:,} episodes in all; give 1 or more, and at most "
+                       f"{MAX_BENCH_EPISODES:,} episodes in all")
     for s in strategies:
         make_operator(s)
     for p in presets:

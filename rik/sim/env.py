@@ -82,8 +82,14 @@ class OpenFrontEnv(gym.Env):
 
         if action_mode not in ACTION_MODES:
             raise RikError(f"action_mode '{action_mode}': use one of {', '.join(ACTION_MODES)}")
-        if episode_length < 1:
-            raise RikError(f"episode_length {episode_length}: must be at least 1 control step")
+        if isinstance(episode_length, bool) or not isinstance(episode_length, int) or episode_length < 1:
+            raise RikError(f"episode_length {episode_length!r}: must be a whole number of control steps, at least 1")
+        streams = tuple(streams) or (("sim",) if images else ())
+        cameras = tuple(cameras)
+        if streams:
+            _check_images(streams, cameras, image_size, spp)
+        if isinstance(catalog_paths, str | Path):  # one path, not a tuple of its characters
+            catalog_paths = (str(catalog_paths),)
         self._catalog = load_catalog([Path(p) for p in catalog_paths])
         entry = self._catalog.robot(robot)  # an unknown id: one line with suggestions
         self._robot = entry.as_arm
@@ -100,8 +106,8 @@ class OpenFrontEnv(gym.Env):
             self._draw.check(self._catalog)
         self._variant, self._front = variant, front
         self.action_mode = action_mode
-        self._streams = tuple(streams) or (("sim",) if images else ())
-        self._cameras, self._size, self._spp = tuple(cameras), image_size, spp
+        self._streams = streams
+        self._cameras, self._size, self._spp = cameras, image_size, spp
         self._max_episode_steps = episode_length
         self.render_mode = render_mode
         self._scenes: OrderedDict[tuple[str, str | None], SimScene] = OrderedDict()
@@ -111,6 +117,14 @@ class OpenFrontEnv(gym.Env):
         self._episode: dict[str, Any] = {"seed": -1}
         first = variant if variant is not None else self._draw.episode(self._catalog, 0).variant  # type: ignore[union-attr]
         self.scene = self._scene(first, front)
+        if self._streams:
+            import mujoco
+
+            known = [mujoco.mj_id2name(self.scene.model, mujoco.mjtObj.mjOBJ_CAMERA, i)
+                     for i in range(self.scene.model.ncam)]
+            for cam in cameras:
+                if cam not in known:
+                    raise RikError(f"cameras: no camera {cam!r} in the scene (cameras: {', '.join(known)})")
         self.task_description = ""
         spaces: dict[str, gym.Space[Any]] = {
             "agent_pos": gym.spaces.Box(-np.inf, np.inf, (len(self.layout.state_names),), np.float32),
@@ -263,6 +277,27 @@ class OpenFrontEnv(gym.Env):
 
     def close(self) -> None:
         self._close_renderers()
+
+
+def _check_images(streams: tuple[str, ...], cameras: tuple[str, ...], image_size: Any, spp: int) -> None:
+    """The image options of :class:`OpenFrontEnv`, checked before anything is built: known streams, at least one
+    camera, ``image_size`` two whole numbers (height, width) and ``spp`` as a stream allows them."""
+    from typing import get_args
+
+    from rik.render.streams import MAX_SIDE, MIN_SIDE, StreamKind, StreamSpec
+
+    for stream in streams:
+        if stream not in get_args(StreamKind):
+            raise RikError(f"streams: unknown stream {stream!r} (streams: {', '.join(get_args(StreamKind))})")
+    if not cameras:
+        raise RikError("cameras: give at least one camera for the images (e.g. front, wrist)")
+    size = tuple(image_size) if isinstance(image_size, tuple | list) else ()
+    if len(size) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in size):
+        raise RikError(f"image_size {image_size!r}: give (height, width), two whole numbers of pixels")
+    if not all(MIN_SIDE <= v <= MAX_SIDE for v in size):
+        raise RikError(f"image_size {image_size!r}: give (height, width), {MIN_SIDE} to {MAX_SIDE} pixels each")
+    for stream in streams:
+        StreamSpec(stream, size[1], size[0], spp=spp)  # type: ignore[arg-type]  # sizes and spp in range
 
 
 def joint_action_bounds(layout: RobotLayout) -> tuple[np.ndarray, np.ndarray]:

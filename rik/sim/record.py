@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rik.errors import RikError
+from rik.errors import RikError, check_folder
 from rik.paths import inside
 from rik.sim.episode import DEFAULT_EPISODES, EpisodeRecorder, episode_id, run_operator, write_episode
 from rik.sim.gripper import HAND_E, GripperSpec
@@ -33,6 +33,7 @@ def variant_dir(catalog: Catalog, variant: str, variants: Path) -> Path:
     from rik.combinator.ids import parse_variant_id
 
     key = parse_variant_id(catalog, variant)
+    check_folder(variants, "--variants")
     directory = inside(variants, key.id, what="variant id")
     result = build_variant(catalog, key, variants)
     if result.status == "rejected":
@@ -40,10 +41,18 @@ def variant_dir(catalog: Catalog, variant: str, variants: Path) -> Path:
     return directory
 
 
+MAX_EPISODES = 1_000_000
+"""Most episodes one ``rik record`` writes (a million episodes is about a terabyte and years of a core): a
+larger ``--episodes`` is a typo, refused before anything is drawn or recorded."""
+
+
 def check_seeds(seed: int, episodes: int) -> None:
-    """Seeds ``seed`` .. ``seed + episodes - 1`` must lie in 0 .. 2^63 - 1 (stored as signed 64-bit integers)."""
+    """Seeds ``seed`` .. ``seed + episodes - 1`` must lie in 0 .. 2^63 - 1 (stored as signed 64-bit integers), and
+    ``episodes`` in 1 .. :data:`MAX_EPISODES`."""
     from rik.schemas.episodes import MAX_SEED
 
+    if not 1 <= episodes <= MAX_EPISODES:
+        raise RikError(f"--episodes {episodes}: give 1 to {MAX_EPISODES:,} episodes per command")
     if seed < 0 or seed + episodes - 1 > MAX_SEED:
         last = f", and the last of {episodes} episodes takes seed {seed + episodes - 1}" if seed >= 0 else ""
         raise RikError(f"--seed {seed}: seeds must lie in 0 .. {MAX_SEED} (2^63 - 1){last}")
@@ -62,6 +71,7 @@ def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, 
     ``out`` with the Hand-E ``gripper`` or an arm (``robot``, a catalog entry); returns their metas. An arm that
     cannot reach the variant's handle is refused before anything is recorded."""
     check_seeds(seed, episodes)
+    check_folder(out, "--out")
     make_operator(strategy)  # unknown strategy: fail before building anything
     directory = variant_dir(catalog, variant, variants)
     if robot is not None:
@@ -117,10 +127,13 @@ def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int =
     variant id, reason); without a ``skipped`` list, or when every seed is skipped, that is an error."""
     import functools
 
-    from rik.assets.workers import map_ids
+    from rik.assets.workers import check_workers, map_ids
     from rik.combinator.build import rejected_variants
 
     check_seeds(seed, episodes)
+    check_workers(workers)
+    check_folder(out, "--out")
+    check_folder(variants, "--variants")
     make_operator(strategy)  # unknown strategy: fail before building anything
     draw.check(catalog)
     seeds = list(range(seed, seed + episodes))
