@@ -1,10 +1,12 @@
-"""Where rik keeps files of its own (the cache directory), and how it writes files: atomically."""
+"""Where rik keeps files of its own (the cache directory), how it writes files (atomically) and folders (staged,
+then renamed into place), and which folders it may replace: only those it made (:class:`MadeFolder`)."""
 
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Collection, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -51,11 +53,90 @@ def atomic_path(path: Path) -> Iterator[Path]:
         raise
 
 
-def replace_directory(stage: Path, final: Path) -> None:
-    """Move the finished directory ``stage`` onto ``final``, replacing what is there: the old one is renamed
-    aside first and removed after, so ``final`` is at every moment the old directory or the new one, whole."""
+@dataclass(frozen=True)
+class MadeFolder:
+    """A kind of folder that rik makes whole (a report, a stream, simulated trials), and how to tell one from a
+    folder of the user's: rik replaces or removes a folder only when it is absent, empty, or ``made`` recognises it.
+
+    ``made(folder)`` reads the file rik writes into every such folder (its marker: a report's ``summary.json``, a
+    stream's ``stream.json``, ...) and checks that nothing else is there but the names rik writes, so a folder an
+    older rik made (before any marker of its own) is recognised as well, and a user's file added to it stops the
+    replacement. ``what`` names the kind in messages ("a report of rik sysid fit"), ``advice`` says where else to
+    write ("choose another --report")."""
+
+    what: str
+    made: Callable[[Path], bool]
+    advice: str = "choose another folder"
+
+
+def is_temporary(name: str) -> bool:
+    """Whether ``name`` is a temporary of :func:`atomic_path` (``.<file>.<pid>.tmp``), which a killed write leaves."""
+    return name.startswith(".") and name.endswith(".tmp") and name[:-4].rsplit(".", 1)[-1].isdigit()
+
+
+def holds_only(folder: Path, names: Callable[[str], bool] | Collection[str]) -> bool:
+    """Whether every entry at the top of ``folder`` is one of ``names`` (a set, or a test of a name) or a temporary
+    of :func:`atomic_path`: whether it holds nothing rik would not have written there."""
+    allowed = names if callable(names) else names.__contains__
+    try:
+        return all(allowed(e.name) or is_temporary(e.name) for e in os.scandir(folder))
+    except OSError:
+        return False
+
+
+def json_object(path: Path) -> dict[str, Any] | None:
+    """The JSON object in file ``path``; None when it is missing, unreadable, not JSON or not an object."""
+    import json
+
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def check_replaceable(folder: Path, kind: MadeFolder) -> None:
+    """Refuse (:class:`rik.errors.RikError`, one line naming ``folder``) to replace or remove ``folder`` unless
+    nothing is there, it is an empty folder, or it is a ``kind`` folder rik made (:class:`MadeFolder`)."""
+    from rik.errors import RikError
+
+    folder = Path(folder)
+    advice = f"{kind.advice}, or move or remove it yourself"
+    if folder.name in ("", ".", "..") or Path.cwd().is_relative_to(folder.resolve()):
+        raise RikError(f"{folder}: is the current folder or holds it, and rik writes {kind.what} as a folder of "
+                       f"its own: name a new folder inside it")
+    if not os.path.lexists(folder):
+        return
+    if folder.is_symlink() or not folder.is_dir():
+        what = "a symbolic link" if folder.is_symlink() else "a file"
+        raise RikError(f"{folder}: is {what}, not {kind.what}; rik replaces only folders it made: {advice}")
+    try:
+        names = sorted(e.name for e in os.scandir(folder))
+    except OSError as exc:
+        raise RikError(f"{folder}: cannot read this folder ({exc.strerror}); {advice}") from None
+    if not names or kind.made(folder):
+        return
+    shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+    raise RikError(f"{folder}: exists and is not {kind.what} (it holds {shown}); rik replaces only folders it made, "
+                   f"so nothing was written: {advice}")
+
+
+def remove_directory(folder: Path, kind: MadeFolder) -> None:
+    """Remove ``folder`` (rik's own earlier output) if it is there: only after :func:`check_replaceable`."""
     import shutil
 
+    check_replaceable(folder, kind)
+    if os.path.lexists(folder):
+        shutil.rmtree(folder)
+
+
+def replace_directory(stage: Path, final: Path, kind: MadeFolder) -> None:
+    """Move the finished directory ``stage`` onto ``final``, replacing what is there if rik made it (a ``kind``
+    folder, :func:`check_replaceable`; anything else is refused and ``stage`` left for the caller): the old one is
+    renamed aside first and removed after, so ``final`` is at every moment the old directory or the new one, whole."""
+    import shutil
+
+    check_replaceable(final, kind)
     if final.exists():
         old = final.with_name(f".{final.name}.old")
         shutil.rmtree(old, ignore_errors=True)
@@ -67,17 +148,19 @@ def replace_directory(stage: Path, final: Path) -> None:
 
 
 @contextmanager
-def staged_directory(final: Path) -> Iterator[Path]:
+def staged_directory(final: Path, kind: MadeFolder) -> Iterator[Path]:
     """A fresh hidden sibling of ``final`` to write a whole directory into; moved onto ``final`` when the block
-    ends without an error (:func:`replace_directory`), removed when it raises: ``final`` is never half-written."""
+    ends without an error (:func:`replace_directory`), removed when it raises: ``final`` is never half-written.
+    A ``final`` that rik did not make (``kind``) is refused before anything is written."""
     import shutil
 
+    check_replaceable(final, kind)
     stage = final.with_name(f".{final.name}.partial")
     shutil.rmtree(stage, ignore_errors=True)
     stage.mkdir(parents=True)
     try:
         yield stage
-        replace_directory(stage, final)
+        replace_directory(stage, final, kind)
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
         raise

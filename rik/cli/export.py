@@ -21,7 +21,7 @@ from rik.cli.rerender import CamerasOpt, EpisodesArg, ResOpt
 from rik.cli.sim import VariantsOpt
 
 if TYPE_CHECKING:
-    pass
+    from rik.paths import MadeFolder
 
 
 def export_lerobot(
@@ -84,25 +84,40 @@ def export_lerobot(
 
 
 DEMO_DATASET = Path("datasets/rik-demo")
+DATASET_NAMES = frozenset({"meta", "data", "videos", "images", "README.md"})
+"""What a LeRobot dataset holds at its top (besides rik's card fields)."""
+
+
+def demo_folders(out: Path) -> list[tuple[Path, MadeFolder]]:
+    """The folders the demo's export replaces: its dataset ``out`` (a finished rik export holding nothing else) and
+    ``<out>.partial`` (an interrupted one: its plan, shards and merged dataset)."""
+    from rik.exporters.lerobot_card import CARD_FIELDS
+    from rik.exporters.lerobot_export import PLAN, _is_rik_export
+    from rik.paths import MadeFolder, holds_only, json_object
+
+    hint = "run the demo in another folder"
+    return [(out, MadeFolder("a dataset rik export-lerobot made", lambda p: _is_rik_export(p) and holds_only(
+                p, DATASET_NAMES | {CARD_FIELDS}), hint)),
+            (out.with_name(f"{out.name}.partial"), MadeFolder("an interrupted export of rik export-lerobot",
+                lambda p: json_object(p / PLAN) is not None and holds_only(p, {PLAN, "shards", "merged"}), hint))]
 DEMO_REPO_ID = "local/rik-demo"
 
 
 def print_demo_export(overlay_paths: list[Path], episodes: list[Path], out: Path = DEMO_DATASET,
                       renders: Path = Path("renders"), variants: Path = Path("variants")) -> None:
     """Export the demo episodes (both streams, at the demo's render size) to a LeRobot dataset, load it back
-    with ``LeRobotDataset`` and print what it holds."""
-    import shutil
-
+    with ``LeRobotDataset`` and print what it holds. The demo's earlier dataset (and an interrupted export of it) is
+    removed first, and only if rik made it (:func:`demo_folders`)."""
     from rik.cli.rerender import DEMO_RES
     from rik.exporters.lerobot_export import ExportSpec
     from rik.exporters.lerobot_export import export_lerobot as run
+    from rik.paths import remove_directory
     from rik.registry.load import load_catalog
 
     quiet_writers()
     con = console()
-    for old in (out, out.with_name(f"{out.name}.partial")):
-        if old.exists():  # the demo's own earlier output
-            shutil.rmtree(old)
+    for old, kind in demo_folders(out):
+        remove_directory(old, kind)  # the demo's own earlier output, never a folder of the user's
     with con.status("exporting to a LeRobot v3.0 dataset (lerobot's writer, AV1 video) ..."):
         result = run(load_catalog(overlay_paths), episodes, out, ExportSpec(DEMO_REPO_ID, width=DEMO_RES,
                                                                             height=DEMO_RES),

@@ -10,6 +10,7 @@ from typing import Annotated, Any
 import typer
 
 from rik.cli.common import CatalogOption, console, overlays
+from rik.paths import MadeFolder, holds_only
 
 app = typer.Typer(help="Model discovery: what the simulation gets wrong about a measured joint, the cause, the "
                        "extended joint model and the gain on held-out data.", no_args_is_help=True)
@@ -44,7 +45,8 @@ def _unit(role: str, units: str) -> Any:
 def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .parquet) or one LeRobot dataset "
                                                         "folder (with --position and --force).", show_default=False)],
         joint: JointOption = JointOpt.slide,
-        report: Annotated[Path, typer.Option("--report", "-o", help="Report directory (replaced whole).")] = Path(
+        report: Annotated[Path, typer.Option("--report", "-o", help="Report directory (replaced whole, if it is an "
+                                                                     "earlier report).")] = Path(
             "sysid-report"),
         heldout: Annotated[list[int] | None, typer.Option("--heldout", help="Index of a trial to hold out "
                                                           "(repeatable; default: the last quarter, or the end of a "
@@ -73,11 +75,13 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
                                                "cell (counted) instead of stopping.")] = False) -> None:
     """Fit the baseline joint model, find the unmodelled effect, extend the model and measure the gain; write a
     report (report.md with plots, summary.json) that names the cause."""
+    from rik.paths import check_replaceable
     from rik.sysid.discover import discover
     from rik.sysid.profile import has_time_column
-    from rik.sysid.report import write_report
+    from rik.sysid.report import REPORT_FOLDER, write_report
     from rik.sysid.trials import ColumnMap, load_lerobot_trials, load_trials
 
+    check_replaceable(report, REPORT_FOLDER)  # before any work: a folder of the user's is never replaced
     con = console()
     folder = len(data) == 1 and data[0].is_dir()
     if quasi_static or (not folder and time is None and not has_time_column(data)):
@@ -139,7 +143,8 @@ def simulate(effect: Annotated[str, typer.Option("--effect", help="Hidden effect
                                                        "with --effect (e.g. self_close with soft_close, as on "
                                                        "soft-close runners).")] = None,
              joint: JointOption = JointOpt.slide,
-             out: Annotated[Path, typer.Option("--out", "-o", help="Directory for the trial CSVs and truth.json.")]
+             out: Annotated[Path, typer.Option("--out", "-o", help="Directory for the trial CSVs and truth.json "
+                                                 "(replaced whole, if it holds earlier simulated trials).")]
              = Path("sysid-data"),
              trials: Annotated[int, typer.Option("--trials", "-n", min=2, help="Trials to simulate.")] = 4,
              seed: Annotated[int, typer.Option("--seed", help="Seed of the truth and the excitation.")] = 0,
@@ -154,8 +159,11 @@ def simulate(effect: Annotated[str, typer.Option("--effect", help="Hidden effect
     simulated hand through strokes, holds and releases, measured with noise and delay (MuJoCo at 0.5 ms)."""
     import numpy as np
 
+    from rik.paths import check_replaceable
     from rik.sysid.generate import random_truth, simulate_trials, write_trials
+    from rik.sysid.trials import simulated_folder
 
+    check_replaceable(out, simulated_folder())  # before any work: a folder of the user's is never replaced
     kind = None if effect == "none" else effect
     if generator is GeneratorOpt.foreign:
         from rik.errors import RikError
@@ -206,29 +214,50 @@ DEMO_DATA, DEMO_REPORT, DEMO_CATALOG = Path("sysid-data"), Path("sysid-report"),
 DEMO_PRESET = "demo-measured"
 
 
+def _is_demo_catalog(folder: Path) -> bool:
+    """Whether ``folder`` is the demo's catalog: the one preset file ``rik sysid apply`` wrote, nothing else."""
+    from rik.sysid.preset import preset_file
+
+    file = preset_file(folder, DEMO_PRESET)
+    try:
+        with file.open(encoding="utf-8") as handle:
+            first = handle.readline()
+    except (OSError, UnicodeDecodeError):
+        return False
+    return first.startswith(f"# Resistance preset '{DEMO_PRESET}' fitted") and holds_only(folder, {file.name})
+
+
+DEMO_ADVICE = "run the demo in another folder"
+DEMO_CATALOG_FOLDER = MadeFolder("the demo's catalog (its one preset file)", _is_demo_catalog, DEMO_ADVICE)
+
+
 def print_demo_sysid(overlay_paths: list[Path]) -> None:
     """The demo's model discovery: simulated measurements of a drawer with a hidden soft-close damper into
-    sysid-data/, the fit and its report into sysid-report/, the fitted joint as a preset in sysid-catalog/."""
-    import shutil
+    sysid-data/, the fit and its report into sysid-report/, the fitted joint as a preset in sysid-catalog/. Each
+    folder replaces the demo's earlier one, and only a folder rik made (a user's folder there is refused)."""
+    from dataclasses import replace
 
     import numpy as np
 
+    from rik.paths import check_replaceable, staged_directory
     from rik.sysid.discover import discover
     from rik.sysid.generate import random_truth, simulate_trials, write_trials
     from rik.sysid.preset import apply_report
-    from rik.sysid.report import write_report
+    from rik.sysid.report import REPORT_FOLDER, write_report
+    from rik.sysid.trials import simulated_folder
 
     con = console()
-    for old in (DEMO_DATA, DEMO_CATALOG):
-        if old.exists():  # the demo's own earlier output
-            shutil.rmtree(old)
+    for folder, kind in ((DEMO_DATA, simulated_folder()), (DEMO_REPORT, REPORT_FOLDER),
+                         (DEMO_CATALOG, DEMO_CATALOG_FOLDER)):
+        check_replaceable(folder, replace(kind, advice=DEMO_ADVICE))  # all three before any work
     with con.status("model discovery on simulated measurements of a drawer ..."):
         truth = random_truth("soft_close", "slide", np.random.default_rng(0))
         trials = simulate_trials(truth, n_trials=4, seed=0)
         write_trials(trials, DEMO_DATA, truth)
         found = discover(trials)
         write_report(found, DEMO_REPORT)
-        preset = apply_report(DEMO_REPORT, DEMO_PRESET, DEMO_CATALOG, overlays=overlay_paths)
+        with staged_directory(DEMO_CATALOG, DEMO_CATALOG_FOLDER) as stage:
+            preset = DEMO_CATALOG / apply_report(DEMO_REPORT, DEMO_PRESET, stage, overlays=overlay_paths).name
     con.print(f"{len(trials)} measured trials of a drawer with a hidden effect ({DEMO_DATA}/; the truth in "
               f"{DEMO_DATA / 'truth.json'}): {found.sentence()}")
     con.print(f"report {DEMO_REPORT / 'report.md'}; preset '{DEMO_PRESET}' in {preset} (use it with --catalog "

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 from rik.combinator.checks import GEOMETRY_CHECKS, CheckResult, ModelContext, run_model_checks
 from rik.combinator.ids import VariantKey
 from rik.errors import RikError
-from rik.paths import atomic_path, inside
+from rik.paths import MadeFolder, atomic_path, check_replaceable, holds_only, inside, json_object
 
 if TYPE_CHECKING:
     from rik.assets.build import Asset
@@ -42,6 +42,11 @@ DEFAULT_OUT = Path("variants")
 MESH_STORE = ".meshes"
 STAGING = ".staging"
 MANIFEST = "manifest.json"
+VARIANT_FILES = frozenset({"model.xml", "scene.xml", "meshes", "report.json"})
+"""What :func:`materialise` writes into a variant's folder."""
+VARIANT_FOLDER = MadeFolder("a variant rik built", lambda d: json_object(d / "report.json") is not None
+                            and holds_only(d, VARIANT_FILES), "choose another --out")
+"""A variant's folder: rebuilt, it is replaced, and only if it is a variant (its report.json, nothing else)."""
 COLLISION_MARKER = "collision.json"
 """``<out>/collision.json``: ``{"collision": "<mode>"}``, the collision mode of every variant in ``<out>``."""
 COMBINATOR_DIR = Path(__file__).parent
@@ -287,6 +292,7 @@ def materialise(checked: CheckedVariant, directory: Path, report: dict[str, Any]
         files[name] = _sha256(text.encode())
     (stage / "report.json").write_text(json.dumps({**report, "files": files}, indent=2) + "\n", encoding="utf-8")
     old = out / STAGING / f"{directory.name}.{os.getpid()}.old"
+    check_replaceable(directory, VARIANT_FOLDER)
     if directory.exists():
         os.replace(directory, old)
     os.replace(stage, directory)
@@ -354,6 +360,7 @@ def build_variant(catalog: Catalog, key: VariantKey, out: Path = DEFAULT_OUT, ca
     directory = out / key.id
     if not force and is_current(directory, digest):
         return VariantResult(key.id, "skipped", digest, time.perf_counter() - t0)
+    check_replaceable(directory, VARIANT_FOLDER)  # before any work: a folder there that is no variant stays
     mark_collision(out, collision)
     checked = check_variant(catalog, key, cache, collision=collision)
     failed = checked.failed
@@ -372,6 +379,15 @@ def _build_one(catalog: Catalog, variant: str, out: Path, cache_root: Path, forc
     from rik.combinator.ids import parse_variant_id
 
     return build_variant(catalog, parse_variant_id(catalog, variant), out, AssetCache(cache_root), force, collision)
+
+
+def check_manifest(out: Path) -> None:
+    """Refuse an ``--out`` whose ``manifest.json`` is not one rik wrote (an object with ``variants``): a build
+    would write over it."""
+    file = out / MANIFEST
+    if os.path.lexists(file) and not isinstance((json_object(file) or {}).get("variants"), dict):
+        raise RikError(f"{file}: exists and is not the manifest of rik variants build (an object with 'variants'), "
+                       "so nothing was written: choose another --out, or move it away yourself")
 
 
 def read_manifest(out: Path) -> dict[str, Any]:
@@ -429,6 +445,7 @@ def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEF
     from rik.assets.workers import map_ids
 
     collision = resolve_collision(out, collision)
+    check_manifest(out)
     cache = cache or AssetCache()
     needed = list(dict.fromkeys([k.handle for k in keys] + [k.base for k in keys]))
     assets = build_assets(catalog, needed, overlays=overlays, workers=workers, cache=cache)

@@ -21,7 +21,16 @@ from typing import Any, Literal
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import inside, replace_directory, write_atomic, write_png
+from rik.paths import (
+    MadeFolder,
+    check_replaceable,
+    holds_only,
+    inside,
+    json_object,
+    replace_directory,
+    write_atomic,
+    write_png,
+)
 
 DEFAULT_RENDERS = Path("renders")
 MANIFEST = "stream.json"
@@ -100,12 +109,26 @@ def is_done(directory: Path, states_sha256: str) -> bool:
     return manifest is not None and manifest.get("states_sha256") == states_sha256
 
 
+def is_stream(directory: Path) -> bool:
+    """Whether ``directory`` is a stream rik rendered (finished, of any states): its ``stream.json`` and one folder
+    per camera it names, nothing else."""
+    manifest = json_object(Path(directory) / MANIFEST)
+    cameras = manifest.get("cameras") if manifest is not None else None
+    return (isinstance(cameras, list) and all(isinstance(c, str) for c in cameras)
+            and holds_only(directory, {MANIFEST, *cameras}))
+
+
+STREAM_FOLDER = MadeFolder("an image stream rik rendered", is_stream, "choose another folder for the renders")
+"""A stream's folder: an outdated one is replaced, and only if :func:`is_stream` recognises it."""
+
+
 class StreamWriter:
     """Writes one stream's frames into its staging folder, skipping those already there, and publishes it."""
 
     def __init__(self, final: Path, spec: StreamSpec, cameras: list[str], frames: int, states_sha256: str):
         self.final, self.spec, self.cameras, self.frames = Path(final), spec, cameras, frames
         self.sha = states_sha256
+        check_replaceable(self.final, STREAM_FOLDER)  # before any frame is rendered
         self.staging = self.final.with_name(f".{self.final.name}.partial")
         marker = self.staging / ".states_sha256"
         if self.staging.exists() and (not marker.is_file() or marker.read_text().strip() != states_sha256):
@@ -129,7 +152,7 @@ class StreamWriter:
                     "frames": self.frames, "states_sha256": self.sha, **info}
         (self.staging / ".states_sha256").unlink(missing_ok=True)
         write_atomic(self.staging / MANIFEST, json.dumps(manifest, indent=2) + "\n")
-        replace_directory(self.staging, self.final)
+        replace_directory(self.staging, self.final, STREAM_FOLDER)
         return self.final
 
 

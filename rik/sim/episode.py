@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import inside, json_sha256, write_atomic
+from rik.paths import MadeFolder, check_replaceable, holds_only, inside, json_object, json_sha256, write_atomic
 from rik.sim.outcome import classify
 from rik.sim.scene import SimScene
 
@@ -35,6 +35,17 @@ DEFAULT_EPISODES = Path("episodes")
 META = "meta.json"
 STATES = "states.parquet"
 STAGING_PREFIX = ".staging-"
+
+
+def is_episode(directory: Path) -> bool:
+    """Whether ``directory`` is an episode rik recorded: its ``meta.json`` (an object) and ``states.parquet``,
+    nothing else."""
+    return json_object(Path(directory) / META) is not None and holds_only(directory, {META, STATES})
+
+
+EPISODE_FOLDER = MadeFolder("an episode rik recorded", is_episode, "choose another --out")
+"""An episode's folder: recorded again, it is replaced, and only if :func:`is_episode` recognises it."""
+
 COLUMNS_2 = ("step", "time", "state", "action", "front_qpos", "front_qvel", "opening", "gripper_opening",
              "tcp", "contacts", "contact_normal_force", "contact_tangential_force")
 """The columns of episodes before format 3."""
@@ -155,6 +166,7 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
     s = recorder.scene
     table = recorder.table()
     final = inside(out, episode, what="episode id")  # before any work: an id leading outside ``out`` is refused
+    check_replaceable(final, EPISODE_FOLDER)  # and a folder there that is not an episode is never replaced
     out.mkdir(parents=True, exist_ok=True)
     staging = out / f"{STAGING_PREFIX}{episode}-{os.getpid()}"
     shutil.rmtree(staging, ignore_errors=True)
@@ -177,6 +189,7 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
             versions=_versions(), log=tuple(log), states_sha256=digest)
         meta = write_meta(staging, meta.model_dump(mode="json"))
         if final.exists():
+            check_replaceable(final, EPISODE_FOLDER)
             shutil.rmtree(final)
         os.replace(staging, final)
     except BaseException:

@@ -45,7 +45,6 @@ front near a strong magnet is held firmly and a push held 15 mm beyond a stop ca
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -55,14 +54,13 @@ from typing import Any
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import write_atomic
 from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
 from rik.sysid.draws import joint_type as _joint
 from rik.sysid.draws import log_uniform as _log_uniform
 from rik.sysid.draws import tilt_phase
 from rik.sysid.draws import uniform as _uniform
-from rik.sysid.trials import Trial, si_columns, write_csv_trials
+from rik.sysid.trials import Trial, si_columns, write_simulated
 
 FOREIGN_KINDS = ("none", "stiction", "magnetic_catch", "self_close", "soft_close", "quadratic_damping",
                  "load_friction", "tilt")
@@ -660,8 +658,6 @@ def simulate_foreign(truth: ForeignTruth, n_trials: int = 3, seed: int = 0, dura
 
 def write_foreign(trials: Sequence[Trial], directory: str | Path, truth: ForeignTruth) -> list[Path]:
     """Write each trial to ``directory/<name>.csv`` (the rik generator's headers) and the truth to
-    ``directory/truth.json``, atomically; returns the CSV paths."""
-    paths = write_csv_trials(trials, directory, truth.joint)
-    directory = Path(directory)
-    write_atomic(directory / TRUTH_FILE, json.dumps(truth.to_json(), indent=2) + "\n")
-    return paths
+    ``directory/truth.json``, the folder whole (:func:`rik.sysid.trials.write_simulated`: an existing folder is
+    replaced only if it holds simulated trials); returns the CSV paths."""
+    return write_simulated(trials, directory, truth.joint, truth.to_json())

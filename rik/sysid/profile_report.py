@@ -30,7 +30,7 @@ from rik.sysid.profile_fit import (
     describe,
     predict,
 )
-from rik.sysid.report import REPORT, SUMMARY, effect_dict
+from rik.sysid.report import REPORT, REPORT_FOLDER, SUMMARY, effect_dict
 from rik.sysid.select import MIN_BIC_DROP, MIN_GAIN, OCCAM, TIE
 
 FORMAT = 1
@@ -206,9 +206,10 @@ def _write_group(fit: ProfileFit, data: ProfileData, directory: Path) -> dict[st
 
 
 def write_profile_report(data: ProfileData, fits: Sequence[ProfileFit], directory: Path) -> Path:
-    """Write the report(s) of ``fits`` into ``directory`` (replaced whole if it exists); returns it."""
+    """Write the report(s) of ``fits`` into ``directory`` (replaced whole if it is an earlier report,
+    :data:`rik.sysid.report.REPORT_FOLDER`; any other folder that is not empty is refused); returns it."""
     directory = Path(directory)
-    with staged_directory(directory) as stage:
+    with staged_directory(directory, REPORT_FOLDER) as stage:
         if len(fits) == 1:
             _write_group(fits[0], data, stage)
         else:

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
-from rik.paths import pyplot, save_figure, staged_directory, write_atomic
+from rik.paths import MadeFolder, holds_only, json_object, pyplot, save_figure, staged_directory, write_atomic
 from rik.schemas.joints import JointType, Spring
 from rik.sysid.discover import Discovery, describe
 from rik.sysid.fit import Fit, Rows, concat_rows
@@ -332,10 +332,33 @@ def markdown(d: Discovery, data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def is_report(folder: Path) -> bool:
+    """Whether ``folder`` is a report ``rik sysid fit`` wrote (of trials, or of quasi-static profiles, one group or
+    several): its ``summary.json`` is a rik summary and it holds nothing else but the files rik writes there."""
+    from rik.sysid.profile_report import PLOT
+
+    data = json_object(folder / SUMMARY)
+    if data is None or data.get("format") != FORMAT:
+        return False
+    groups = data.get("groups") if data.get("mode") == "quasi-static" else None
+    if not isinstance(groups, list):
+        return holds_only(folder, {SUMMARY, REPORT, PLOT, *PLOTS})
+    named = [g.get("directory") if isinstance(g, dict) else None for g in groups]
+    subdirs = {s for s in named if isinstance(s, str) and "/" not in s and s not in ("", ".", "..")}
+    return (len(subdirs) == len(named)
+            and holds_only(folder, {SUMMARY, REPORT, *subdirs})
+            and all(not (folder / s).exists() or ((folder / s).is_dir() and is_report(folder / s)) for s in subdirs))
+
+
+REPORT_FOLDER = MadeFolder("a report of rik sysid fit", is_report, "choose another --report")
+"""The report folder: replaced whole on a rerun, and only if :func:`is_report` recognises it."""
+
+
 def write_report(d: Discovery, directory: Path) -> Path:
-    """Write ``report.md``, ``summary.json`` and the plots into ``directory`` (replaced whole if it exists)."""
+    """Write ``report.md``, ``summary.json`` and the plots into ``directory`` (replaced whole if it is an earlier
+    report, :data:`REPORT_FOLDER`; any other folder that is not empty is refused)."""
     directory = Path(directory)
-    with staged_directory(directory) as stage:
+    with staged_directory(directory, REPORT_FOLDER) as stage:
         data = summary(d)
         res = all_residuals(d)
         for name, plot in PLOTS.items():

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -10,16 +9,15 @@ from pathlib import Path
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import write_atomic
 from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
 from rik.sysid.draws import joint_type as _joint
 from rik.sysid.generate.common import _non_negative, _positive
-from rik.sysid.generate.constants import FORCE_NOISE, POSITION_NOISE, SOURCE, TRUTH_FILE
+from rik.sysid.generate.constants import FORCE_NOISE, POSITION_NOISE, SOURCE
 from rik.sysid.generate.excitation import excitation_plan
 from rik.sysid.generate.simulation import Simulation, simulate
 from rik.sysid.generate.truth import GroundTruth
-from rik.sysid.trials import Trial, si_columns, write_csv_trials
+from rik.sysid.trials import Trial, si_columns, write_simulated
 
 
 def trial_units(joint: JointType) -> tuple[TrialUnits, TrialColumns]:
@@ -101,10 +99,8 @@ def simulate_trials(truth: GroundTruth, *, n_trials: int = 4, seed: int = 0, dur
 def write_trials(trials: Sequence[Trial], directory: str | Path, truth: GroundTruth) -> list[Path]:
     """Write each trial to ``directory/<name>.csv`` (headers ``time [s]``, ``position [m|rad]``,
     ``force [N]`` or ``torque [N·m]``, values printed to round-trip exactly) and the truth to
-    ``directory/truth.json``, each atomically; returns the CSV paths (for :func:`rik.sysid.trials.load_trials`)."""
+    ``directory/truth.json``, the folder whole (:func:`rik.sysid.trials.write_simulated`: an existing folder is
+    replaced only if it holds simulated trials); returns the CSV paths (for :func:`rik.sysid.trials.load_trials`)."""
     if not isinstance(truth, GroundTruth):
         raise RikError(f"truth must be a GroundTruth, got {type(truth).__name__}")
-    paths = write_csv_trials(trials, directory, truth.joint)
-    directory = Path(directory)
-    write_atomic(directory / TRUTH_FILE, json.dumps(truth.to_json(), indent=2) + "\n")
-    return paths
+    return write_simulated(trials, directory, truth.joint, truth.to_json())
