@@ -64,6 +64,10 @@ interpolation."""
 _SPEED = {JointType.slide: "m/s", JointType.hinge: "rad/s"}
 MIN_DELAY_SAMPLES = 20
 """Fewest moving samples the delay estimate needs."""
+MAX_GRID_SAMPLES = 5_000_000
+"""Most samples a trial is resampled to (each preprocessed signal is an array of this many float64s)."""
+MAX_GRID_FACTOR = 100
+"""Most resampled samples per measured one: more means the time jumps, or is read in the wrong unit."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,10 +124,30 @@ def median_rate(t: np.ndarray) -> float:
     return float(1.0 / np.median(np.diff(t)))
 
 
+def grid_samples(t: np.ndarray, rate_hz: float) -> int:
+    """Number of samples of :func:`uniform_grid`."""
+    return int(math.floor((t[-1] - t[0]) * rate_hz + 1e-9)) + 1
+
+
 def uniform_grid(t: np.ndarray, rate_hz: float) -> np.ndarray:
     """Times from ``t[0]`` to at most ``t[-1]`` every 1/``rate_hz`` s."""
-    count = int(math.floor((t[-1] - t[0]) * rate_hz + 1e-9)) + 1
-    return t[0] + np.arange(count) / rate_hz
+    return t[0] + np.arange(grid_samples(t, rate_hz)) / rate_hz
+
+
+def _check_grid(trial: Trial, rate: float) -> None:
+    """Refuse to resample ``trial`` onto more than :data:`MAX_GRID_SAMPLES` samples, or more than
+    :data:`MAX_GRID_FACTOR` per measured sample, before allocating them: one line naming the largest time step."""
+    count = (trial.t[-1] - trial.t[0]) * rate + 1
+    limit = min(MAX_GRID_SAMPLES, MAX_GRID_FACTOR * len(trial.t))
+    if count <= limit:
+        return
+    steps = np.diff(trial.t)
+    k = int(np.argmax(steps))
+    raise TrialError(trial.source, trial.name, trial.meta.columns.time,
+                     f"the trial spans {trial.meta.duration:.6g} s: at {rate:g} Hz that is {count:.4g} samples to "
+                     f"resample from {len(trial.t)} measured (at most {limit:,}); "
+                     f"the time jumps by {steps[k]:.6g} s after sample {k} (median step {np.median(steps):.6g} s): "
+                     "split the trial there, or check the time column's unit")
 
 
 def interval_means(t: np.ndarray, x: np.ndarray, grid: np.ndarray) -> np.ndarray:
@@ -292,10 +316,16 @@ def preprocess(trial: Trial, rate_hz: float | None = None, *, window_s: float = 
         raise TrialError(trial.source, trial.name, None, f"preprocessing settings: polyorder must be 2 to 6 (got "
                                                          f"{polyorder}), max_delay_s ({max_delay_s}) and limit_margin "
                                                          f"({limit_margin}) at least 0")
+    for name, value in (("delay_s (--delay)", delay_s), ("max_delay_s", max_delay_s)):
+        if value is not None and not (math.isfinite(value) and abs(value) < trial.meta.duration):
+            raise TrialError(trial.source, trial.name, None, f"preprocessing setting {name} must be a "
+                                                             f"number of seconds shorter than the trial "
+                                                             f"({trial.meta.duration:.6g} s), got {value}")
     if limits is not None and not limits[0] < limits[1]:
         raise TrialError(trial.source, trial.name, None, f"limits must be (lower, upper) with lower < upper, "
                                                          f"got {limits}")
     rate = float(rate_hz) if rate_hz is not None else float(max(1, round(median_rate(trial.t))))
+    _check_grid(trial, rate)
     grid = uniform_grid(trial.t, rate)
     window = window_samples(window_s, rate, polyorder)
     lag_max = int(round(max_delay_s * rate)) if delay_s is None else abs(int(round(delay_s * rate)))
@@ -315,9 +345,11 @@ def preprocess(trial: Trial, rate_hz: float | None = None, *, window_s: float = 
         usable = (np.abs(qd) >= moving_velocity) & ~touching(q, bounds, limit_margin, window)
         lag, used = best_lag(q, qd, qdd, f_smooth, usable, lag_max)
         if used < MIN_DELAY_SAMPLES:
+            unit = (f" (the samples are {1 / median_rate(trial.t):.3g} s apart: is the time in ms read as s?)"
+                    if median_rate(trial.t) <= 1.0 else "")
             raise TrialError(trial.source, trial.name, trial.meta.columns.position,
                              f"only {used} moving samples (|velocity| ≥ {moving_velocity:g} {_SPEED[joint]}) to "
-                             f"estimate the delay from, at least {MIN_DELAY_SAMPLES} needed; pass delay_s")
+                             f"estimate the delay from, at least {MIN_DELAY_SAMPLES} needed{unit}; pass delay_s")
     else:
         lag = int(round(delay_s * rate))
     motion = {"t": grid, "q_raw": q_raw, "q": q, "qd": qd, "qdd": qdd}

@@ -7,7 +7,9 @@ values on the other side, in ``<catalog_dir>/preset-<name>.yaml``. Use it with `
 
 from __future__ import annotations
 
+import os
 import re
+import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -77,7 +79,9 @@ def write_preset(resistance: JointResistance, joint_type: JointType, name: str, 
     text = (f"# Resistance preset '{name}' fitted to measured data (rik sysid); units: rik/schemas/joints.py\n"
             + yaml.safe_dump({"schema": CATALOG_SCHEMA, "presets": [entry]}, sort_keys=False, allow_unicode=True))
     catalog_dir.mkdir(parents=True, exist_ok=True)
-    staged = catalog_dir / f".{file.name}.check.yaml"  # hidden: a catalog scan skips it
+    handle, name = tempfile.mkstemp(prefix=f".{file.name}.", suffix=".check.yaml", dir=catalog_dir)
+    os.close(handle)  # a new file (never one of the user's); hidden: a catalog scan skips it
+    staged = Path(name)
     try:
         staged.write_text(text, encoding="utf-8")
         load_catalog([catalog_dir, staged])  # the whole user catalog must still validate with the new preset
@@ -107,7 +111,7 @@ def read_summary(path: Path) -> dict[str, Any]:
     if not isinstance(data, dict) or data.get("format") != 1:
         raise RikError(f"{file}: field 'format' must be 1 (a rik sysid report summary), got "
                        f"{data.get('format') if isinstance(data, dict) else type(data).__name__!r}")
-    if data.get("joint") not in {j.value for j in JointType}:
+    if not isinstance(data.get("joint"), str) or data["joint"] not in {j.value for j in JointType}:
         raise RikError(f"{file}: field 'joint' must be slide or hinge, got {data.get('joint')!r}")
     try:
         data["resistance"] = JointResistance.model_validate(data.get("resistance"))

@@ -34,11 +34,14 @@ from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.sysid.trials import (
     COLUMN_NAMES,
+    EMPTY_FILE,
     FORCE_UNITS,
+    NOT_UTF8,
     POSITION_UNITS,
     TRIAL_COLUMN,
     RawTable,
     TrialError,
+    check_size,
     joint_type,
     match_header,
     parse_header,
@@ -157,8 +160,16 @@ def has_time_column(paths: Sequence[str | Path], time: str | None = None) -> boo
     if path.suffix.lower() == ".csv" and path.is_file():
         import csv
 
-        with path.open(encoding="utf-8-sig", newline="") as handle:
-            header = next((row for row in csv.reader(handle) if any(c.strip() for c in row)), [])
+        check_size(path)
+        try:
+            with path.open(encoding="utf-8-sig", newline="") as handle:
+                header = next((row for row in csv.reader(handle) if any(c.strip() for c in row)), None)
+        except UnicodeDecodeError:
+            raise TrialError(path, None, None, NOT_UTF8) from None
+        except csv.Error as exc:
+            raise TrialError(path, None, None, f"malformed CSV header ({exc})") from None
+        if header is None:
+            raise TrialError(path, None, None, EMPTY_FILE)
         headers = [c.strip() for c in header]
     else:
         headers = read_table(path).headers

@@ -70,6 +70,17 @@ MIN_MOTION = {JointType.slide: 1e-3, JointType.hinge: math.radians(0.5)}
 """Smallest position range (max − min) of a trial, m (slide: 1 mm) or rad (hinge: 0.5°)."""
 MIN_FORCE_RANGE = {JointType.slide: 0.01, JointType.hinge: 0.001}
 """Smallest force range (max − min) of a trial, N (slide) or N·m (hinge): below it the force is constant."""
+MAX_SAMPLE_INTERVAL = 1.0
+"""Largest median interval between a trial's samples, s: data sampled slower than 1 Hz cannot show a joint's
+dynamics (the smoothing window is 0.1 s), and such intervals are what milliseconds (of a logger at 500 Hz or
+slower), µs or ns read as s look like."""
+MAX_FILE_BYTES = 256 * 2**20
+"""Largest CSV file read, bytes (256 MiB, about 4 million rows of three numbers; parsing takes a few times that
+in memory)."""
+MAX_ROWS = 5_000_000
+"""Most data rows read from one file (CSV or Parquet): about 83 minutes at 1 kHz."""
+NOT_UTF8 = "not a UTF-8 text file; expected CSV with a header line"
+EMPTY_FILE = "empty file; the first line must be a header such as 'time [s],position [m],force [N]'"
 
 ROLES = ("time", "position", "force", "velocity")
 COLUMN_NAMES = {"time": ("time", "t"), "position": ("position", "q"), "force": ("force", "torque", "f"),
@@ -287,12 +298,25 @@ def _first_line(exc: BaseException) -> str:
     return text[0] if text else type(exc).__name__
 
 
+def _too_many_rows(rows: int) -> str:
+    return f"more than {MAX_ROWS:,} data rows ({rows:,}); split the file (by trial) or downsample it"
+
+
+def check_size(path: Path) -> None:
+    """Refuse a CSV file larger than :data:`MAX_FILE_BYTES` before reading it."""
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise TrialError(path, None, None, f"{size / 2**20:,.0f} MiB, more than rik reads from one CSV file "
+                                           f"({MAX_FILE_BYTES // 2**20} MiB); split it (by trial) or downsample it")
+
+
 def _read_csv(path: Path) -> RawTable:
     file = str(path)
+    check_size(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError:
-        raise TrialError(file, None, None, "not a UTF-8 text file; expected CSV with a header line") from None
+        raise TrialError(file, None, None, NOT_UTF8) from None
     reader = csv.reader(text.splitlines())
     header: list[str] | None = None
     cells: list[list[str]] = []
@@ -309,11 +333,12 @@ def _read_csv(path: Path) -> RawTable:
                                                    f"but the header has {len(header)}")
             cells.append(row)
             lines.append(reader.line_num)
+            if len(cells) > MAX_ROWS:
+                raise TrialError(file, None, None, _too_many_rows(len(cells)))
     except csv.Error as exc:
         raise TrialError(file, None, None, f"malformed CSV at line {reader.line_num}: {exc}") from None
     if header is None:
-        raise TrialError(file, None, None, "empty file; the first line must be a header such as "
-                                           "'time [s],position [m],force [N]'")
+        raise TrialError(file, None, None, EMPTY_FILE)
     index = {h: i for i, h in enumerate(header)}
     line_array = np.asarray(lines, dtype=np.int64)
 
@@ -348,6 +373,9 @@ def _read_parquet(path: Path) -> RawTable:
 
     file = str(path)
     try:
+        rows = pq.ParquetFile(path).metadata.num_rows
+        if rows > MAX_ROWS:
+            raise TrialError(file, None, None, _too_many_rows(rows))
         table = pq.read_table(path)
     except (pa.ArrowException, OSError) as exc:
         raise TrialError(file, None, None, f"not a readable Parquet file ({_first_line(exc)})") from None
@@ -550,6 +578,25 @@ def _check_time(src: _Source) -> None:
     raise src.error("time", problem + "; time must increase strictly within a trial")
 
 
+def _check_time_unit(src: _Source) -> None:
+    """Refuse a time axis whose samples are :data:`MAX_SAMPLE_INTERVAL` or more apart (median): most likely time
+    in another unit than the one read (ms as s, µs, ns); named with the unit that would give a usual rate."""
+    t = src.values["time"]
+    if len(t) < 2 or (interval := float(np.median(np.diff(t))) * src.scales["time"]) <= MAX_SAMPLE_INTERVAL:
+        return
+    unit = src.units["time"]
+    likely = next((name for name, scale in (("ms", 1e-3), ("µs", 1e-6), ("ns", 1e-9))
+                   if 1e-5 <= interval * scale <= 0.1), None)
+    if likely == "ms" and unit != "ms":
+        advice = "if it is in ms, write the header as 'time [ms]' or pass --time-unit ms"
+    elif likely is not None:
+        advice = f"if it is in {likely}, convert it to s or ms (rik reads time in {_choices(TIME_UNITS)})"
+    else:
+        advice = "give the time in s or ms"
+    raise src.error("time", f"samples are {_num(interval)} s apart (median of the time read in {unit}), slower "
+                            f"than 1 Hz: is the time in another unit? {advice}")
+
+
 def _check_range(src: _Source, role: str, minimum_si: float) -> None:
     values = src.values[role]
     lo, hi = float(values.min()), float(values.max())
@@ -569,6 +616,7 @@ def _build(src: _Source, limits: _Thresholds) -> Trial:
     """Check a trial's data (in the order of the module docstring) and convert it to SI."""
     _check_finite(src)
     _check_time(src)
+    _check_time_unit(src)
     n = len(src.values["time"])
     if n < limits.min_samples:
         raise src.error(None, f"only {n} samples; a trial needs at least {limits.min_samples}")
@@ -669,7 +717,12 @@ def _feature_ref(text: str, features: dict[str, Any], info_file: str) -> _Featur
         hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
         raise TrialError(info_file, None, text, f"no feature '{key}' in the dataset{hint}")
     feature = features[key]
-    size = int(np.prod(feature.get("shape") or [1]))
+    shape = feature.get("shape") if isinstance(feature, dict) else None
+    if not isinstance(feature, dict) or not (shape is None or isinstance(shape, list) and all(
+            isinstance(n, int) and not isinstance(n, bool) and 0 < n <= MAX_ROWS for n in shape)):
+        raise TrialError(info_file, None, text, f"feature '{key}' is malformed: it needs a 'shape', a list of "
+                                                "positive whole numbers")
+    size = int(np.prod(shape or [1]))
     sel = match["sel"] if match else None
     if sel is None:
         if size != 1:
@@ -699,7 +752,17 @@ def _read_info(root: Path) -> tuple[str, dict[str, Any]]:
         raise TrialError(info_file, None, None, f"not valid JSON ({_first_line(exc)})") from None
     if not isinstance(info, dict) or not isinstance(info.get("features"), dict) or not info.get("fps"):
         raise TrialError(info_file, None, None, "malformed LeRobot info: needs 'fps' and 'features'")
+    fps = info["fps"]
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not math.isfinite(fps) or fps <= 0:
+        raise TrialError(info_file, None, None, f"field 'fps' must be a positive number of frames per second, "
+                                                f"got {fps!r}")
     return str(info_file), info
+
+
+def _is_number(kind: pa.DataType) -> bool:
+    import pyarrow as pa
+
+    return pa.types.is_integer(kind) or pa.types.is_floating(kind) or pa.types.is_decimal(kind)
 
 
 def _ref_values(table: pa.Table, ref: _FeatureRef, file: str) -> tuple[np.ndarray, np.ndarray]:
@@ -710,8 +773,11 @@ def _ref_values(table: pa.Table, ref: _FeatureRef, file: str) -> tuple[np.ndarra
         raise TrialError(file, None, ref.text, f"no column '{ref.key}' in the data file")
     column = table.column(ref.key).combine_chunks()
     rows = len(column)
-    if pa.types.is_list(column.type) or pa.types.is_fixed_size_list(column.type) \
-            or pa.types.is_large_list(column.type):
+    listed = pa.types.is_list(column.type) or pa.types.is_fixed_size_list(column.type) \
+        or pa.types.is_large_list(column.type)
+    if not _is_number(column.type.value_type if listed else column.type):
+        raise TrialError(file, None, ref.text, f"column '{ref.key}' holds {column.type} values, not numbers")
+    if listed:
         null = column.is_null().to_numpy(zero_copy_only=False).astype(bool)
         flat = cast("pa.ListArray", column).flatten().cast(pa.float64()).to_numpy(zero_copy_only=False)
         if null.any() or flat.size != rows * ref.size:
@@ -728,12 +794,22 @@ def _lerobot_file(path: Path, refs: dict[str, _FeatureRef], fps: float) -> tuple
 
     file = str(path)
     try:
-        table = pq.read_table(path)
+        parquet = pq.ParquetFile(path)
+        names = set(parquet.schema_arrow.names)
+        if parquet.metadata.num_rows > MAX_ROWS:
+            raise TrialError(file, None, None, _too_many_rows(parquet.metadata.num_rows))
+        wanted = [c for c in dict.fromkeys(["episode_index", "timestamp", "frame_index",
+                                            *(r.key for r in refs.values())]) if c in names]
+        table = pq.read_table(path, columns=wanted)  # only these: a dataset's frames may hold images
     except (pa.ArrowException, OSError) as exc:
         raise TrialError(file, None, None, f"not a readable Parquet file ({_first_line(exc)})") from None
     if "episode_index" not in table.column_names:
         raise TrialError(file, None, "episode_index", "missing; a LeRobot data file has one per row")
-    episodes = table.column("episode_index").to_numpy(zero_copy_only=False).astype(np.int64)
+    index = table.column("episode_index")
+    if not pa.types.is_integer(index.type) or index.null_count:
+        raise TrialError(file, None, "episode_index", f"must be whole numbers in every row, got {index.type}"
+                                                      + (f" with {index.null_count} empty" if index.null_count else ""))
+    episodes = index.to_numpy().astype(np.int64)
     columns = {role: _ref_values(table, ref, file) for role, ref in refs.items()}
     if "time" in refs:
         return columns, episodes

@@ -156,6 +156,9 @@ def read_truth(path: str | Path) -> GroundTruth:
         path = path / TRUTH_FILE
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
+    except (OSError, ValueError) as exc:  # a JSONDecodeError, or a UnicodeDecodeError: not UTF-8
         raise RikError(f"{path}: cannot read the ground truth ({str(exc).splitlines()[0]})") from None
-    return GroundTruth.from_json(data)
+    try:
+        return GroundTruth.from_json(data)
+    except RikError as exc:
+        raise RikError(f"{path}: {exc}") from None
