@@ -134,6 +134,10 @@ def _context(spec: EvalSpec) -> dict[str, Any]:
         check_policy_folder(Path(spec.operator))  # LeRobot imports and calls what the folder names: check it first
         policy_cfg = PreTrainedConfig.from_pretrained(spec.operator)
         policy_cfg.pretrained_path = Path(spec.operator)
+        if getattr(policy_cfg, "pretrained_backbone_weights", None) is not None:
+            # ACT's and diffusion's image backbone would first load torchvision's ImageNet weights (a download, read
+            # with torch.load): model.safetensors replaces every one of them, so nothing is fetched or unpickled
+            policy_cfg.pretrained_backbone_weights = None
         policy = make_policy(cfg=policy_cfg, env_cfg=cfg)
         policy.eval()
         pre, post = make_pre_post_processors(policy_cfg=policy_cfg, pretrained_path=str(spec.operator),
