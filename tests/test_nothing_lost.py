@@ -234,6 +234,20 @@ def test_episode_folder_of_the_user_is_not_replaced(tmp_path: Path) -> None:
     assert tree(out) == before
 
 
+def test_bench_keeps_a_table_of_the_user(rik, tmp_path: Path) -> None:
+    out = tmp_path / "paper"
+    out.mkdir()
+    (out / "table.md").write_text("| handle | F | P | S |\n|---|---:|---:|---:|\n| knob | 0.1 | 0.2 | 0.7 |\n")
+    before = tree(tmp_path)
+    res = rik("bench", "--types", "knob", "--presets", "smooth", "--strategies", "grasp_vertical", "-n", "1",
+              "--workers", "1", "--variants", str(tmp_path / "variants"), "--out", str(out))
+    assert res.code == 2
+    assert one_line(res.err) == (f"rik: error: {out / 'table.md'}: exists and was not written by rik bench (no "
+                                 "results.csv of its own beside it), so nothing was run: choose another --out, or "
+                                 "move it away yourself")
+    assert tree(tmp_path) == before
+
+
 # ------------------------------------------------------------------------------------------- bad measured data
 
 def write_columns(path: Path, header: str, rows: np.ndarray) -> str:
