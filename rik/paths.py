@@ -84,12 +84,31 @@ def holds_only(folder: Path, names: Callable[[str], bool] | Collection[str]) -> 
         return False
 
 
-def json_object(path: Path) -> dict[str, Any] | None:
-    """The JSON object in file ``path``; None when it is missing, unreadable, not JSON or not an object."""
+MAX_JSON_BYTES = 16 * 2**20
+"""Largest JSON file :func:`read_json` reads (rik's own are a few kB to a few MB)."""
+
+
+def read_json(path: Path, limit: int = MAX_JSON_BYTES) -> Any:
+    """The JSON in file ``path`` (UTF-8), read only when it is at most ``limit`` bytes. Raises OSError when it
+    cannot be read, and ValueError, with the reason, when it is larger, not UTF-8, not JSON, or nested too deeply
+    to parse (which Python's parser reports as a RecursionError)."""
     import json
 
+    with open(path, "rb") as handle:
+        raw = handle.read(limit + 1)
+    if len(raw) > limit:
+        raise ValueError(f"larger than {limit / 2**20:g} MiB")
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        return json.loads(raw.decode("utf-8"))
+    except RecursionError:
+        raise ValueError("nested too deeply") from None
+
+
+def json_object(path: Path) -> dict[str, Any] | None:
+    """The JSON object in file ``path`` (:func:`read_json`); None when it is missing, unreadable, not JSON or not an
+    object."""
+    try:
+        data = read_json(Path(path))
     except (OSError, ValueError):
         return None
     return data if isinstance(data, dict) else None

@@ -411,6 +411,31 @@ def test_summary_with_a_joint_that_is_no_name_is_one_line(rik, tmp_path: Path) -
     assert not (tmp_path / "cat").exists()
 
 
+DEEP = "[" * 100_000 + "]" * 100_000
+"""JSON nested deeper than Python's parser goes (it raised RecursionError)."""
+
+
+def test_json_nested_too_deeply_is_one_line(rik, trials, tmp_path: Path) -> None:
+    from rik.sysid.generate import read_truth
+
+    report = tmp_path / "report"
+    report.mkdir()
+    (report / "summary.json").write_text(DEEP)
+    res = rik("sysid", "apply", str(report), "--as-preset", "mine", "--catalog-dir", str(tmp_path / "cat"))
+    assert res.code == 2
+    assert one_line(res.err) == f"rik: error: {report / 'summary.json'}: not valid JSON (nested too deeply)"
+    root = lerobot(tmp_path / "ds", trials)
+    (root / "meta" / "info.json").write_text(DEEP)
+    res = rik("sysid", "fit", str(root), "--position", "observation.state[0]", "--position-unit", "m",
+              "--force", "action[0]", "--force-unit", "N", "--report", str(tmp_path / "out"))
+    assert res.code == 2
+    assert one_line(res.err) == f"rik: error: {root / 'meta' / 'info.json'}: not valid JSON (nested too deeply)"
+    (report / "truth.json").write_text(DEEP)
+    with pytest.raises(RikError, match=r"truth.json: cannot read the ground truth \(nested too deeply\)$"):
+        read_truth(report)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ds", "report"]
+
+
 def test_ground_truth_that_is_not_utf8_names_the_file(tmp_path: Path) -> None:
     from rik.sysid.generate import read_truth
 

@@ -94,10 +94,9 @@ def write_preset(resistance: JointResistance, joint_type: JointType, name: str, 
 def read_summary(path: Path) -> dict[str, Any]:
     """The ``summary.json`` of a ``rik sysid fit`` report (``path``: the report directory or the file), checked
     to hold what a preset needs: one line naming the file and field when it does not."""
-    import json
-
     from pydantic import ValidationError
 
+    from rik.paths import read_json
     from rik.schemas.joints import JointResistance, JointType
 
     path = Path(path)
@@ -105,8 +104,8 @@ def read_summary(path: Path) -> dict[str, Any]:
     if not file.is_file():
         raise RikError(f"{file}: no such report summary; pass the directory `rik sysid fit --report` wrote")
     try:
-        data = json.loads(file.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        data = read_json(file)
+    except ValueError as exc:  # not JSON, not UTF-8, too large or nested too deeply
         raise RikError(f"{file}: not valid JSON ({exc})") from None
     if not isinstance(data, dict) or data.get("format") != 1:
         raise RikError(f"{file}: field 'format' must be 1 (a rik sysid report summary), got "

@@ -746,9 +746,11 @@ def _read_info(root: Path) -> tuple[str, dict[str, Any]]:
     info_file = root / "meta" / "info.json"
     if not info_file.is_file():
         raise TrialError(root, None, None, "not a LeRobot dataset (no meta/info.json)")
+    from rik.paths import read_json
+
     try:
-        info = json.loads(info_file.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        info = read_json(info_file)
+    except ValueError as exc:  # not JSON, not UTF-8, too large or nested too deeply
         raise TrialError(info_file, None, None, f"not valid JSON ({_first_line(exc)})") from None
     if not isinstance(info, dict) or not isinstance(info.get("features"), dict) or not info.get("fps"):
         raise TrialError(info_file, None, None, "malformed LeRobot info: needs 'fps' and 'features'")
@@ -980,7 +982,6 @@ def write_simulated(trials: Sequence[Trial], directory: str | Path, joint: Joint
     """Write simulated ``trials`` (:func:`write_csv_trials`) and their ``truth`` (JSON) to ``directory`` as a whole:
     into a hidden sibling first, then renamed into place, replacing an earlier folder of simulated trials only (any
     other folder that is not empty is refused, before anything is written). Returns the CSV paths."""
-    import json
 
     from rik.paths import staged_directory, write_atomic
 

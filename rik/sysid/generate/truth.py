@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -10,6 +9,7 @@ from typing import Any
 
 from rik.errors import RikError
 from rik.joints.kinds import SCHEMAS
+from rik.paths import read_json
 from rik.schemas.joints import JointEffect, JointType, Spring, Tilt
 from rik.sysid.draws import joint_type as _joint
 from rik.sysid.generate.constants import TRUTH_FILE
@@ -155,8 +155,8 @@ def read_truth(path: str | Path) -> GroundTruth:
     if path.is_dir():
         path = path / TRUTH_FILE
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:  # a JSONDecodeError, or a UnicodeDecodeError: not UTF-8
+        data = read_json(path)
+    except (OSError, ValueError) as exc:  # not JSON, not UTF-8, too large or nested too deeply
         raise RikError(f"{path}: cannot read the ground truth ({str(exc).splitlines()[0]})") from None
     try:
         return GroundTruth.from_json(data)
