@@ -85,19 +85,23 @@ def export_lerobot(
 
 DEMO_DATASET = Path("datasets/rik-demo")
 DATASET_NAMES = frozenset({"meta", "data", "videos", "images", "README.md"})
-"""What a LeRobot dataset holds at its top (besides rik's card fields)."""
+"""What a LeRobot dataset rik exported holds at its top."""
 
 
 def demo_folders(out: Path) -> list[tuple[Path, MadeFolder]]:
-    """The folders the demo's export replaces: its dataset ``out`` (a finished rik export holding nothing else) and
-    ``<out>.partial`` (an interrupted one: its plan, shards and merged dataset)."""
+    """The folders the demo's export replaces: its dataset ``out`` (a finished rik export: lerobot's
+    ``meta/info.json`` and rik's ``meta/rik_card.json``, and nothing else at its top) and ``<out>.partial`` (an
+    interrupted one: its plan, shards and merged dataset)."""
     from rik.exporters.lerobot_card import CARD_FIELDS
-    from rik.exporters.lerobot_export import PLAN, _is_rik_export
+    from rik.exporters.lerobot_export import PLAN
     from rik.paths import MadeFolder, holds_only, json_object
 
+    def exported(p: Path) -> bool:
+        return (json_object(p / "meta" / "info.json") is not None and json_object(p / "meta" / CARD_FIELDS)
+                is not None and holds_only(p, DATASET_NAMES))
+
     hint = "run the demo in another folder"
-    return [(out, MadeFolder("a dataset rik export-lerobot made", lambda p: _is_rik_export(p) and holds_only(
-                p, DATASET_NAMES | {CARD_FIELDS}), hint)),
+    return [(out, MadeFolder("a dataset rik export-lerobot made", exported, hint)),
             (out.with_name(f"{out.name}.partial"), MadeFolder("an interrupted export of rik export-lerobot",
                 lambda p: json_object(p / PLAN) is not None and holds_only(p, {PLAN, "shards", "merged"}), hint))]
 DEMO_REPO_ID = "local/rik-demo"
