@@ -22,6 +22,7 @@ from rik.errors import RikError
 if TYPE_CHECKING:
     from rik.dataset.plan import Plan
     from rik.registry.catalog import Catalog
+    from rik.schemas.dataset import DatasetSpec
 
 app = typer.Typer(help="Datasets as specs: plan one, build it (local processes or Ray), list, show and verify "
                        "what was built.", no_args_is_help=True)
@@ -52,14 +53,15 @@ def _hours(h: float) -> str:
     return f"{h / 24:.1f} days"
 
 
-def _plan(spec_path: Path, variants: Path, workers: int, catalog_paths: list[Path] | None
-          ) -> tuple[Catalog, Plan]:
+def _plan(spec_path: Path, variants: Path, workers: int, catalog_paths: list[Path] | None,
+          spec: DatasetSpec | None = None) -> tuple[Catalog, Plan]:
+    """The catalog and the plan of the spec at ``spec_path`` (``spec``: it, when already read)."""
     from rik.dataset.plan import make_plan
     from rik.dataset.spec import load_spec
     from rik.registry.load import load_catalog
     from rik.registry.sources import display_path
 
-    spec = load_spec(spec_path)
+    spec = spec if spec is not None else load_spec(spec_path)
     catalog = load_catalog(overlays(catalog_paths))
     return catalog, make_plan(catalog, spec, source=display_path(spec_path), variants_dir=variants, workers=workers,
                               overlays=overlays(catalog_paths))
@@ -135,20 +137,23 @@ def build_command(spec: SpecArg,
     """Build SPEC into --out: record -> render -> export per episode, in shards merged at the end. A rerun does only
     what is missing (after a crash, a kill, or failures)."""
     quiet_writers()
-    from rik.dataset.build import build_dataset, default_work
+    from rik.dataset.build import build_dataset, check_destination
     from rik.dataset.engines import check_ray, local_engine
+    from rik.dataset.spec import load_spec, spec_hash
 
     if ray is not None:
         check_ray()  # before any work: a missing extra is found at once
     if render_actors is not None and ray is None:
         raise RikError("--render-actors: render actors are Ray's; give --ray too")
+    loaded = load_spec(spec)
+    out_dir, work_dir = check_destination(out, work, spec_hash(loaded), spec_file=spec, variants=variants)
     engine: Any = None
     if ray is not None:  # before the plan, which may build variants: a cluster that does not answer writes nothing
         from rik.dataset.engines import RayEngine
 
         engine = RayEngine(ray, overlays(catalog), render_actors=render_actors)
     try:
-        cat, plan = _plan(spec, variants, workers, catalog)
+        cat, plan = _plan(spec, variants, workers, catalog, loaded)
     except BaseException:
         if engine is not None:
             engine.close()
@@ -156,9 +161,9 @@ def build_command(spec: SpecArg,
     _print_plan(plan)
     if engine is None:
         engine = local_engine(cat, workers, overlays(catalog))
-    print(f"  engine: {engine.name}, {engine.workers} workers; work folder {work or default_work(out)}")
+    print(f"  engine: {engine.name}, {engine.workers} workers; work folder {work_dir}")
     with progress_bar() as bar:
-        result = build_dataset(cat, plan, out, engine, work=work, variants=variants, retries=retries,
+        result = build_dataset(cat, plan, out_dir, engine, work=work_dir, variants=variants, retries=retries,
                                progress=stage_progress(bar))
     if result.up_to_date:
         print(f"{out}: already built from this spec; nothing to do ({result.episodes} episodes)")
@@ -195,13 +200,16 @@ def list_command(as_json: JsonOpt = False) -> None:
     for col in ("path", "repo id", "spec hash", "episodes", "outcomes", "size"):
         table.add_column(col)
     for r in rows:
-        if not r["present"]:
-            table.add_row(r["path"], "(gone)", "", "", "", "")
+        if not r["present"] or r.get("damaged"):
+            table.add_row(r["path"], "(damaged)" if r.get("damaged") else "(gone)", "", "", "", "")
             continue
         outcomes = " ".join(f"{k}{v}" for k, v in r["outcomes"].items())
         table.add_row(r["path"], str(r["repo_id"]), str(r["spec_hash"])[:12], str(r["episodes"]), outcomes,
                       _human_bytes(r["bytes"]))
     console().print(table)
+    for r in rows:
+        if r.get("damaged"):
+            print(f"damaged: {r['damaged']}")
 
 
 @app.command("show")

@@ -12,6 +12,7 @@ published only when every unit succeeded.
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import time
 from collections import deque
@@ -26,6 +27,8 @@ from rik.errors import RikError
 from rik.paths import write_atomic
 
 if TYPE_CHECKING:
+    from pydantic import BaseModel
+
     from rik.exporters.lerobot_export import ExportSpec
     from rik.registry.catalog import Catalog
 
@@ -37,6 +40,11 @@ BUILD_META = "rik_build.json"
 these vary from one build to the next."""
 STAGES = ("record", "render", "shard")
 DEFAULT_RETRIES = 2
+MARKER_FIELDS: dict[str, tuple[tuple[str, type | tuple[type, ...]], ...]] = {
+    "record": (("output", str), ("episode", str), ("outcome", str), ("states_sha256", str)),
+    "render": (("output", str),), "shard": (("output", str),)}
+"""The fields of a unit's marker the build reads back, and their types; a marker without them is damaged and its
+unit runs again."""
 
 
 @dataclass
@@ -73,12 +81,39 @@ def default_work(out: Path) -> Path:
 
 
 def read_dataset_meta(root: Path) -> dict[str, Any] | None:
-    """``meta/rik_dataset.json`` of a built dataset, or None when ``root`` holds none (or it is unreadable)."""
-    try:
-        data = json.loads((Path(root) / "meta" / DATASET_META).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    """``meta/rik_dataset.json`` of a built dataset, or None when ``root`` holds none. One that is there but
+    damaged (not JSON, not an object, a field rik reads missing or of the wrong type) raises one line naming the
+    file and the field (:func:`read_meta_file`)."""
+    from rik.schemas.dataset import DatasetRecord
+
+    path = Path(root) / "meta" / DATASET_META
+    if not path.is_file():
         return None
-    return data if isinstance(data, dict) else None
+    return read_meta_file(path, DatasetRecord)
+
+
+def read_meta_file(path: Path, model: type[BaseModel]) -> dict[str, Any]:
+    """The JSON object in ``path``, checked against ``model`` (which says what rik reads of it); a file that cannot
+    be read or is damaged raises a :class:`RikError` line naming the file and the field."""
+    from pydantic import ValidationError
+
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise RikError(f"{path}: cannot read it ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise RikError(f"{path}: damaged: not UTF-8 text; rik wrote it as JSON") from None
+    except ValueError as exc:
+        raise RikError(f"{path}: damaged: not JSON ({str(exc).splitlines()[0]})") from None
+    if not isinstance(data, dict):
+        raise RikError(f"{path}: damaged: holds a JSON {type(data).__name__}, not the object rik wrote")
+    try:
+        model.model_validate(data)
+    except ValidationError as exc:
+        first = exc.errors(include_url=False)[0]
+        where = ".".join(str(p) for p in first["loc"])
+        raise RikError(f"{path}, field '{where}': damaged: {first['msg'][0].lower()}{first['msg'][1:]}") from None
+    return data
 
 
 # ---- the units, as they run in a worker -------------------------------------------------------------------------
@@ -121,9 +156,12 @@ def read_marker(folders: Folders, stage: str, key: str) -> dict[str, Any] | None
         data = json.loads(folders.marker(stage, key).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-    output = data.get("output")
-    if not isinstance(output, str) or not (folders.work / output).exists():
-        return None
+    if not isinstance(data, dict) or not all(isinstance(data.get(f), t) for f, t in MARKER_FIELDS[stage]):
+        return None  # a damaged marker: the unit runs again
+    output = data["output"]
+    parts = output.split("/")
+    if output.startswith("/") or any(p in ("", ".", "..") for p in parts) or not (folders.work / output).exists():
+        return None  # its output is gone, or the marker points outside the work folder
     if stage == "record" and not _states_intact(folders.work / output, data.get("states_sha256")):
         return None  # an episode changed or truncated since it was recorded is recorded again
     return data
@@ -327,8 +365,7 @@ def build_dataset(catalog: Catalog, plan: Plan, out: Path, engine: Engine, *, wo
     what failed; the dataset is published only without failures."""
     from rik.locks import exclusive
 
-    out = Path(out).absolute()
-    work = Path(work).absolute() if work else default_work(out)
+    out, work = check_destination(out, work, plan.spec_hash, variants=variants)
     result = BuildResult(out, work, plan.spec_hash)
     if _up_to_date(out, plan, result):
         engine.close()  # (a Ray cluster started for the build stops here too)
@@ -370,6 +407,82 @@ def build_dataset(catalog: Catalog, plan: Plan, out: Path, engine: Engine, *, wo
 
         register_dataset(out)
     return result
+
+
+def check_destination(out: Path, work: Path | None, spec_hash: str, *, spec_file: Path | None = None,
+                      variants: Path | None = None) -> tuple[Path, Path]:
+    """``(out, work)`` as absolute, normalised paths (``work`` defaults to ``<out>.work``), after refusing with one
+    line, before anything is written, every pair a build must not write: ``/``; a file; the current folder, or a
+    folder that holds it, the spec or ``variants``, as ``out``; ``out`` and ``work`` the same folder or one inside
+    the other, or on two file systems (the dataset is renamed from ``work`` into ``out``); an ``out`` that holds
+    something else than this spec's dataset; a ``work`` that holds something else than a build's work."""
+    given = {"--out": str(out), "--work": str(work) if work is not None else None}
+    out = Path(os.path.abspath(out))
+    if out.resolve() == Path(out.resolve().anchor):
+        raise RikError(f"--out {given['--out']}: is the root of the file system; give the name of a new folder")
+    work = Path(os.path.abspath(work)) if work is not None else default_work(out)
+    if given["--work"] is None:
+        given["--work"] = f"{given['--out']}.work (the default)"
+    paths = {"--out": out, "--work": work}
+    real = {opt: p.resolve() for opt, p in paths.items()}
+    for opt, p in paths.items():
+        shown = given[opt]
+        if real[opt] == Path(real[opt].anchor):
+            raise RikError(f"{opt} {shown}: is the root of the file system; give the name of a new folder")
+        if p.exists() and not p.is_dir():
+            raise RikError(f"{opt} {shown}: is a file, not a folder; give the name of a new folder")
+        base = _existing_ancestor(p)
+        if not base.is_dir():
+            raise RikError(f"{opt} {shown}: {base} is a file, not a folder; give a folder's name")
+    if real["--out"] == real["--work"]:
+        raise RikError(f"--out {given['--out']} and --work {given['--work']}: are the same folder; the work folder "
+                       "must be another one (the default is OUT.work, beside the dataset)")
+    if real["--work"].is_relative_to(real["--out"]):
+        raise RikError(f"--work {given['--work']}: is inside --out {given['--out']}, which receives the finished "
+                       "dataset whole; give a work folder outside it (the default is OUT.work, beside it)")
+    if real["--out"].is_relative_to(real["--work"]):
+        raise RikError(f"--out {given['--out']}: is inside --work {given['--work']}; give a dataset folder outside "
+                       "the work folder (the default work folder is OUT.work, beside it)")
+    inside_out = [("the current folder", Path.cwd())]
+    if spec_file is not None:
+        inside_out.append((f"the spec {spec_file}", Path(spec_file)))
+    if variants is not None:
+        inside_out.append((f"--variants {variants}", Path(variants)))
+    for what, p in inside_out:
+        if p.resolve().is_relative_to(real["--out"]):
+            role = "is" if p.resolve() == real["--out"] else "holds"
+            raise RikError(f"--out {given['--out']}: {role} {what}; --out receives the finished dataset whole: "
+                           "give the name of a new folder")
+    if out.is_dir():
+        meta = read_dataset_meta(out)
+        if meta is None:
+            raise RikError(f"{out}: exists and is not a dataset built by rik dataset build (no meta/{DATASET_META});"
+                           " choose another --out")
+        if meta.get("spec_hash") != spec_hash:
+            raise RikError(f"{out}: holds the dataset of another spec (spec hash {str(meta.get('spec_hash'))[:12]}, "
+                           f"this spec's is {spec_hash[:12]}); choose another --out")
+    if work.is_dir() and not _is_work_folder(work):
+        names = sorted(e.name for e in os.scandir(work))
+        shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+        raise RikError(f"--work {given['--work']}: exists and is not the work folder of a rik dataset build (it "
+                       f"holds {shown}); give a new folder, or one an earlier build used")
+    if _existing_ancestor(out.parent).stat().st_dev != _existing_ancestor(work).stat().st_dev:
+        raise RikError(f"--out {given['--out']} and --work {given['--work']}: are on two file systems; the finished "
+                       "dataset is renamed from the work folder into --out, so give folders on one file system")
+    return out, work
+
+
+def _existing_ancestor(path: Path) -> Path:
+    """``path`` itself, or its nearest ancestor that exists."""
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
+
+
+def _is_work_folder(work: Path) -> bool:
+    """Whether ``work`` is empty or holds a build's work: the spec file and unit markers a build writes first."""
+    names = {e.name for e in os.scandir(work)}
+    return not names or "units" in names or any(n.startswith("spec-") and n.endswith(".json") for n in names)
 
 
 def _up_to_date(out: Path, plan: Plan, result: BuildResult) -> bool:

@@ -18,11 +18,28 @@ def registry_file() -> Path:
 
 
 def _read() -> list[dict[str, Any]]:
+    """The registry's entries ([] when there is none yet); a damaged registry raises one line naming it (and the
+    entry), never read as empty: a build would then write over the pointers it still holds."""
+    from rik.errors import RikError
+
+    path = registry_file()
+    fix = "it only points at datasets: move it away, and rebuild (or list) the datasets it named"
     try:
-        data = json.loads(registry_file().read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
         return []
-    return [e for e in data if isinstance(e, dict) and isinstance(e.get("path"), str)] if isinstance(data, list) else []
+    except OSError as exc:
+        raise RikError(f"{path}: cannot read the registry of datasets ({exc.strerror})") from None
+    except ValueError:
+        raise RikError(f"{path}: the registry of datasets is damaged (not JSON); {fix}") from None
+    if not isinstance(data, list):
+        raise RikError(f"{path}: the registry of datasets is damaged (a JSON {type(data).__name__}, not a list); "
+                       f"{fix}")
+    for i, e in enumerate(data):
+        if not isinstance(e, dict) or not isinstance(e.get("path"), str):
+            raise RikError(f"{path}, entry {i}, field 'path': the registry of datasets is damaged (no folder's "
+                           f"path there); {fix}")
+    return data
 
 
 def folder_size(root: Path) -> int:
@@ -32,17 +49,17 @@ def folder_size(root: Path) -> int:
 
 def describe_dataset(root: Path) -> dict[str, Any]:
     """What ``rik dataset list/show`` says of the dataset at ``root`` (read from its metadata; ``present`` is
-    False when it is gone or no longer a built dataset)."""
-    from rik.dataset.build import BUILD_META, read_dataset_meta
+    False when it is gone or no longer a built dataset). Damaged metadata raises one line naming the file and the
+    field (:func:`rik.dataset.build.read_meta_file`)."""
+    from rik.dataset.build import BUILD_META, read_dataset_meta, read_meta_file
+    from rik.schemas.dataset import BuildRecord
 
     root = Path(root).absolute()
     meta = read_dataset_meta(root)
     if meta is None:
         return {"path": str(root), "present": False}
-    try:
-        build = json.loads((root / "meta" / BUILD_META).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        build = {}
+    build_file = root / "meta" / BUILD_META
+    build = read_meta_file(build_file, BuildRecord) if build_file.exists() else {}
     counts = meta.get("counts", {})
     spec = meta.get("spec", {})
     return {"path": str(root), "present": True, "repo_id": spec.get("repo_id"), "spec_hash": meta.get("spec_hash"),
@@ -58,6 +75,8 @@ def register_dataset(root: Path) -> None:
 
     root = Path(root).absolute()
     path = registry_file()
+    from rik.errors import RikError
+
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with exclusive(path, "rik dataset build", wait=True):
@@ -65,10 +84,19 @@ def register_dataset(root: Path) -> None:
             info = describe_dataset(root)
             entries.append({k: info.get(k) for k in ("path", "repo_id", "spec_hash")})
             write_atomic(path, json.dumps(entries, indent=1) + "\n")
-    except OSError:
+    except (OSError, RikError):  # a damaged registry is left as it is (rik dataset list names it), not replaced
         pass
 
 
 def list_datasets() -> list[dict[str, Any]]:
-    """Every registered dataset, described as it is now on disk (in registration order)."""
-    return [describe_dataset(Path(e["path"])) for e in _read()]
+    """Every registered dataset, described as it is now on disk (in registration order); one whose metadata is
+    damaged is listed with ``damaged``, the line that names the file and field, so the others still show."""
+    from rik.errors import RikError
+
+    rows = []
+    for e in _read():
+        try:
+            rows.append(describe_dataset(Path(e["path"])))
+        except RikError as exc:
+            rows.append({"path": str(Path(e["path"]).absolute()), "present": True, "damaged": str(exc)})
+    return rows

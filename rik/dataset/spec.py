@@ -11,11 +11,81 @@ from rik.schemas.dataset import DatasetSpec
 DEFAULT_ROBOT = "hand-e"
 
 
+MAX_SPEC_BYTES = 4_000_000
+"""Largest spec file read, bytes (a spec that lists every variant of the catalog by id is ~200 kB)."""
+MAX_SPEC_DEPTH = 16
+"""Deepest nesting of lists and mappings in a spec (a valid one nests 3 deep); libyaml's composer recurses in C,
+and a deeper document crashes the process (a segmentation fault at ~10^5 levels)."""
+MAX_SPEC_NODES = 1_000_000
+"""Most nodes a spec may hold with its aliases expanded: an alias bomb ("billion laughs") is refused unread."""
+
+
 def load_spec(path: Path) -> DatasetSpec:
-    """The spec in the YAML file ``path``; bad input raises one line naming the file, line and field."""
+    """The spec in the YAML file ``path``; bad input raises one line naming the file, line and field. The file is
+    bounded before it is parsed (:data:`MAX_SPEC_BYTES`, :data:`MAX_SPEC_DEPTH`, :data:`MAX_SPEC_NODES`)."""
     from rik.registry.entries import read_yaml_model
 
+    check_spec_shape(Path(path))
     return read_yaml_model(Path(path), DatasetSpec, "dataset spec")
+
+
+def check_spec_shape(path: Path) -> None:
+    """Refuse, with one line naming the file (and line), a spec too large, too deeply nested or whose aliases
+    expand past :data:`MAX_SPEC_NODES` nodes, from libyaml's event stream (which neither recurses nor expands
+    aliases). What cannot be read or parsed is left to the reader, which names it."""
+    import yaml
+
+    from rik.errors import RikError
+    from rik.registry.sources import _safe_loader, display_path
+
+    shown = display_path(path)
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(MAX_SPEC_BYTES + 1)
+    except OSError:
+        return
+    if len(raw) > MAX_SPEC_BYTES:
+        raise RikError(f"{shown}: the dataset spec is larger than {MAX_SPEC_BYTES:,} bytes; a spec lists variants, "
+                       "operators and settings, not data")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return
+    sizes: dict[str, int] = {}
+    """Expanded node count of each anchor, once its node is closed."""
+    stack: list[tuple[str | None, int]] = [(None, 0)]
+    """Open collections: their anchor and node count so far (the document at the bottom)."""
+    try:
+        for event in yaml.parse(text, Loader=_safe_loader()):
+            line = event.start_mark.line + 1 if event.start_mark is not None else 0
+            if isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+                stack.append((event.anchor, 1))
+                if len(stack) - 1 > MAX_SPEC_DEPTH:
+                    raise RikError(f"{shown}:{line}: the dataset spec nests lists and mappings more than "
+                                   f"{MAX_SPEC_DEPTH} deep")
+                continue
+            if isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+                anchor, n = stack.pop()
+                if anchor is not None:
+                    sizes[anchor] = n
+            elif isinstance(event, yaml.ScalarEvent):
+                n = 1
+                if event.anchor is not None:
+                    sizes[event.anchor] = 1
+            elif isinstance(event, yaml.AliasEvent):
+                if event.anchor not in sizes:  # an alias inside its own anchor: a structure that contains itself
+                    raise RikError(f"{shown}:{line}: the dataset spec has an alias (*{event.anchor}) inside its own "
+                                   "anchor; a spec is a tree")
+                n = sizes[event.anchor]
+            else:
+                continue
+            anchor, total = stack[-1]
+            stack[-1] = (anchor, total + n)
+            if total + n > MAX_SPEC_NODES:
+                raise RikError(f"{shown}:{line}: the dataset spec expands to more than {MAX_SPEC_NODES:,} values "
+                               "through its aliases (*name); write it without them, or with fewer")
+    except yaml.YAMLError:
+        return  # malformed: read_yaml_model names the line
 
 
 def spec_data(spec: DatasetSpec) -> dict[str, Any]:

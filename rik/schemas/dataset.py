@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from rik.schemas.common import CatalogId, Frozen, SimpleId
 
@@ -128,3 +128,45 @@ class DatasetSpec(Frozen):
     def size(self) -> tuple[int, int]:
         """(width, height), px."""
         return (self.resolution, self.resolution) if isinstance(self.resolution, int) else self.resolution
+
+
+class RecordedSpec(BaseModel):
+    """The spec as ``meta/rik_dataset.json`` records it: the fields rik reads back (the others are kept)."""
+
+    model_config = ConfigDict(extra="allow")
+    repo_id: str
+    streams: list[str] = []
+
+
+class RecordedCounts(BaseModel):
+    """The counts a built dataset records (episodes, frames, variants; the others are kept)."""
+
+    model_config = ConfigDict(extra="allow")
+    episodes: int = Field(ge=0)
+    frames: int = Field(ge=0)
+    variants: int = Field(default=0, ge=0)
+
+
+class DatasetRecord(BaseModel):
+    """``meta/rik_dataset.json`` of a built dataset, as ``rik dataset show|list|verify`` and a rebuild read it: a
+    file that breaks this is damaged (refused with one line naming the field)."""
+
+    model_config = ConfigDict(extra="allow")
+    spec_hash: str
+    source: str | None = None
+    spec: RecordedSpec
+    counts: RecordedCounts
+    outcomes: dict[str, int] = {}
+    versions: dict[str, str] = {}
+    files: dict[str, str]
+    """sha256 of every file of the dataset but rik's two metadata files, by relative path."""
+
+
+class BuildRecord(BaseModel):
+    """``meta/rik_build.json``: the statistics of the build, as ``rik dataset show`` prints them."""
+
+    model_config = ConfigDict(extra="allow")
+    engine: str | None = None
+    workers: int | None = None
+    wall_seconds: float | None = None
+    seconds: dict[str, float] = {}
