@@ -8,7 +8,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
-from web_fixtures import browser, served, signed, app_client
+from web_fixtures import app_client, browser, served, signed
 
 from rik.combinator.ids import parse_variant_id, variant_id
 from rik.registry.doc import csv_rows
