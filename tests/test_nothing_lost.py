@@ -445,3 +445,22 @@ def test_ground_truth_that_is_not_utf8_names_the_file(tmp_path: Path) -> None:
     (tmp_path / "truth.json").write_text('{"joint": "slide"}')
     with pytest.raises(RikError, match=rf"^{tmp_path / 'truth.json'}: ground truth lacks"):
         read_truth(tmp_path)
+
+
+def test_resuming_a_finished_export_says_it_is_complete(rik, tmp_path: Path) -> None:
+    """``export-lerobot --resume`` into a finished export: "already complete", not "not a rik export" (rik's card
+    fields live in ``meta/``), and the dataset is left as it was."""
+    from rik.sim.record import record
+
+    cat = load_catalog()
+    record(cat, KNOB, "grasp_vertical", seed=3, out=tmp_path / "episodes", variants=tmp_path / "variants",
+           max_seconds=0.3)
+    out = tmp_path / "ds"
+    args = ["export-lerobot", str(tmp_path / "episodes"), "--out", str(out), "--repo-id", "local/done", "--streams",
+            "none", "--variants", str(tmp_path / "variants"), "--renders", str(tmp_path / "renders")]
+    assert rik(*args).code == 0
+    before = tree(out)
+    res = rik(*args, "--resume")
+    assert one_line(res.err) == f"rik: error: {out}: the export is already complete (nothing to resume); choose another --out " \
+                                "to export again" and res.code == 2
+    assert tree(out) == before

@@ -289,7 +289,7 @@ def _is_rik_export(folder: Path) -> bool:
     """Whether ``folder`` holds a finished rik export (lerobot's info.json and rik's card fields)."""
     from rik.exporters.lerobot_card import CARD_FIELDS
 
-    return (folder / "meta" / "info.json").is_file() and (folder / CARD_FIELDS).is_file()
+    return (folder / "meta" / "info.json").is_file() and (folder / "meta" / CARD_FIELDS).is_file()
 
 
 def _check_out_free(out: Path, resume: bool) -> None:
@@ -301,7 +301,7 @@ def _check_out_free(out: Path, resume: bool) -> None:
     if _is_rik_export(out):
         raise RikError(f"{out}: the export is already complete (nothing to resume); choose another --out to export "
                        "again")
-    raise RikError(f"{out}: exists and is not a rik export (no meta/info.json and rik_card.json), so there is nothing "
+    raise RikError(f"{out}: exists and is not a rik export (no meta/info.json and meta/rik_card.json), so there is nothing "
                    "to resume there; choose another --out")
 
 
