@@ -292,6 +292,18 @@ def test_damaged_dataset_record_is_one_line(rik, tmp_path, monkeypatch, case: st
     assert rows[0]["damaged"].startswith(f"{meta}, field '{field}'")
 
 
+@pytest.mark.parametrize("command", ["show", "verify"])
+def test_record_nested_too_deeply_is_one_line(rik, tmp_path, command: str) -> None:
+    """JSON nested 100,000 deep stopped Python's parser with a RecursionError (a traceback)."""
+    ds = tmp_path / "ds"
+    (ds / "meta").mkdir(parents=True)
+    meta = ds / "meta" / "rik_dataset.json"
+    meta.write_text('{"files": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    r = rik("dataset", command, str(ds))
+    assert r.code == 2, r
+    assert one_line(r.err) == f"rik: error: {meta}: damaged: not the JSON rik wrote (nested too deeply)"
+
+
 def test_damaged_build_record_is_one_line(rik, tmp_path) -> None:
     ds = tmp_path / "ds"
     (ds / "meta").mkdir(parents=True)
@@ -313,8 +325,9 @@ def test_damaged_registry_is_named_and_never_overwritten(rik, tmp_path, monkeypa
     path.write_text('[{"path": "/data/ds1", "repo_id": "local/a"}, ')  # cut short
     r = rik("dataset", "list")
     assert r.code == 2, r
-    assert one_line(r.err) == (f"rik: error: {path}: the registry of datasets is damaged (not JSON); it only points "
-                               "at datasets: move it away, and rebuild (or list) the datasets it named")
+    line = one_line(r.err)
+    assert line.startswith(f"rik: error: {path}: the registry of datasets is damaged (not JSON: "), line
+    assert line.endswith("it only points at datasets: move it away, and rebuild (or list) the datasets it named")
     ds = tmp_path / "ds"
     (ds / "meta").mkdir(parents=True)
     (ds / "meta" / "rik_dataset.json").write_text(json.dumps(GOOD_RECORD))

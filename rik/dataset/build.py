@@ -97,14 +97,14 @@ def read_meta_file(path: Path, model: type[BaseModel]) -> dict[str, Any]:
     be read or is damaged raises a :class:`RikError` line naming the file and the field."""
     from pydantic import ValidationError
 
+    from rik.paths import read_json
+
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = read_json(path)
     except OSError as exc:
         raise RikError(f"{path}: cannot read it ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise RikError(f"{path}: damaged: not UTF-8 text; rik wrote it as JSON") from None
-    except ValueError as exc:
-        raise RikError(f"{path}: damaged: not JSON ({str(exc).splitlines()[0]})") from None
+    except ValueError as exc:  # too large, not UTF-8, not JSON, nested too deeply
+        raise RikError(f"{path}: damaged: not the JSON rik wrote ({str(exc).splitlines()[0]})") from None
     if not isinstance(data, dict):
         raise RikError(f"{path}: damaged: holds a JSON {type(data).__name__}, not the object rik wrote")
     try:
@@ -152,8 +152,10 @@ def _mark(folders: Folders, stage: str, key: str, record: dict[str, Any]) -> dic
 
 def read_marker(folders: Folders, stage: str, key: str) -> dict[str, Any] | None:
     """The record of a finished unit whose output is still in place, else None."""
+    from rik.paths import read_json
+
     try:
-        data = json.loads(folders.marker(stage, key).read_text(encoding="utf-8"))
+        data = read_json(folders.marker(stage, key))
     except (OSError, ValueError):
         return None
     if not isinstance(data, dict) or not all(isinstance(data.get(f), t) for f, t in MARKER_FIELDS[stage]):

@@ -21,17 +21,19 @@ def _read() -> list[dict[str, Any]]:
     """The registry's entries ([] when there is none yet); a damaged registry raises one line naming it (and the
     entry), never read as empty: a build would then write over the pointers it still holds."""
     from rik.errors import RikError
+    from rik.paths import read_json
 
     path = registry_file()
     fix = "it only points at datasets: move it away, and rebuild (or list) the datasets it named"
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = read_json(path)
     except FileNotFoundError:
         return []
     except OSError as exc:
         raise RikError(f"{path}: cannot read the registry of datasets ({exc.strerror})") from None
-    except ValueError:
-        raise RikError(f"{path}: the registry of datasets is damaged (not JSON); {fix}") from None
+    except ValueError as exc:
+        raise RikError(f"{path}: the registry of datasets is damaged (not JSON: {str(exc).splitlines()[0]}); "
+                       f"{fix}") from None
     if not isinstance(data, list):
         raise RikError(f"{path}: the registry of datasets is damaged (a JSON {type(data).__name__}, not a list); "
                        f"{fix}")
