@@ -33,6 +33,16 @@ cores skews every number. Ray is always shut down at the end.
 Run: ``uv run python benchmarks/dataset_build.py [--variants 4] [--episodes 2] [--size 64] [--max-seconds 2]
 [--skip-ray]`` (5 to 8 minutes on 2 cores shared with other work, with the defaults; ~20 s of it starting
 Ray).
+
+**Plan size** (``--plan-sizes 1000,10000,100000``, with ``--plan-only`` alone): ``make_plan`` of a spec of one
+variant (``drawer-chest-80__two_point-bow-128__normal``) x one operator x N episodes, streams ``sim`` and
+``rerendered``, 16 episodes per shard. The variant is built and checked once before (not timed), so ``make_plan``
+only re-reads its report: what is timed is the plan itself (selection, checks, one key per episode, render and
+shard), which is all ``rik dataset plan --sample 0`` and a build do before their first unit, besides loading the
+catalog. Columns: ``make_plan`` now; its unit layout alone (``rik.dataset.plan.lay_out_units``), and the layout as
+it was before (``_quadratic_layout`` below: each shard took its renders by scanning every render unit of the plan,
+comparing whole episode units), run on the same plan up to ``--old-max`` episodes (10,000: the old layout is
+quadratic, ~1 h at 100,000), with its keys compared to the new ones (byte-identical, or the run stops).
 """
 
 from __future__ import annotations
@@ -147,6 +157,92 @@ def warm_up(catalog: Any, plan: Any, root: Path, variants: Path) -> float:
     return time.perf_counter() - t0
 
 
+def _quadratic_layout(plan: Any, fronts: dict[str, str]) -> None:
+    """``make_plan``'s unit layout before it was made linear (b352c43), kept here only to measure against: the
+    shard loop scans every render unit for each shard (``r.episode in chunk``: dataclass equality of whole units)."""
+    from rik.dataset.plan import EpisodeUnit, RenderUnit, ShardUnit, export_settings
+    from rik.dataset.spec import library_versions
+    from rik.paths import json_sha256
+
+    spec = plan.spec
+    record_versions = library_versions("mujoco")
+    for v, front in fronts.items():
+        for op in spec.operators:
+            for k in range(spec.episodes_per_variant):
+                seed = spec.seed + k
+                key = json_sha256({"stage": "record", "variant": v, "variant_hash": plan.variants[v],
+                                   "front": front, "strategy": op.strategy, "params": op.params, "label": op.label,
+                                   "seed": seed, "max_seconds": spec.max_seconds, "gripper": spec.robot,
+                                   "versions": record_versions})
+                plan.episodes.append(EpisodeUnit(len(plan.episodes), v, front, op, seed, key, spec.robot))
+    render_versions = library_versions("mujoco", "mitsuba")
+    for e in plan.episodes:
+        for s in spec.streams:
+            key = json_sha256({"stage": "render", "record": e.key, "stream": plan.stream_spec(s).key,
+                               "cameras": list(spec.cameras), "versions": render_versions})
+            plan.renders.append(RenderUnit(e, s, key))
+    export_versions = library_versions("lerobot", "av")
+    size = spec.shard_episodes
+    for i in range(0, len(plan.episodes), size):
+        chunk = tuple(plan.episodes[i:i + size])
+        key = json_sha256({"stage": "shard", "episodes": [e.key for e in chunk],
+                           "renders": [r.key for r in plan.renders if r.episode in chunk],
+                           "export": export_settings(spec), "versions": export_versions})
+        plan.shards.append(ShardUnit(len(plan.shards), chunk, key))
+
+
+def plan_sizes(catalog: Any, base: Path, sizes: list[int], old_max: int) -> None:
+    """Time ``make_plan`` at each size, and the unit layout now and before (see the module docstring)."""
+    import dataclasses
+
+    from rik.dataset.plan import lay_out_units, make_plan
+    from rik.dataset.spec import load_spec
+
+    variant = "drawer-chest-80__two_point-bow-128__normal"
+    variants = base / "plan-variants"
+
+    def spec_of(n: int) -> Any:
+        path = base / f"plan-{n}.yaml"
+        path.write_text(f"repo_id: {REPO}\nvariants:\n  ids: [{variant}]\noperators:\n  - strategy: contact_rich\n"
+                        f"episodes_per_variant: {n}\nstreams: [sim, rerendered]\nshard_episodes: 16\n",
+                        encoding="utf-8")
+        return load_spec(path)
+
+    t = time.perf_counter()
+    make_plan(catalog, spec_of(1), variants_dir=variants)
+    print(f"\nplan size: variant built and checked in {time.perf_counter() - t:.1f} s (not timed); load {load()}")
+    rows = []
+    for n in sizes:
+        spec = spec_of(n)
+        t = time.perf_counter()
+        plan = make_plan(catalog, spec, variants_dir=variants)
+        total = time.perf_counter() - t
+        fronts = {e.variant: e.front for e in plan.episodes[:1]}
+        shell = dataclasses.replace(plan, episodes=[], renders=[], shards=[])
+        t = time.perf_counter()
+        lay_out_units(shell, fronts)
+        layout = time.perf_counter() - t
+        old: float | None = None
+        same = "-"
+        if n <= old_max:
+            before = dataclasses.replace(plan, episodes=[], renders=[], shards=[])
+            t = time.perf_counter()
+            _quadratic_layout(before, fronts)
+            old = time.perf_counter() - t
+            keys = [[u.key for u in units] for units in (plan.episodes, plan.renders, plan.shards)]
+            if keys != [[u.key for u in units] for units in (before.episodes, before.renders, before.shards)]:
+                raise SystemExit(f"{n} episodes: the old layout gives other keys")
+            same = "yes"
+        units = len(plan.episodes) + len(plan.renders) + len(plan.shards)
+        rows.append((n, units, total, layout, old, same))
+        print(f"  {n} episodes planned; load {load()}")
+    print(f"\n{'episodes':>9}{'units':>9}{'make_plan s':>13}{'layout s':>10}{'before s':>10}{'same keys':>11}"
+          f"{'us/episode':>12}")
+    for n, units, total, layout, old, same in rows:
+        before_text = f"{old:.2f}" if old is not None else "not run"
+        print(f"{n:>9}{units:>9}{total:>13.2f}{layout:>10.2f}{before_text:>10}{same:>11}{1e6 * total / n:>12.1f}")
+
+
 def load() -> str:
     return ", ".join(f"{x:.2f}" for x in os.getloadavg())
 
@@ -158,7 +254,19 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=64, help="image side, px")
     ap.add_argument("--max-seconds", type=float, default=2.0, help="longest episode, simulated s")
     ap.add_argument("--skip-ray", action="store_true")
+    ap.add_argument("--plan-sizes", default="", help="episode counts to plan, comma-separated (1000,10000,100000)")
+    ap.add_argument("--old-max", type=int, default=10_000, help="largest plan laid out the old way too")
+    ap.add_argument("--plan-only", action="store_true", help="only the plan-size table, no build")
     args = ap.parse_args()
+    sizes = [int(x) for x in args.plan_sizes.split(",") if x.strip()]
+    if args.plan_only:
+        from rik.registry.load import load_catalog
+
+        print(f"load average at start: {load()} ({os.cpu_count()} CPU cores)")
+        with tempfile.TemporaryDirectory(prefix="dataset-plan-") as tmp:
+            plan_sizes(load_catalog(), Path(tmp), sizes or [1000, 10_000, 100_000], args.old_max)
+        print(f"load average now {load()}")
+        return
 
     from rik.dataset.engines import local_engine
     from rik.dataset.plan import make_plan
@@ -241,6 +349,9 @@ def main() -> None:
     print(f"datasets of {', '.join(digests)}: {'byte-identical' if same else 'DIFFER'} "
           f"(sha256 of every file but meta/rik_build.json: "
           + ", ".join(f"{k.split()[0]} {v[:12]}" for k, v in digests.items()) + ")")
+    if sizes:
+        with tempfile.TemporaryDirectory(prefix="dataset-plan-") as tmp:
+            plan_sizes(catalog, Path(tmp), sizes, args.old_max)
     print(f"\ntotal run time {time.perf_counter() - started:.0f} s; load average now {load()} (other work on the "
           "machine skews every number)")
 
