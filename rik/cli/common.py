@@ -42,14 +42,23 @@ DEFAULT_WORKERS = max(1, min(8, os.cpu_count() or 1))
 
 
 def _check_workers(workers: int) -> int:
-    """``--workers``, refused (one line) above what the machine can hold, before the command does any work."""
+    """``--workers``, refused (one line) below 1 or above what the machine can hold, before the command does any
+    work. (Not typer's ``min=1``: that prints a usage box of many lines.)"""
     from rik.assets.workers import check_workers
 
     return check_workers(workers)
 
 
-WorkersOpt = Annotated[int, typer.Option("--workers", "-j", min=1, callback=_check_workers,
-                                         help="Parallel processes.")]
+def check_at_least_one_worker(workers: int) -> int:
+    """``--workers`` of a command whose workers may run elsewhere (a Ray cluster): refused (one line) below 1 only."""
+    from rik.errors import RikError
+
+    if workers < 1:
+        raise RikError(f"--workers {workers}: give 1 or more worker processes")
+    return workers
+
+
+WorkersOpt = Annotated[int, typer.Option("--workers", "-j", callback=_check_workers, help="Parallel processes.")]
 
 
 class OutputFormat(StrEnum):

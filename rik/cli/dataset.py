@@ -10,6 +10,7 @@ import typer
 from rik.cli.common import (
     DEFAULT_WORKERS,
     CatalogOption,
+    check_at_least_one_worker,
     console,
     overlays,
     print_json,
@@ -31,7 +32,8 @@ SpecArg = Annotated[Path, typer.Argument(help="The dataset spec (YAML; docs/data
                                          show_default=False)]
 VariantsOpt = Annotated[Path, typer.Option("--variants", help="Folder of built variants (missing ones are built "
                                            "there first).")]
-WorkersOpt = Annotated[int, typer.Option("--workers", "-j", min=1, help="Local worker processes.")]
+WorkersOpt = Annotated[int, typer.Option("--workers", "-j", callback=check_at_least_one_worker,
+                                         help="Local worker processes.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")]
 
 

@@ -15,6 +15,7 @@ from rik.cli.common import (
     HandleTypeOpt,
     RobotOpt,
     WorkersOpt,
+    _check_workers,
     console,
     overlays,
     progress_bar,
@@ -58,8 +59,8 @@ def record(variant: Annotated[str | None, typer.Argument(
                                                        "(default smooth,normal,high).", show_default=False)] = None,
            kinds: Annotated[str | None, typer.Option("--kinds", help="With --split: comma-separated front kinds "
                                                      "(default drawer).", show_default=False)] = None,
-           workers: Annotated[int, typer.Option("--workers", "-j", min=1, help="With --split: episodes in this "
-                                                "many processes.")] = 1,
+           workers: Annotated[int, typer.Option("--workers", "-j", callback=_check_workers,
+                                                help="With --split: episodes in this many processes.")] = 1,
            robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """Record episodes of a scripted strategy on a variant, or on variants drawn from a catalog split (--split),
     into --out/<id>/ (meta.json, states.parquet)."""
