@@ -55,6 +55,11 @@ control (on by default), in its AVX-512 code, reads memory it never wrote: the s
 and pixels from one process to the next (with ``MALLOC_PERTURB_`` at will). Without it, or without AVX-512, x264 is
 repeatable; the cost is bigger files at the same CRF (measured +14..37% at 256x256, with +0.8..1.7 dB PSNR) and no
 loss of speed. libsvtav1 and hevc were repeatable as they are."""
+MIN_WIDTH: dict[str, int] = {"libsvtav1": 25}
+"""Narrowest frame, px, that a codec encodes. SVT-AV1 (lerobot's PyAV build) dies of a floating-point exception
+(SIGFPE, which takes the worker process with it) on frames less than 25 pixels wide, at any height (measured: 24x24,
+24x64, 24x4096, 16x16 and 8x64 crash; 25x8, 25x64, 26x2048, 32x4 and 64x8 encode); h264 and hevc take rik's
+smallest size (8 a side)."""
 DONE = "DONE"
 PLAN = "plan.json"
 
@@ -128,6 +133,21 @@ def _check_spec(spec: ExportSpec) -> None:
         raise RikError(f"--repo-id '{spec.repo_id}': give it as OWNER/NAME, e.g. local/rik-drawers")
     if spec.fps is not None and not 1 <= spec.fps <= MAX_FPS:
         raise RikError(f"--fps {spec.fps}: give 1 to {MAX_FPS} Hz")
+    from rik.render.streams import MAX_SPP
+
+    if "rerendered" in spec.streams and not 1 <= spec.spp <= MAX_SPP:  # as StreamSpec says, before the codec's size
+        raise RikError(f"--spp {spec.spp}: give 1 to {MAX_SPP} samples per pixel")
+    check_codec_size(spec)
+
+
+def check_codec_size(spec: ExportSpec) -> None:
+    """Refuse (one line) an image size that ``spec.codec`` cannot encode (:data:`MIN_WIDTH`), before any work: the
+    encoder would otherwise crash its process once the frames are rendered."""
+    least = MIN_WIDTH.get(spec.codec)
+    if spec.streams and least is not None and spec.width < least:
+        raise RikError(f"--res {spec.width}x{spec.height}: --codec {spec.codec} encodes frames at least {least} "
+                       f"pixels wide (narrower ones crash its encoder); give a width of {least} or more, or "
+                       f"--codec h264")
 
 
 def _episode_fps(metas: dict[Path, EpisodeMeta], spec: ExportSpec) -> int:
@@ -223,6 +243,7 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
 
     from rik.exporters.lerobot_check import check_frame_counts
 
+    check_codec_size(spec)  # rik dataset's shards come here without export_lerobot's checks
     quiet_encoders()
     layout = sources_layout(catalog, sources)
     if root.exists():
@@ -337,6 +358,10 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
             raise RikError(f"{partial_dir}: the interrupted export there was of other episodes or settings; delete "
                            "it, or run it again with the same ones")
 
+    if spec.streams:
+        from rik.render.episodes import check_renders_outside
+
+        check_renders_outside(renders, {d: m.id for d, m in metas.items()}, "--renders")
     # 1. The image streams, rendered where missing (resumable per frame), all at the export's size.
     cameras: list[str] | None = list(spec.cameras) or None
     stream_dirs: dict[Path, dict[str, Path]] = {d: {} for d in dirs}
