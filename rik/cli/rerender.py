@@ -36,7 +36,7 @@ def _run(episodes: list[Path], kind: StreamKind, res: str, cameras: str | None, 
          catalog: list[Path] | None, sheet: bool = False, **quality: Unpack[_Quality]) -> None:
     from rik.errors import check_folder
     from rik.registry.load import load_catalog
-    from rik.render.episodes import render_episodes
+    from rik.render.episodes import check_renders_outside, render_episodes
     from rik.render.streams import StreamSpec, parse_resolution
     from rik.sim.episode import find_episodes, read_meta
 
@@ -50,6 +50,7 @@ def _run(episodes: list[Path], kind: StreamKind, res: str, cameras: str | None, 
         use_variant(spec.variant)  # an unsupported or unavailable variant fails before any work
     dirs = find_episodes(episodes)
     metas = {d: read_meta(d) for d in dirs}
+    check_renders_outside(out, {d: m.id for d, m in metas.items()})
     by_id = {m.id: d for d, m in metas.items()}
     total = sum(m.steps + 1 for m in metas.values())
     cams = [c.strip() for c in cameras.split(",") if c.strip()] if cameras else None

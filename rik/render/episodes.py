@@ -21,6 +21,18 @@ if TYPE_CHECKING:
     from rik.sim.scene import SimScene
 
 
+def check_renders_outside(renders: Path, episodes: dict[Path, str], option: str = "--out") -> None:
+    """Refuse (one line) a renders folder that is an episode folder or inside one, or whose stream folder of an
+    episode (``renders/<id>``) would be that episode's folder: episodes are only read, never written into.
+    ``episodes`` maps each episode folder to its id."""
+    root = Path(renders).resolve()
+    for d, episode_id in episodes.items():
+        home = Path(d).resolve()
+        if root.is_relative_to(home) or (root / episode_id).resolve().is_relative_to(home):
+            raise RikError(f"{option} {renders}: would write the streams inside episode folder {d}; rik never writes "
+                           f"into an episode: give {option} outside the episodes, e.g. renders")
+
+
 @dataclass(frozen=True)
 class StreamResult:
     episode: str
@@ -144,6 +156,7 @@ def render_episodes(catalog: Catalog, episodes: Sequence[Path], spec: StreamSpec
     from rik.sim.episode import read_meta
 
     metas = {str(d): read_meta(d) for d in episodes}  # every episode readable before any work starts
+    check_renders_outside(renders, {Path(d): m.id for d, m in metas.items()})
     cams = tuple(cameras) if cameras else None
     if workers > 1 and len(episodes) > 1:
         fn = partial(_render_one, spec, Path(renders), Path(variants), cams)
