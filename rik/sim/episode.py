@@ -21,7 +21,16 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import MadeFolder, check_replaceable, holds_only, inside, json_object, json_sha256, write_atomic
+from rik.paths import (
+    MadeFolder,
+    check_replaceable,
+    holds_only,
+    inside,
+    json_object,
+    json_sha256,
+    read_json,
+    write_atomic,
+)
 from rik.sim.outcome import classify
 from rik.sim.scene import SimScene
 
@@ -33,6 +42,8 @@ if TYPE_CHECKING:
 
 DEFAULT_EPISODES = Path("episodes")
 META = "meta.json"
+MAX_META_BYTES = 2**20
+"""Largest ``meta.json`` read (:func:`read_meta`): rik writes a few kB."""
 STATES = "states.parquet"
 STAGING_PREFIX = ".staging-"
 
@@ -226,11 +237,16 @@ def read_meta(directory: Path) -> EpisodeMeta:
     if not file.is_file():
         raise EpisodeError(f"{file}: no such file; {directory} is not a recorded episode")
     try:
-        data = json.loads(file.read_text(encoding="utf-8"))
+        data = read_json(file, MAX_META_BYTES)
         meta = EpisodeMeta.model_validate(data)
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         line = f" (line {exc.lineno})" if isinstance(exc, json.JSONDecodeError) else ""
         raise EpisodeError(f"{file}: not valid JSON{line}: {getattr(exc, 'msg', exc)}") from None
+    except ValueError as exc:  # larger than MAX_META_BYTES, or nested too deeply: refused before it is read whole
+        raise EpisodeError(f"{file}: {exc}, not an episode's meta.json (rik writes a few kB); record the episode "
+                           "again, or restore the file") from None
+    except OSError as exc:
+        raise EpisodeError(f"{file}: cannot be read ({exc.strerror})") from None
     except ValidationError as exc:
         err = exc.errors()[0]
         where = ".".join(str(p) for p in err["loc"]) or "(top level)"
