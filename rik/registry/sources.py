@@ -63,15 +63,75 @@ def display_path(path: Path) -> str:
         return str(path)
 
 
+MAX_CATALOG_FILES = 1000
+"""Most YAML files one catalog folder may hold (:func:`catalog_files`)."""
+MAX_CATALOG_DEPTH = 8
+"""Deepest level of folders below a catalog folder that is searched for YAML files."""
+MAX_CATALOG_ENTRIES = 100_000
+"""Most entries (files and folders) looked at below a catalog folder: ``--catalog /`` stops here, not at the end of
+the file system."""
+MAX_CATALOG_BYTES = 16 * 2**20
+"""Largest catalog YAML file read (rik's built-in catalog is a few hundred kB in all)."""
+
+
 def catalog_files(path: Path) -> list[Path]:
     """The YAML files of a catalog: the file itself, or every ``*.yaml``/``*.yml`` below a directory, sorted
-    (hidden files and directories, such as an import in progress, are skipped)."""
+    (hidden files and directories, such as an import in progress, are skipped; so are symbolic links to folders,
+    which are never followed). The walk is bounded (:data:`MAX_CATALOG_FILES` files, :data:`MAX_CATALOG_DEPTH`
+    levels, :data:`MAX_CATALOG_ENTRIES` entries looked at) and so is each file (:data:`MAX_CATALOG_BYTES`): past a
+    bound, one :class:`CatalogError` naming the folder or file, before any file is read."""
     if path.is_dir():
-        return sorted(p for p in path.rglob("*") if p.suffix in (".yaml", ".yml") and p.is_file()
-                      and not any(part.startswith(".") for part in p.relative_to(path).parts))
-    if path.is_file():
-        return [path]
-    raise CatalogError(display_path(path), None, None, "no such catalog file or directory")
+        files = _walk_catalog(path)
+    elif path.is_file():
+        files = [path]
+    else:
+        raise CatalogError(display_path(path), None, None, "no such catalog file or directory")
+    for file in files:
+        _check_size(file)
+    return files
+
+
+def _walk_catalog(root: Path) -> list[Path]:
+    shown = display_path(root)
+    advice = "give --catalog the folder (or file) of the catalog itself"
+    found: list[Path] = []
+    seen = 0
+    todo = [(root, 0)]
+    while todo:
+        folder, depth = todo.pop()
+        try:
+            entries = list(os.scandir(folder))
+        except OSError as exc:
+            raise CatalogError(display_path(folder), None, None, f"cannot read this catalog folder "
+                               f"({exc.strerror})") from None
+        seen += len(entries)
+        if seen > MAX_CATALOG_ENTRIES:
+            raise CatalogError(shown, None, None, f"holds more than {MAX_CATALOG_ENTRIES:,} files and folders, too "
+                               f"many for a catalog; {advice}")
+        for e in entries:
+            if e.name.startswith("."):
+                continue
+            if e.is_dir(follow_symlinks=False):
+                if depth + 1 > MAX_CATALOG_DEPTH:
+                    raise CatalogError(shown, None, None, f"has folders more than {MAX_CATALOG_DEPTH} levels deep "
+                                       f"({display_path(Path(e.path))}), too deep for a catalog; {advice}")
+                todo.append((Path(e.path), depth + 1))
+            elif e.name.endswith((".yaml", ".yml")) and e.is_file():
+                found.append(Path(e.path))
+                if len(found) > MAX_CATALOG_FILES:
+                    raise CatalogError(shown, None, None, f"holds more than {MAX_CATALOG_FILES:,} YAML files, too "
+                                       f"many for a catalog; {advice}")
+    return sorted(found)
+
+
+def _check_size(file: Path) -> None:
+    try:
+        size = file.stat().st_size
+    except OSError as exc:
+        raise CatalogError(display_path(file), None, None, f"cannot read the file ({exc.strerror})") from None
+    if size > MAX_CATALOG_BYTES:
+        raise CatalogError(display_path(file), None, None, f"{size / 2**20:,.0f} MiB, larger than the "
+                           f"{MAX_CATALOG_BYTES // 2**20} MiB a catalog file may have; nothing was read")
 
 
 def read_file(path: Path, builtin: bool) -> list[RawEntry]:
@@ -81,7 +141,13 @@ def read_file(path: Path, builtin: bool) -> list[RawEntry]:
     loader = _safe_loader()
     shown = display_path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        with open(path, "rb") as handle:
+            raw = handle.read(MAX_CATALOG_BYTES + 1)
+        if len(raw) > MAX_CATALOG_BYTES:  # grown since catalog_files checked it
+            _check_size(path)
+            raise CatalogError(shown, None, None, f"larger than the {MAX_CATALOG_BYTES // 2**20} MiB a catalog "
+                               "file may have")
+        text = raw.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise CatalogError(shown, None, None, f"cannot read the file ({exc.__class__.__name__}: {exc})") from None
     try:
