@@ -40,6 +40,14 @@ MAX_FACES = 500_000
 handles (172 to about 4,000) and well above a scan decimated for simulation (tens of thousands). Cleaning, ray
 casts and CoACD grow with the count: a 5.2-million-triangle STL ran for minutes, then the process died without
 a message (issue 16), so larger files are refused at once, before any work."""
+BYTES_PER_FACE = 512
+"""Largest file, per triangle of ``--max-faces``, that rik reads (:func:`check_file_size`): a binary STL takes 50
+bytes a triangle, an ASCII STL about 250, an OBJ or PLY written without shared corners (each triangle its own three
+vertices, normals and texture coordinates) about 400, a GLB about 120."""
+BYTES_ALLOWANCE = 64 * 2**20
+"""Added to the bound for headers, materials and textures (a GLB's pictures)."""
+GLTF_SIZES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
+GLTF_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 
 
 @dataclass(frozen=True)
@@ -54,8 +62,86 @@ def mesh_sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _load(path: Path, suffixes: tuple[str, ...], force: str, wrong_type: str) -> Any:
-    """``trimesh.load`` with one-line errors for a wrong file type, a missing file and a damaged one."""
+def largest_file(max_faces: int) -> int:
+    """Bytes of the largest mesh file read for ``--max-faces max_faces`` (:data:`BYTES_PER_FACE`)."""
+    return BYTES_PER_FACE * max_faces + BYTES_ALLOWANCE
+
+
+def check_file_size(path: Path, max_faces: int) -> None:
+    """Refuse, before trimesh reads it, a mesh file larger than :func:`largest_file`, or a glTF/GLB whose JSON
+    declares more data (buffers, accessors) than that: trimesh allocates what they declare (a 16-byte sparse
+    accessor of 10^10 points asks for 112 GiB)."""
+    shown = display_path(path)
+    most = largest_file(max_faces)
+    size = path.stat().st_size
+    how = (f"--max-faces {max_faces:,} allows {most / 2**20:,.0f} MiB ({BYTES_PER_FACE} bytes a triangle, plus "
+           f"{BYTES_ALLOWANCE // 2**20} MiB for headers and textures)")
+    if size > most:
+        raise RikError(f"{shown}: {size / 2**20:,.0f} MiB, larger than {how}; nothing was read: simplify the mesh, "
+                       "or raise --max-faces")
+    if path.suffix.lower() in (".glb", ".gltf"):
+        declared = _gltf_declared_bytes(path, size)
+        if declared > most:
+            raise RikError(f"{shown}: its glTF JSON declares {declared / 2**20:,.0f} MiB of buffers and accessors, "
+                           f"more than {how}; nothing was loaded: export the file again, or raise --max-faces")
+
+
+def _gltf_declared_bytes(path: Path, size: int) -> int:
+    """Bytes of data a glTF (.gltf) or GLB file declares: its buffers and accessors (the larger sum), and the
+    external files its buffers name; a GLB JSON chunk longer than the file is refused."""
+    import json
+    import struct
+
+    shown = display_path(path)
+    try:
+        with open(path, "rb") as handle:
+            if path.suffix.lower() == ".glb":
+                head = handle.read(20)
+                if len(head) < 20 or head[:4] != b"glTF":
+                    raise RikError(f"{shown}: not a GLB file (no glTF header)")
+                length = struct.unpack("<I", head[12:16])[0]
+                if length > size - 20:
+                    raise RikError(f"{shown}: its JSON chunk declares {length:,} bytes, more than the file holds "
+                                   f"({size:,}); the file is damaged: export it again")
+                raw = handle.read(length)
+            else:
+                raw = handle.read()  # size already bounded
+        doc = json.loads(raw.decode("utf-8"))
+    except RikError:
+        raise
+    except (OSError, ValueError, RecursionError) as exc:
+        raise RikError(f"{shown}: cannot read its glTF JSON ({exc.__class__.__name__}: {exc})") from None
+    if not isinstance(doc, dict):
+        raise RikError(f"{shown}: its glTF JSON is not an object")
+
+    def items(key: str) -> list[dict[str, Any]]:
+        value = doc.get(key)
+        return [v for v in value if isinstance(v, dict)] if isinstance(value, list) else []
+
+    def number(value: Any) -> int:
+        return value if isinstance(value, int) and value > 0 else 0
+
+    buffers = 0
+    for b in items("buffers"):
+        buffers += number(b.get("byteLength"))
+        uri = b.get("uri")
+        if isinstance(uri, str) and not uri.startswith("data:"):
+            try:
+                buffers += (path.parent / uri).stat().st_size  # trimesh reads the file whole
+            except (OSError, ValueError):
+                pass  # a missing file: trimesh says so
+    accessors = 0
+    for a in items("accessors"):
+        kind, shape = a.get("componentType"), a.get("type")
+        accessors += (number(a.get("count")) * (GLTF_SIZES.get(kind, 4) if isinstance(kind, int) else 4)
+                      * (GLTF_WIDTH.get(shape, 16) if isinstance(shape, str) else 16))
+    return max(buffers, accessors)
+
+
+def _load(path: Path, suffixes: tuple[str, ...], force: str, wrong_type: str, max_faces: int | None = MAX_FACES
+          ) -> Any:
+    """``trimesh.load`` with one-line errors for a wrong file type, a missing file, one too large for
+    ``max_faces`` (:func:`check_file_size`) and a damaged one."""
     import trimesh
 
     shown = display_path(path)
@@ -63,6 +149,8 @@ def _load(path: Path, suffixes: tuple[str, ...], force: str, wrong_type: str) ->
         raise RikError(f"{shown}: {wrong_type}")
     if not path.is_file():
         raise RikError(f"{shown}: no such file")
+    if max_faces is not None:
+        check_file_size(path, max_faces)
     try:
         return trimesh.load(path, force=force, process=False)
     except Exception as exc:  # trimesh raises many types for a damaged file
@@ -87,13 +175,15 @@ def check_size(faces: int, shown: str, max_faces: int) -> None:
                        f"simplify it, or raise the limit with --max-faces {faces}")
 
 
-def read_mesh(path: Path) -> trimesh.Trimesh:
-    """Read a mesh file as one triangle mesh (scenes are flattened); clear errors for every way it can fail."""
+def read_mesh(path: Path, max_faces: int | None = MAX_FACES) -> trimesh.Trimesh:
+    """Read a mesh file as one triangle mesh (scenes are flattened); clear errors for every way it can fail. A file
+    larger than ``max_faces`` allows (:func:`check_file_size`) is refused unread; None: no bound (a registered
+    mesh, checked by its sha256)."""
     import trimesh
 
     shown = display_path(path)
     loaded = _load(path, SUFFIXES, "mesh", f"unknown mesh file type '{path.suffix or '(none)'}'; rik reads "
-                   + ", ".join(SUFFIXES))
+                   + ", ".join(SUFFIXES), max_faces)
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise RikError(f"{shown}: the mesh is empty (no triangles)")
     check_finite(loaded, shown)
@@ -107,7 +197,7 @@ def read_user_mesh(path: Path, sha256: str) -> trimesh.Trimesh:
     if mesh_sha256(path) != sha256:
         raise RikError(f"{display_path(path)}: the mesh file changed since it was imported (sha256 differs from "
                        "generator.sha256); import it again")
-    return read_mesh(path)
+    return read_mesh(path, None)  # its sha256 matched: the file rik wrote, within the --max-faces it was given
 
 
 def clean(mesh: trimesh.Trimesh, shown: str) -> trimesh.Trimesh:
@@ -224,6 +314,25 @@ Prepare = Callable[[Path], None]
 directory: load the catalog with it as the last overlay. Files it writes there are moved in with the entry."""
 
 
+def check_extras(catalog_dir: Path, extras: Path | None) -> None:
+    """Refuse (one line), before any work, an import whose pictures (``extras``, a folder relative to
+    ``catalog_dir``) would go where something already is: rik never writes over a file it did not make there."""
+    if extras is None:
+        return
+    folder = catalog_dir / extras
+    if not os.path.lexists(folder):
+        return
+    try:
+        names = sorted(os.listdir(folder)) if folder.is_dir() and not folder.is_symlink() else [folder.name]
+    except OSError:
+        names = [folder.name]
+    if names:
+        shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+        raise RikError(f"{display_path(folder)}: already holds {shown}, where this import writes its pictures; rik "
+                       "writes only new files into the catalog folder: move or remove it, or choose another --id "
+                       "(nothing was read or written)")
+
+
 def _register(catalog_dir: Path, stem: str, meshes: dict[Path, trimesh.Trimesh],
               yaml_text: Callable[[dict[Path, str]], str], what: str, prepare: Prepare | None = None) -> Path:
     """Add ``<stem>.yaml`` and ``meshes`` (paths relative to ``catalog_dir``) to the user catalog. Nothing is left
@@ -252,7 +361,11 @@ def _register(catalog_dir: Path, stem: str, meshes: dict[Path, trimesh.Trimesh],
         if prepare is not None:
             prepare(tmp)
         extras = sorted(p.relative_to(tmp) for p in tmp.rglob("*") if p.is_file() and p.relative_to(tmp) != yaml_rel
-                        and p.relative_to(tmp) not in meshes)  # what prepare wrote (pictures); replaced if there
+                        and p.relative_to(tmp) not in meshes)  # what prepare wrote (pictures)
+        for rel in extras:  # never over a file rik did not make (one made meanwhile: check_extras ran first)
+            if os.path.lexists(catalog_dir / rel):
+                raise RikError(f"{display_path(catalog_dir / rel)}: already exists, and rik writes only new files into "
+                               f"the catalog folder; move or remove it, then import again (nothing was registered)")
         order = (*extras, *meshes, yaml_rel)  # the YAML last: it is what makes the entry visible
         for rel in order:
             folder = (catalog_dir / rel).parent
@@ -274,9 +387,10 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
                   clearance: tuple[float, float] | None = None, grip_diameter: float | None = None,
                   mount: str | None = None, edge: str = "top", mass: float | None = None,
                   density: float = DEFAULT_DENSITY, licence: str = "LicenseRef-user", max_faces: int = MAX_FACES,
-                  prepare: Prepare | None = None) -> ImportedHandle:
+                  prepare: Prepare | None = None, extras: Path | None = None) -> ImportedHandle:
     """Read ``path``, normalise it and register it in ``catalog_dir`` (created if needed). A file of more than
-    ``max_faces`` triangles is refused before any work.
+    ``max_faces`` triangles is refused before any work, and so is an ``extras`` folder (relative to
+    ``catalog_dir``: where ``prepare`` writes pictures) that already holds anything.
 
     Nothing is left behind on failure: files are written to a hidden directory inside ``catalog_dir``, the whole
     catalog (built-in + every overlay file already there + the new one) is validated, ``prepare`` (the
@@ -287,7 +401,12 @@ def import_handle(path: Path, *, handle_type: str, design_id: str, size: str, ca
     shown = display_path(path)
     if not design_id.startswith(f"{handle_type}/"):
         raise RikError(f"--id {design_id}: a {handle_type} design's id must start with '{handle_type}/'")
-    mesh = read_mesh(path)
+    yaml_file = catalog_dir / f"{design_id.replace('/', '__')}.yaml"
+    if yaml_file.exists():  # as _register says, before any work
+        raise RikError(f"{display_path(yaml_file)} already exists: design {design_id} was imported before; choose "
+                       "another --id or delete the files")
+    check_extras(catalog_dir, extras)
+    mesh = read_mesh(path, max_faces)
     check_size(len(mesh.faces), shown, max_faces)
     mesh = clean(mesh, shown)
     mesh = scale_to_metres(mesh, units, handle_type, shown)
@@ -326,13 +445,14 @@ def read_mapping(path: Path) -> BaseUnitMapping:
     return read_yaml_model(path, BaseUnitMapping, "mapping file")
 
 
-def node_meshes(path: Path, nodes: dict[str, str], mapping_file: Path) -> dict[str, trimesh.Trimesh]:
+def node_meshes(path: Path, nodes: dict[str, str], mapping_file: Path, max_faces: int = MAX_FACES
+                ) -> dict[str, trimesh.Trimesh]:
     """For each ``field -> node name``, the node's geometry and its descendants', in the file's world frame."""
     import trimesh
 
     shown = display_path(path)
     scene = _load(path, (".glb", ".gltf"), "scene", "a base unit is imported from a .glb or .gltf file with named "
-                  "nodes")
+                  "nodes", max_faces)
     graph = scene.graph
     parents = graph.transforms.parents
     names = sorted(n for n in graph.nodes if n != graph.base_frame)
@@ -394,7 +514,7 @@ def import_base_unit(path: Path, mapping_path: Path, *, unit_id: str, catalog_di
     mapping = read_mapping(mapping_path)
     fields = {"carcass.node": mapping.carcass.node,
               **{f"fronts.{i}.node": f.node for i, f in enumerate(mapping.fronts)}}
-    raw = node_meshes(path, fields, mapping_path)
+    raw = node_meshes(path, fields, mapping_path, max_faces)
     check_size(sum(len(m.faces) for m in raw.values()), display_path(path), max_faces)
     rotation = _frame_rotation(mapping.up, mapping.front, display_path(mapping_path))
     parts: dict[str, Any] = {}

@@ -237,7 +237,8 @@ def import_(
         "rik-catalog"),
     # the default is rik.assets.importer.MAX_FACES, written out so that `rik --help` does not import the importer
     max_faces: Annotated[int, typer.Option(min=1, help="Refuse files with more triangles than this (CoACD and the "
-                                           "checks would run for minutes and may run out of memory).")] = 500_000,
+                                           "checks would run for minutes and may run out of memory), and files "
+                                           "larger than 512 bytes per triangle plus 64 MiB (unread).")] = 500_000,
     seed: SeedOpt = 0,
     catalog: CatalogOption = None,
 ) -> None:
@@ -277,7 +278,8 @@ def import_(
     imported = import_handle(file, handle_type=handle_type.value, design_id=design_id, size=size_label,
                              catalog_dir=catalog_dir, name=name, finish=finish, units=units.value,
                              out_axis=out_axis.value, long_axis=long_axis.value, hole_spacing=hole_spacing,
-                             clearance=clearance, mass=mass, max_faces=max_faces, prepare=decompose)
+                             clearance=clearance, mass=mass, max_faces=max_faces, prepare=decompose,
+                             extras=picture_dir(Path("pictures"), handle_id))
     con = console()
     g = imported.geometry
     con.print(f"registered {imported.handle_id} in {imported.yaml_path} (mesh {imported.mesh_path}): "
