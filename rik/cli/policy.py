@@ -62,7 +62,7 @@ def eval_policy(
     trained on an arm's export runs with --robot and that arm (its joint actions); scripted strategies run with any
     robot."""
     from rik.errors import RikError
-    from rik.evaluation.evaluate import EvalSpec, finished_rows, prepare, run_eval, slug, write_tables
+    from rik.evaluation.evaluate import EvalSpec, check_eval_out, finished_rows, prepare, run_eval, slug, write_tables
     from rik.registry.load import load_catalog
 
     if label and len(policies) > 1:
@@ -77,6 +77,7 @@ def eval_policy(
     labels = [s.label for s in specs]
     if len(set(labels)) < len(labels):
         raise RikError(f"two policies have the same name ({', '.join(labels)}): give them different run folders")
+    check_eval_out(out, [slug(s.label) for s in specs] if len(specs) > 1 else [])
     con = console()
     every: list[dict[str, Any]] = []
     for spec in specs:

@@ -249,6 +249,33 @@ def _episode_item(spec_json: str, video_root: str, threads: int | None, catalog:
     return run_episode(EvalSpec(**json.loads(spec_json)), seed, Path(video_root) if film else None)
 
 
+EVAL_FILES = ("table.md", "episodes.csv", "eval_info.json", "success.png", "videos")
+"""What ``rik eval`` writes into ``--out`` (and, with several policies, into a folder per policy there)."""
+
+
+def _is_eval(folder: Path) -> bool:
+    """Whether ``folder`` holds an earlier rik eval's output: its ``eval_info.json`` with rik's rows and settings."""
+    from rik.paths import json_object
+
+    info = json_object(folder / "eval_info.json")
+    return info is not None and isinstance(info.get("rik"), dict) and "spec" in info["rik"]
+
+
+def check_eval_out(out: Path, policy_folders: Sequence[str] = ()) -> None:
+    """Refuse (one line), before any episode, an ``--out`` (or a policy's folder in it, ``policy_folders``) where a
+    file rik eval writes (:data:`EVAL_FILES`) is there and the folder is not an earlier rik eval's output: a rerun
+    may write over its own results, never a user's file."""
+    import os
+
+    out = Path(out)
+    ours_below = any(_is_eval(out / f) for f in policy_folders)
+    for folder in (out, *(out / f for f in policy_folders)):
+        taken = [name for name in EVAL_FILES if os.path.lexists(folder / name)]
+        if taken and not (_is_eval(folder) or (folder == out and ours_below)):
+            raise RikError(f"{folder / taken[0]}: exists and was not written by rik eval (no eval_info.json of its "
+                           "own beside it), so nothing was run: choose another --out, or move it away yourself")
+
+
 def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
              progress: Callable[[dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
     """Run every episode of ``spec`` (in ``workers`` processes, one PyTorch thread each) and write the outputs
@@ -259,6 +286,7 @@ def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
     from rik.combinator.build import require_variants
     from rik.sim.draw import Draw
 
+    check_eval_out(out)
     draw = Draw(spec.split, spec.handle_types, spec.presets, spec.kinds)
     seeds = spec.seeds()
     require_variants(catalog, (draw.episode(catalog, s).variant for s in seeds), Path(spec.variants),
