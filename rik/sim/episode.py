@@ -242,15 +242,15 @@ def read_meta(directory: Path) -> EpisodeMeta:
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         line = f" (line {exc.lineno})" if isinstance(exc, json.JSONDecodeError) else ""
         raise EpisodeError(f"{file}: not valid JSON{line}: {getattr(exc, 'msg', exc)}") from None
-    except ValueError as exc:  # larger than MAX_META_BYTES, or nested too deeply: refused before it is read whole
-        raise EpisodeError(f"{file}: {exc}, not an episode's meta.json (rik writes a few kB); record the episode "
-                           "again, or restore the file") from None
     except OSError as exc:
         raise EpisodeError(f"{file}: cannot be read ({exc.strerror})") from None
     except ValidationError as exc:
         err = exc.errors()[0]
         where = ".".join(str(p) for p in err["loc"]) or "(top level)"
         raise EpisodeError(f"{file}: field '{where}': {err['msg']}") from None
+    except ValueError as exc:  # larger than MAX_META_BYTES, or nested too deeply: refused before it is read whole
+        raise EpisodeError(f"{file}: {exc}, not an episode's meta.json (rik writes a few kB); record the episode "
+                           "again, or restore the file") from None
     if meta.format >= 2 and meta.meta_sha256 != meta_digest(data):
         raise EpisodeError(f"{file}: edited or corrupt (its fields no longer match their meta_sha256); record the "
                            "episode again, or restore the file")
