@@ -286,7 +286,7 @@ def test_resume_on_a_folder_that_is_not_a_rik_export(rik, episode: Path, work: P
     out.mkdir()
     (out / "cat.jpg").write_bytes(b"\xff\xd8")
     msg = one_line(rik("export-lerobot", str(episode.parent), "--out", str(out), *EXPORT, "--resume"))
-    assert msg == (f"{out}: exists and is not a rik export (no meta/info.json and rik_card.json), so there is nothing "
+    assert msg == (f"{out}: exists and is not a rik export (no meta/info.json and meta/rik_card.json), so there is nothing "
                    "to resume there; choose another --out")
     assert tree(out) == ["cat.jpg"]
 

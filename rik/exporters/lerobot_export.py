@@ -322,8 +322,8 @@ def _check_out_free(out: Path, resume: bool) -> None:
     if _is_rik_export(out):
         raise RikError(f"{out}: the export is already complete (nothing to resume); choose another --out to export "
                        "again")
-    raise RikError(f"{out}: exists and is not a rik export (no meta/info.json and meta/rik_card.json), so there is nothing "
-                   "to resume there; choose another --out")
+    raise RikError(f"{out}: exists and is not a rik export (no meta/info.json and meta/rik_card.json), so there is "
+                   "nothing to resume there; choose another --out")
 
 
 def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: ExportSpec, *, renders: Path,
