@@ -183,6 +183,19 @@ def check_robot(catalog: Catalog, spec: DatasetSpec, source: str) -> None:
         raise _field_error(source, "robot", exc) from None
 
 
+def check_codec(spec: DatasetSpec, source: str) -> None:
+    """The spec's image size is one its codec encodes (libsvtav1 crashes on frames under 25 px wide), checked
+    before any work instead of when the first shard is encoded."""
+    from rik.exporters.lerobot_export import MIN_WIDTH
+
+    least = MIN_WIDTH.get(spec.codec)
+    width, height = spec.size
+    if spec.streams and least is not None and width < least:
+        raise RikError(f"{source}, field 'resolution': codec {spec.codec} encodes frames at least {least} pixels wide "
+                       f"(narrower ones crash its encoder), got {width}x{height}; give a width of {least} or more, or "
+                       "codec: h264")
+
+
 def check_cameras(spec: DatasetSpec, source: str) -> None:
     """The spec's cameras exist in rik's scenes."""
     from rik.sim.observation import CAMERAS
@@ -215,6 +228,7 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
     check_robot(catalog, spec, source)
     check_operators(spec, source)
     check_cameras(spec, source)
+    check_codec(spec, source)
     chosen = select_variants(catalog, spec, source)
     check_size(spec, len(chosen), source)
     collision = resolve_collision(variants_dir)
