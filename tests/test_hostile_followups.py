@@ -207,3 +207,35 @@ def test_workers_below_one_is_one_line(rik, tmp_path: Path, monkeypatch, command
     msg = refused(rik(*command, "--workers", workers))
     assert msg.startswith(f"--workers {workers}: give 1 ")
     assert tree(tmp_path) == []
+
+
+def test_a_catalog_or_mapping_file_nested_too_deeply_or_an_alias_bomb_is_one_line(rik, tmp_path: Path) -> None:
+    """A catalog overlay nested 100,000 deep crashed the process (libyaml's composer recursing in C: a segmentation
+    fault, exit -11); one whose aliases expand past a million values, and a base unit's mapping file likewise, are
+    one line before they are parsed."""
+    import subprocess
+    import sys
+
+    deep = tmp_path / "deep.yaml"
+    deep.write_text("handles:\n  - " + "[" * 100_000 + "]" * 100_000 + "\n", encoding="utf-8")
+    run = subprocess.run([sys.executable, "-m", "rik", "catalog", "list", "--catalog", str(deep)],
+                         capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert run.returncode == 2, (run.returncode, run.stderr[-500:])
+    assert one_line_text(run.stderr) == "deep.yaml:2: the catalog file nests lists and mappings more than 16 deep"
+    bomb = tmp_path / "bomb.yaml"
+    levels = ['a0: &a0 [x, x, x, x, x, x, x, x, x, x]']
+    levels += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 10)}]" for i in range(1, 8)]
+    bomb.write_text("\n".join(levels) + "\nhandles: []\n", encoding="utf-8")
+    msg = one_line(rik("catalog", "list", "--catalog", str(bomb)))
+    assert msg.startswith(f"{bomb}:") and "the catalog file expands to more than 1,000,000 values through its " \
+                                          "aliases" in msg
+    msg = one_line(rik("assets", "import", str(bomb), "--base-unit", "--parts", str(bomb), "--id", "drawer/x",
+                       "--catalog-dir", str(tmp_path / "mine")))
+    assert "the mapping file expands to more than 1,000,000 values" in msg, msg
+    assert not (tmp_path / "mine").exists()
+
+
+def one_line_text(err: str) -> str:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rik: error: "), err[-2000:]
+    return lines[0].removeprefix("rik: error: ")

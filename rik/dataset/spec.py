@@ -30,13 +30,12 @@ def load_spec(path: Path) -> DatasetSpec:
 
 
 def check_spec_shape(path: Path) -> None:
-    """Refuse, with one line naming the file (and line), a spec too large, too deeply nested or whose aliases
-    expand past :data:`MAX_SPEC_NODES` nodes, from libyaml's event stream (which neither recurses nor expands
-    aliases). What cannot be read or parsed is left to the reader, which names it."""
-    import yaml
-
+    """Refuse, with one line naming the file (and line), a spec larger than :data:`MAX_SPEC_BYTES`, nested deeper
+    than :data:`MAX_SPEC_DEPTH` or whose aliases expand past :data:`MAX_SPEC_NODES` values
+    (:func:`rik.registry.sources.check_yaml_shape`). What cannot be read or decoded is left to the reader, which
+    names it."""
     from rik.errors import RikError
-    from rik.registry.sources import _safe_loader, display_path
+    from rik.registry.sources import check_yaml_shape, display_path
 
     shown = display_path(path)
     try:
@@ -51,41 +50,7 @@ def check_spec_shape(path: Path) -> None:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
         return
-    sizes: dict[str, int] = {}
-    """Expanded node count of each anchor, once its node is closed."""
-    stack: list[tuple[str | None, int]] = [(None, 0)]
-    """Open collections: their anchor and node count so far (the document at the bottom)."""
-    try:
-        for event in yaml.parse(text, Loader=_safe_loader()):
-            line = event.start_mark.line + 1 if event.start_mark is not None else 0
-            if isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
-                stack.append((event.anchor, 1))
-                if len(stack) - 1 > MAX_SPEC_DEPTH:
-                    raise RikError(f"{shown}:{line}: the dataset spec nests lists and mappings more than "
-                                   f"{MAX_SPEC_DEPTH} deep")
-                continue
-            if isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
-                anchor, n = stack.pop()
-                if anchor is not None:
-                    sizes[anchor] = n
-            elif isinstance(event, yaml.ScalarEvent):
-                n = 1
-                if event.anchor is not None:
-                    sizes[event.anchor] = 1
-            elif isinstance(event, yaml.AliasEvent):
-                if event.anchor not in sizes:  # an alias inside its own anchor: a structure that contains itself
-                    raise RikError(f"{shown}:{line}: the dataset spec has an alias (*{event.anchor}) inside its own "
-                                   "anchor; a spec is a tree")
-                n = sizes[event.anchor]
-            else:
-                continue
-            anchor, total = stack[-1]
-            stack[-1] = (anchor, total + n)
-            if total + n > MAX_SPEC_NODES:
-                raise RikError(f"{shown}:{line}: the dataset spec expands to more than {MAX_SPEC_NODES:,} values "
-                               "through its aliases (*name); write it without them, or with fewer")
-    except yaml.YAMLError:
-        return  # malformed: read_yaml_model names the line
+    check_yaml_shape(text, shown, "dataset spec", MAX_SPEC_DEPTH, MAX_SPEC_NODES)
 
 
 def spec_data(spec: DatasetSpec) -> dict[str, Any]:

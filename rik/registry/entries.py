@@ -98,11 +98,17 @@ def read_yaml_model[M: BaseModel](path: Path, model: type[M], what: str) -> M:
     import yaml
 
     from rik.errors import CatalogError, RikError
-    from rik.registry.sources import _safe_loader, display_path, line_of
+    from rik.registry.sources import MAX_CATALOG_BYTES, _safe_loader, check_yaml_shape, display_path, line_of
 
     shown = display_path(path)
     try:
-        data = yaml.load(path.read_text(encoding="utf-8"), Loader=_safe_loader())
+        with open(path, "rb") as handle:
+            raw = handle.read(MAX_CATALOG_BYTES + 1)
+        if len(raw) > MAX_CATALOG_BYTES:
+            raise RikError(f"{shown}: the {what} is larger than {MAX_CATALOG_BYTES // 2**20} MiB; nothing was read")
+        text = raw.decode("utf-8")
+        check_yaml_shape(text, shown, what)
+        data = yaml.load(text, Loader=_safe_loader())
     except OSError as exc:
         raise RikError(f"{shown}: cannot read the {what} ({exc.strerror})") from None
     except UnicodeDecodeError:

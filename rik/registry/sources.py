@@ -134,6 +134,61 @@ def _check_size(file: Path) -> None:
                            f"{MAX_CATALOG_BYTES // 2**20} MiB a catalog file may have; nothing was read")
 
 
+MAX_YAML_DEPTH = 16
+"""Deepest nesting of lists and mappings in a YAML file rik reads from a user (a catalog entry nests 5 deep, a dataset
+spec 3): libyaml's composer recurses in C, and a deeper document crashes the process (a segmentation fault at about
+10^5 levels)."""
+MAX_YAML_NODES = 1_000_000
+"""Most values a YAML file may hold with its aliases and merge keys expanded: an alias bomb ("billion laughs") is
+refused before it is expanded."""
+
+
+def check_yaml_shape(text: str, shown: str, what: str, max_depth: int = MAX_YAML_DEPTH,
+                     max_nodes: int = MAX_YAML_NODES) -> None:
+    """Refuse, with one :class:`RikError` line naming the file (``shown``) and line, YAML ``text`` nested deeper than
+    ``max_depth`` or whose aliases expand past ``max_nodes`` values, from libyaml's event stream (which neither
+    recurses nor expands aliases). ``what`` names the file's role ("dataset spec", "catalog file"). Malformed YAML is
+    left to the reader, which names its line."""
+    import yaml
+
+    from rik.errors import RikError
+
+    sizes: dict[str, int] = {}
+    """Expanded node count of each anchor, once its node is closed."""
+    stack: list[tuple[str | None, int]] = [(None, 0)]
+    """Open collections: their anchor and node count so far (the document at the bottom)."""
+    try:
+        for event in yaml.parse(text, Loader=_safe_loader()):
+            line = event.start_mark.line + 1 if event.start_mark is not None else 0
+            if isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+                stack.append((event.anchor, 1))
+                if len(stack) - 1 > max_depth:
+                    raise RikError(f"{shown}:{line}: the {what} nests lists and mappings more than {max_depth} deep")
+                continue
+            if isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+                anchor, n = stack.pop()
+                if anchor is not None:
+                    sizes[anchor] = n
+            elif isinstance(event, yaml.ScalarEvent):
+                n = 1
+                if event.anchor is not None:
+                    sizes[event.anchor] = 1
+            elif isinstance(event, yaml.AliasEvent):
+                if event.anchor not in sizes:  # an alias inside its own anchor: a structure that contains itself
+                    raise RikError(f"{shown}:{line}: the {what} has an alias (*{event.anchor}) inside its own "
+                                   "anchor; it must be a tree")
+                n = sizes[event.anchor]
+            else:
+                continue
+            anchor, total = stack[-1]
+            stack[-1] = (anchor, total + n)
+            if total + n > max_nodes:
+                raise RikError(f"{shown}:{line}: the {what} expands to more than {max_nodes:,} values through its "
+                               "aliases (*name); write it without them, or with fewer")
+    except yaml.YAMLError:
+        return  # malformed: the reader names the line
+
+
 def read_file(path: Path, builtin: bool) -> list[RawEntry]:
     """Parse one catalog file into raw entries; raises :class:`CatalogError` on malformed YAML or layout."""
     import yaml
@@ -150,6 +205,8 @@ def read_file(path: Path, builtin: bool) -> list[RawEntry]:
         text = raw.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise CatalogError(shown, None, None, f"cannot read the file ({exc.__class__.__name__}: {exc})") from None
+    if not builtin:
+        check_yaml_shape(text, shown, "catalog file")
     try:
         doc = yaml.load(text, Loader=loader)
     except yaml.YAMLError as exc:
