@@ -30,11 +30,32 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     faulthandler.cancel_dump_traceback_later()
 
 
+BROWSER_TEST_S = 600
+"""Bound of a test that drives a browser or a window, s (they take 3-30 s on an idle 2-core machine): past it the
+test fails with every thread's stack (pytest-timeout), also where a call of Playwright's has no timeout of its
+own (``keyboard.up`` waits for the page, which a starved machine may never schedule)."""
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """A test that drives a browser or opens a window is also ``slow`` (out of the everyday tier) and bounded by
+    :data:`BROWSER_TEST_S`."""
+    for item in items:
+        if item.get_closest_marker("browser") or item.get_closest_marker("display"):
+            item.add_marker(pytest.mark.slow)
+            if item.get_closest_marker("timeout") is None:
+                item.add_marker(pytest.mark.timeout(BROWSER_TEST_S))
+
+
 @pytest.fixture(autouse=True, scope="session")
 def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     """Keep the catalog index cache out of the user's home and free of other runs' state."""
     mp = pytest.MonkeyPatch()
-    mp.setenv("RIK_CACHE", str(tmp_path_factory.mktemp("rik-cache")))
+    if os.environ.get("PYTEST_XDIST_WORKER"):  # one cache for all of a run's workers: assets are built once
+        shared = tmp_path_factory.getbasetemp().parent / "rik-cache"  # (content-addressed, written by rename)
+        shared.mkdir(exist_ok=True)
+        mp.setenv("RIK_CACHE", str(shared))
+    else:
+        mp.setenv("RIK_CACHE", str(tmp_path_factory.mktemp("rik-cache")))
     mp.delenv("RIK_CATALOG", raising=False)
     yield
     mp.undo()

@@ -7,6 +7,8 @@ import pytest
 import trimesh
 from test_assets_core import _bar_pull
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 
 @pytest.fixture(scope="module")
 def bar_files(tmp_path_factory):

@@ -110,6 +110,7 @@ def test_an_edited_index_is_rebuilt_not_served(rik, tmp_path, monkeypatch) -> No
     assert index.read_bytes() == written  # rebuilt and rewritten
 
 
+@pytest.mark.slow
 def test_stats_and_demo(rik, tmp_path, monkeypatch) -> None:
     numbers = json.loads(rik("catalog", "stats", "--format", "json").out)
     assert numbers["pairings"] == {"total": 1079, "fit": 1079}

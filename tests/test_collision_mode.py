@@ -15,6 +15,8 @@ from rik.errors import RikError
 from rik.registry import load_catalog
 from rik.sim.record import variant_dir
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 CAT = load_catalog()
 BOW = "drawer-bedside-45__two_point-bow-128__normal"
 """One front with a bow handle: concave, so CoACD splits it into several hulls."""

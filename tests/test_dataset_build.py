@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 SPEC = """\
 repo_id: local/rik-small
 variants:

@@ -13,6 +13,8 @@ import pytest
 
 from rik.registry.load import load_catalog
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 CAT = load_catalog()
 SPEC = """repo_id: local/rik-ray
 variants:

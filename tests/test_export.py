@@ -24,6 +24,8 @@ from rik.sim.episode import write_meta
 from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
 from rik.sim.record import record
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"
 KNOB = "drawer-bedside-45__knob-mushroom-30__normal"

@@ -14,6 +14,8 @@ import pytest
 
 from rik.registry import load_catalog
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"
 REPO = "local/rik-robots"

@@ -149,6 +149,7 @@ def test_demo_sysid_keeps_folders_it_did_not_make(tmp_path: Path, monkeypatch) -
         (tmp_path / folder).rmdir()
 
 
+@pytest.mark.slow
 def test_demo_sysid_twice_replaces_its_own_folders(tmp_path: Path, monkeypatch, capsys) -> None:
     from rik.cli.sysid import DEMO_CATALOG, DEMO_DATA, DEMO_REPORT, print_demo_sysid
 
@@ -447,6 +448,7 @@ def test_ground_truth_that_is_not_utf8_names_the_file(tmp_path: Path) -> None:
         read_truth(tmp_path)
 
 
+@pytest.mark.slow
 def test_resuming_a_finished_export_says_it_is_complete(rik, tmp_path: Path) -> None:
     """``export-lerobot --resume`` into a finished export: "already complete", not "not a rik export" (rik's card
     fields live in ``meta/``), and the dataset is left as it was."""

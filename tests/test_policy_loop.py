@@ -16,6 +16,8 @@ import pytest
 
 from rik.registry import load_catalog
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 CAT = load_catalog()
 BIN = Path(sys.executable).parent
 DRAW = ("--types", "knob", "--presets", "smooth")

@@ -20,6 +20,8 @@ from rik.sim.episode import read_episode, states, write_meta
 from rik.sim.record import record
 from rik.sim.replay import episode_scene
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"
 CAMERAS = ("front", "wrist")

@@ -22,6 +22,8 @@ from rik.sysid.discover import discover
 from rik.sysid.effects import INDISTINGUISHABLE
 from rik.sysid.generate import EFFECT_KINDS, GroundTruth, ground_truth_force, random_truth, simulate_trials
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 SEEDS = (0, 1, 2)
 HINGE_KINDS = tuple(k for k in EFFECT_KINDS if k != "stiction")
 """The hinge cases: every kind but stiction (tested on slides only)."""

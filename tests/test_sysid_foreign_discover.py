@@ -20,6 +20,8 @@ from rik.sysid.discover import discover
 from rik.sysid.effects import INDISTINGUISHABLE
 from rik.sysid.foreign import FOREIGN_KINDS, foreign_truth, simulate_foreign
 
+pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+
 SEEDS = (0, 1, 2)
 MISSED = {("stiction", 1): "measured miss: stiction's held-out gain is 9.9 % (10 % needed)"}
 

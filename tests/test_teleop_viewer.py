@@ -18,6 +18,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.display  # a window under Xvfb (also slow)
+
 VARIANT = "drawer-chest-80__two_point-bow-128__normal"
 STATUS = re.compile(r"^(?P<episode>\S+) \| (?P<state>[a-z ]+) \| [\d.]+ s \((?P<limit>[^)]*)\) \| open (?P<open>-?\d+)% "
                     r"\| grip (?P<grip>\w+) \| handle (?P<ahead>[+-][\d.]+) ahead (?P<left>[+-][\d.]+) left "

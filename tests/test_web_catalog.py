@@ -98,6 +98,7 @@ def test_user_handle_without_pictures_gets_a_placeholder(tmp_path: Path) -> None
                 response.text
 
 
+@pytest.mark.browser
 def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
     index = build_index(catalog)
     total = len(catalog.handles)
@@ -109,7 +110,7 @@ def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
 
     def count_is(page, n: int) -> None:
         page.wait_for_function("t => document.querySelector('#count').textContent === t", arg=f"{n} of {total} handles",
-                               timeout=10_000)
+                               timeout=10_000, polling=100)
         assert page.locator("#handle-grid .card:visible").count() == n
 
     with served(AppConfig(catalog)) as url, browser() as chromium:
@@ -120,7 +121,7 @@ def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
         count_is(page, total)
         assert page.locator("#handle-grid .card img").count() == total
         page.wait_for_function("() => [...document.querySelectorAll('#handle-grid img')]"
-                               ".every(i => i.complete && i.naturalWidth > 0)", timeout=20_000)
+                               ".every(i => i.complete && i.naturalWidth > 0)", timeout=20_000, polling=100)
         page.select_option("#f-type", "knob")
         count_is(page, knobs)
         assert {page.locator("#handle-grid .card:visible").nth(i).get_attribute("data-id").split("/")[0]
@@ -141,7 +142,7 @@ def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
         assert page.url.endswith(f"/catalog/handle/{DEMO_HANDLE}")
         dimensions = page.text_content("#dimensions")
         assert "length mm140" in dimensions and "clearance mm (depth x width)20 x 116" in dimensions
-        page.wait_for_function("() => document.querySelector('#fidelity-img').naturalWidth > 0", timeout=10_000)
+        page.wait_for_function("() => document.querySelector('#fidelity-img').naturalWidth > 0", timeout=10_000, polling=100)
         assert "CoACD (3 hulls)" in page.text_content("#fidelity")
         assert f"vertices{vertices}" in page.text_content("#mesh-stats")
         page.select_option("#pair-other", label=f"{DEMO_BASE} ({catalog.base_units[DEMO_BASE].name})")
@@ -159,12 +160,12 @@ def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
         page.click("#tabs button[data-tab=bases]")
         assert page.locator("#base-grid .card:visible").count() == len(catalog.base_units)
         page.wait_for_function("() => [...document.querySelectorAll('#base-grid img')]"
-                               ".every(i => i.complete && i.naturalWidth > 0)", timeout=10_000)
+                               ".every(i => i.complete && i.naturalWidth > 0)", timeout=10_000, polling=100)
         page.click(f"#base-grid .card[data-id='{DEMO_BASE}']")
         page.wait_for_selector("#pair-other optgroup", state="attached")
         assert page.get_attribute("#teleop-link", "href").startswith("/teleop/drawer-chest-80__")
 
         page.goto(f"{url}/catalog/handle/knob/ball-25")  # an entry's own address opens its panel
         page.wait_for_function("() => document.querySelector('#detail-title')?.textContent === 'knob/ball-25'",
-                               timeout=10_000)
+                               timeout=10_000, polling=100)
         assert errors == []

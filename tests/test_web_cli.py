@@ -50,6 +50,7 @@ def test_an_unknown_variant_fails_before_any_port_is_taken(rik, tmp_path: Path) 
     assert not (tmp_path / "v").exists()  # refused before anything was built
 
 
+@pytest.mark.slow
 def test_rik_serve_answers_and_stops_on_ctrl_c(tmp_path: Path) -> None:
     """The real command in its own process, as a user runs it: the printed address (with its launch token) answers
     and opens the catalog, the same address without the token is refused, Ctrl+C stops it with exit 0 and no

@@ -147,6 +147,7 @@ def test_a_get_of_a_station_page_starts_nothing(variants: Path, tmp_path: Path) 
         assert client.post("/teleop/keymap.json", headers={"Origin": "http://evil.example"}).status_code == 403
 
 
+@pytest.mark.browser
 @needs_chromium
 def test_a_page_of_another_origin_in_the_same_browser_cannot_act(variants: Path, tmp_path: Path) -> None:
     """The operator has the station open (the token's cookie is in the browser); a page of another site in the
@@ -178,7 +179,7 @@ def test_a_page_of_another_origin_in_the_same_browser_cannot_act(variants: Path,
                                                                                body=attack))
             evil = context.new_page()
             evil.goto("http://evil.example/attack.html")
-            evil.wait_for_function("window.results.ws && window.results.post", timeout=WAIT_MS)
+            evil.wait_for_function("window.results.ws && window.results.post", timeout=WAIT_MS, polling=100)
             assert evil.evaluate("window.results.ws") == "refused"
             # a rebinding name (resolving to this machine, as the attacker's DNS answers after its page loaded)
             # reaches the app only with its own name in Host, which the app refuses
@@ -247,6 +248,7 @@ def test_stations_are_bounded_and_released_when_idle_with_their_drafts(variants:
             assert st["session"]["episode"] != episode
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not hasattr(resource, "prlimit"), reason="needs Linux's prlimit")
 def test_a_save_on_a_full_disk_keeps_the_episode_and_the_station(variants: Path, tmp_path: Path) -> None:
     """The real ``rik teleop --web`` whose file-size limit is 1 KiB (a full disk to it): Save fails with a message and

@@ -18,7 +18,8 @@ CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"
 STATION = "document.getElementById('station').dataset"
 
-pytestmark = pytest.mark.skipif(shutil.which("chromium") is None, reason="Debian's chromium is not installed")
+pytestmark = [pytest.mark.browser,
+              pytest.mark.skipif(shutil.which("chromium") is None, reason="Debian's chromium is not installed")]
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +52,7 @@ class Driver:
 
         try:
             self.page.wait_for_function(f"(() => {{ const d = {STATION}; return {condition}; }})()",
-                                        timeout=WAIT_MS)
+                                        timeout=WAIT_MS, polling=100)
         except PlaywrightTimeout:
             last = self.page.evaluate("JSON.stringify(window.rikTest.status())")
             raise AssertionError(f"the station never reached {condition} in {WAIT_MS / 1000:.0f} s; its last "
@@ -76,7 +77,7 @@ def open_station(b, url: str):
     page = b.new_page(viewport={"width": 1400, "height": 1000})
     page.goto(signed(f"{url}/teleop/{BOW}"))
     page.wait_for_function(f"{STATION}.ready === 'true' && document.getElementById('cam-front').dataset.step !== ''",
-                           timeout=WAIT_MS)
+                           timeout=WAIT_MS, polling=100)
     return page
 
 
@@ -128,7 +129,7 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
         drive.wait("d.replaying === 'false'")
         assert f"replayed {saved}; back to live" in page.inner_text("#banner")
         page.select_option("#size", "640x480")
-        page.wait_for_function("document.getElementById('cam-front').naturalWidth === 640", timeout=WAIT_MS)
+        page.wait_for_function("document.getElementById('cam-front').naturalWidth === 640", timeout=WAIT_MS, polling=100)
     _check_saved(rik, episodes / saved, variants, drive, stick, simulated, shot)
 
 

@@ -56,6 +56,7 @@ def _listing(root: Path) -> set[str]:
     return {str(p.relative_to(root)) for p in root.rglob("*")}
 
 
+@pytest.mark.slow
 def test_workers_exit_when_the_parent_is_killed(tmp_path: Path) -> None:
     cache, out = tmp_path / "cache", tmp_path / "variants"
     env = {**os.environ, "RIK_CACHE": str(cache)}

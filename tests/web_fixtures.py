@@ -19,9 +19,14 @@ from typing import Any
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage"]
+                 "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage",
+                 "--num-raster-threads=1", "--renderer-process-limit=2", "--disable-smooth-scrolling"]
 """Flags for a root, headless, offline machine (no sandbox as root; no background connections that this
-machine's closed network would refuse)."""
+machine's closed network would refuse), and a small one: one raster thread and at most two renderer processes,
+so that Chromium does not pin a busy 2-core machine and starve the station it tests."""
+ACTION_MS = 60_000
+"""Bound of every Playwright action and navigation (Playwright's keyboard calls take none: the test's own bound,
+``BROWSER_TEST_S`` in tests/conftest.py, ends those)."""
 WAIT_MS = 90_000
 """Bound of every wait for the station (a loaded 2-core machine steps the simulation slowly)."""
 TOKEN = "rik-web-tests-launch-token"
@@ -118,6 +123,19 @@ def station_process(*args: str, cwd: Path, procs: list[subprocess.Popen] | None 
                 proc.wait(timeout=30)
 
 
+def _bounded(b: Any, make: str) -> None:
+    """Wrap ``b.<make>`` so the page or context it returns has :data:`ACTION_MS` as its default timeouts."""
+    original = getattr(b, make)
+
+    def made(*args: Any, **kwargs: Any) -> Any:
+        thing = original(*args, **kwargs)
+        thing.set_default_timeout(ACTION_MS)
+        thing.set_default_navigation_timeout(ACTION_MS)
+        return thing
+
+    setattr(b, make, made)
+
+
 @contextmanager
 def browser(*args: str) -> Iterator[Any]:
     """A headless Debian Chromium (Playwright gives it a fresh temporary profile), through Playwright; ``args``:
@@ -125,7 +143,9 @@ def browser(*args: str) -> Iterator[Any]:
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=[*CHROMIUM_ARGS, *args])
+        b = p.chromium.launch(executable_path=CHROMIUM, args=[*CHROMIUM_ARGS, *args], timeout=ACTION_MS)
+        for make in ("new_page", "new_context"):  # every page and context: actions and navigations bounded
+            _bounded(b, make)
         try:
             yield b
         finally:
