@@ -61,6 +61,23 @@ def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     mp.undo()
 
 
+SHORT_KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
+
+
+@pytest.fixture(scope="session")
+def knob_recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder with ``episodes/`` holding one short episode of :data:`SHORT_KNOB` (grasp_vertical, seed 3, 0.3 s) and
+    the ``variants/`` it was recorded in, made once per session (per worker): the input that tests of damaged or
+    hostile input copy, or hand to a command that must refuse something else. Tests never write into it."""
+    from rik.registry import load_catalog
+    from rik.sim.record import record
+
+    root = tmp_path_factory.mktemp("knob-recording")
+    record(load_catalog(), SHORT_KNOB, "grasp_vertical", seed=3, out=root / "episodes", variants=root / "variants",
+           max_seconds=0.3)
+    return root
+
+
 def read_line(stream, timeout: float = 120.0) -> str:
     """The next line of a child process's text ``stream``, waiting at most ``timeout`` s (an assertion error past
     it: a test never blocks on a child that stops talking). Reads on a daemon thread, which ends with the stream."""

@@ -15,23 +15,15 @@ import pytest
 from test_hostile_input import one_line, tree
 
 from rik.registry import load_catalog
-from rik.sim.record import record
 
 CAT = load_catalog()
 KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 
 
-@pytest.fixture(scope="module")
-def work(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    root = tmp_path_factory.mktemp("followups")
-    record(CAT, KNOB, "grasp_vertical", seed=3, out=root / "episodes", variants=root / "variants", max_seconds=0.3)
-    return root
-
-
 @pytest.fixture
-def episode(work: Path, tmp_path: Path) -> Path:
+def episode(knob_recording: Path, tmp_path: Path) -> Path:
     """A copy of the recorded episode in ``tmp_path/episodes``: what a test may find written into it stays there."""
-    source = next((work / "episodes").iterdir())
+    source = next((knob_recording / "episodes").iterdir())
     return Path(shutil.copytree(source, tmp_path / "episodes" / source.name))
 
 
@@ -45,13 +37,13 @@ def refused(result) -> str:
 
 
 # ---- 1. a size the codec cannot encode -------------------------------------------------------------------------
-def test_av1_frames_narrower_than_25_pixels_are_refused_first(rik, work: Path, episode: Path, tmp_path: Path) -> None:
+def test_av1_frames_narrower_than_25_pixels_are_refused_first(rik, knob_recording: Path, episode: Path, tmp_path: Path) -> None:
     """libsvtav1 dies of SIGFPE on frames under 25 px wide (any height); 64x8 encodes."""
     before = tree(tmp_path)
     for res, shown in (("16", "16x16"), ("24x64", "24x64")):
         msg = refused(rik("export-lerobot", str(episode), "--out", str(tmp_path / "ds"), "--repo-id", "local/av1",
                           "--res", res, "--streams", "sim", "--renders", str(tmp_path / "renders"), "--variants",
-                          str(work / "variants")))
+                          str(knob_recording / "variants")))
         assert msg == (f"--res {shown}: --codec libsvtav1 encodes frames at least 25 pixels wide (narrower ones "
                        "crash its encoder); give a width of 25 or more, or --codec h264")
     assert tree(tmp_path) == before
@@ -67,23 +59,23 @@ def test_av1_frames_narrower_than_25_pixels_are_refused_first(rik, work: Path, e
 
 
 # ---- 2. an --out inside the episodes ---------------------------------------------------------------------------
-def test_render_out_inside_an_episode_is_refused(rik, work: Path, episode: Path, tmp_path: Path) -> None:
+def test_render_out_inside_an_episode_is_refused(rik, knob_recording: Path, episode: Path, tmp_path: Path) -> None:
     before = contents(tmp_path)
     for out in (episode, episode / "renders", episode.parent):  # the last: renders/<id> is the episode itself
         msg = refused(rik("render", str(episode), "--res", "16", "--out", str(out), "--variants",
-                          str(work / "variants")))
+                          str(knob_recording / "variants")))
         assert msg == (f"--out {out}: would write the streams inside episode folder {episode}; rik never writes into "
                        "an episode: give --out outside the episodes, e.g. renders")
     assert contents(tmp_path) == before
 
 
 # ---- 3. files read whole ---------------------------------------------------------------------------------------
-def test_a_huge_meta_json_is_refused_unread(rik, work: Path, episode: Path, tmp_path: Path) -> None:
+def test_a_huge_meta_json_is_refused_unread(rik, knob_recording: Path, episode: Path, tmp_path: Path) -> None:
     meta = episode / "meta.json"
     os.truncate(meta, 8 * 2**20)  # sparse: the JSON, then zeros
     before = contents(tmp_path)
     msg = refused(rik("render", str(episode), "--res", "16", "--out", str(tmp_path / "renders"), "--variants",
-                      str(work / "variants")))
+                      str(knob_recording / "variants")))
     assert msg == (f"{meta}: larger than 1 MiB, not an episode's meta.json (rik writes a few kB); record the episode "
                    "again, or restore the file")
     assert contents(tmp_path) == before
@@ -163,14 +155,14 @@ def test_a_catalog_walk_is_bounded_and_stays_inside(rik, tmp_path: Path) -> None
 
 
 # ---- 6. rik eval over a user's files ---------------------------------------------------------------------------
-def test_eval_keeps_a_users_files_in_out(rik, work: Path, tmp_path: Path) -> None:
+def test_eval_keeps_a_users_files_in_out(rik, knob_recording: Path, tmp_path: Path) -> None:
     out = tmp_path / "results"
     out.mkdir()
     (out / "table.md").write_text("my notes\n")
     before = contents(tmp_path)
     msg = refused(rik("eval", "strategy:grasp_vertical", "--split", "all", "--types", "knob", "--presets", "normal",
                       "-n", "1", "--episode-length", "3", "--videos", "0", "--workers", "1", "--out", str(out),
-                      "--variants", str(work / "variants")))
+                      "--variants", str(knob_recording / "variants")))
     assert msg == (f"{out / 'table.md'}: exists and was not written by rik eval (no eval_info.json of its own beside "
                    "it), so nothing was run: choose another --out, or move it away yourself")
     assert contents(tmp_path) == before

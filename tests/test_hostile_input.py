@@ -22,24 +22,16 @@ from rik.errors import RikError
 from rik.paths import inside
 from rik.registry import load_catalog
 from rik.sim.episode import EpisodeError, meta_digest, read_episode, read_meta
-from rik.sim.record import record
 
 CAT = load_catalog()
 KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 EXPORT = ["--repo-id", "local/hostile", "--res", "16", "--streams", "sim", "--codec", "h264"]
 
 
-@pytest.fixture(scope="module")
-def work(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    root = tmp_path_factory.mktemp("hostile")
-    record(CAT, KNOB, "grasp_vertical", seed=3, out=root / "episodes", variants=root / "variants", max_seconds=0.3)
-    return root
-
-
 @pytest.fixture
-def episode(work: Path, tmp_path: Path) -> Path:
+def episode(knob_recording: Path, tmp_path: Path) -> Path:
     """A private copy of the recorded episode, to damage."""
-    src = next((work / "episodes").iterdir())
+    src = next((knob_recording / "episodes").iterdir())
     dst = tmp_path / "episodes" / src.name
     shutil.copytree(src, dst)
     return dst
@@ -78,7 +70,7 @@ def test_inside_refuses_every_way_out(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("bad_id", ["../../escaped", "/tmp/rik-escaped-abs", ".hidden", "a/b"])
-def test_episode_id_that_is_not_a_folder_name_is_refused(rik, episode: Path, work: Path, tmp_path: Path,
+def test_episode_id_that_is_not_a_folder_name_is_refused(rik, episode: Path, knob_recording: Path, tmp_path: Path,
                                                           bad_id: str) -> None:
     reseal(episode, id=bad_id)
     before = tree(tmp_path)
@@ -86,11 +78,11 @@ def test_episode_id_that_is_not_a_folder_name_is_refused(rik, episode: Path, wor
         read_meta(episode)
     renders = tmp_path / "deep" / "renders"
     msg = one_line(rik("render", str(episode), "--res", "16", "--out", str(renders), "--variants",
-                       str(work / "variants")))
+                       str(knob_recording / "variants")))
     assert msg.startswith(f"{episode / 'meta.json'}: field 'id': Value error, {bad_id!r} is not a safe folder name")
     out = tmp_path / "deep" / "ds"
     msg = one_line(rik("export-lerobot", str(episode), "--out", str(out), "--renders", str(renders), "--variants",
-                       str(work / "variants"), *EXPORT))
+                       str(knob_recording / "variants"), *EXPORT))
     assert "field 'id'" in msg and "is not a safe folder name" in msg
     assert tree(tmp_path) == before  # nothing written anywhere, not even the output's parents
     assert not Path("/tmp/rik-escaped-abs").exists()
@@ -170,13 +162,13 @@ def test_bench_seed_out_of_range(rik, tmp_path: Path) -> None:
     assert msg.startswith("--seed -1: the benchmark's seed must lie in 0 .. ")
 
 
-def _export(rik, episode: Path, work: Path, out: Path):
+def _export(rik, episode: Path, knob_recording: Path, out: Path):
     return rik("export-lerobot", str(episode.parent), "--out", str(out), "--renders", str(out.parent / "renders"),
-               "--variants", str(work / "variants"), *EXPORT)
+               "--variants", str(knob_recording / "variants"), *EXPORT)
 
 
 @pytest.mark.parametrize("case", ["huge seed", "fps 0", "random parquet", "narrow state", "text state"])
-def test_damaged_episode_is_one_line_and_leaves_nothing(rik, episode: Path, work: Path, tmp_path: Path,
+def test_damaged_episode_is_one_line_and_leaves_nothing(rik, episode: Path, knob_recording: Path, tmp_path: Path,
                                                         case: str) -> None:
     import numpy as np
     import pyarrow as pa
@@ -208,7 +200,7 @@ def test_damaged_episode_is_one_line_and_leaves_nothing(rik, episode: Path, work
         read_episode(episode)
     assert expected in str(err.value)
     out = tmp_path / "ds"
-    msg = one_line(_export(rik, episode, work, out))
+    msg = one_line(_export(rik, episode, knob_recording, out))
     assert expected in msg
     assert not out.exists() and not out.with_name("ds.partial").exists() and not out.with_name("ds.lock").exists()
 
@@ -231,7 +223,7 @@ def test_narrow_state_names_the_row_and_the_meta(episode: Path) -> None:
 
 
 # ---- 7. one export at a time per --out -------------------------------------------------------------------------
-def test_second_export_into_the_same_out_is_refused(rik, episode: Path, work: Path, tmp_path: Path) -> None:
+def test_second_export_into_the_same_out_is_refused(rik, episode: Path, knob_recording: Path, tmp_path: Path) -> None:
     from rik.locks import exclusive
 
     out = tmp_path / "ds"
@@ -241,7 +233,7 @@ def test_second_export_into_the_same_out_is_refused(rik, episode: Path, work: Pa
         "    print('held', flush=True); time.sleep(60)\n"), str(out)], stdout=subprocess.PIPE, text=True)
     try:
         assert read_line(holder.stdout).strip() == "held"
-        msg = one_line(_export(rik, episode, work, out))
+        msg = one_line(_export(rik, episode, knob_recording, out))
         assert msg == (f"{out}: another rik export-lerobot (pid {holder.pid}) is writing it now; wait for it to "
                        "finish, or choose another --out")
         assert not out.exists() and not out.with_name("ds.partial").exists()
@@ -253,7 +245,7 @@ def test_second_export_into_the_same_out_is_refused(rik, episode: Path, work: Pa
     assert not out.with_name("ds.lock").exists()
 
 
-def test_out_made_by_someone_else_during_the_export(rik, episode: Path, work: Path, tmp_path: Path,
+def test_out_made_by_someone_else_during_the_export(rik, episode: Path, knob_recording: Path, tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """The export finishes, finds --out taken and says so; the finished dataset is kept and --resume publishes
     it once --out is moved away."""
@@ -267,7 +259,7 @@ def test_out_made_by_someone_else_during_the_export(rik, episode: Path, work: Pa
         (out / "theirs").mkdir(parents=True)
 
     monkeypatch.setattr(lerobot_card, "write_card", card_then_someone_makes_out)
-    msg = one_line(_export(rik, episode, work, out))
+    msg = one_line(_export(rik, episode, knob_recording, out))
     assert msg == (f"{out}: was created by something else while the export ran, so the finished dataset was not moved "
                    f"there (it is kept in {out.with_name('ds.partial') / 'merged'}); move {out} away and run again "
                    "with --resume")
@@ -275,13 +267,13 @@ def test_out_made_by_someone_else_during_the_export(rik, episode: Path, work: Pa
     monkeypatch.setattr(lerobot_card, "write_card", real)
     shutil.move(out, tmp_path / "theirs")
     result = rik("export-lerobot", str(episode.parent), "--out", str(out), "--renders", str(tmp_path / "renders"),
-                 "--variants", str(work / "variants"), *EXPORT, "--resume")
+                 "--variants", str(knob_recording / "variants"), *EXPORT, "--resume")
     assert result.code == 0, result.err
     assert (out / "meta" / "info.json").is_file() and not out.with_name("ds.partial").exists()
 
 
 # ---- 9. small ones ----------------------------------------------------------------------------------------------
-def test_resume_on_a_folder_that_is_not_a_rik_export(rik, episode: Path, work: Path, tmp_path: Path) -> None:
+def test_resume_on_a_folder_that_is_not_a_rik_export(rik, episode: Path, knob_recording: Path, tmp_path: Path) -> None:
     out = tmp_path / "photos"
     out.mkdir()
     (out / "cat.jpg").write_bytes(b"\xff\xd8")
@@ -329,7 +321,7 @@ def test_full_disk_in_a_command_is_one_line(tmp_path: Path) -> None:
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]
 
 
-def test_two_renders_of_one_stream_render_it_once(episode: Path, work: Path, tmp_path: Path) -> None:
+def test_two_renders_of_one_stream_render_it_once(episode: Path, knob_recording: Path, tmp_path: Path) -> None:
     """While one process renders a stream (holding its lock), another waits, then reuses the finished stream
     instead of rendering beside it into the same folder."""
     from rik.render.episodes import render_episode
@@ -346,10 +338,10 @@ def test_two_renders_of_one_stream_render_it_once(episode: Path, work: Path, tmp
         "with exclusive(final, 'rik render'):\n"
         "    print('held', flush=True); time.sleep(2)\n"
         "    _render_stream(load_catalog(), ep, spec, final, variants, None, None)\n"),
-        str(episode), str(renders), str(work / "variants")], stdout=subprocess.PIPE, text=True)
+        str(episode), str(renders), str(knob_recording / "variants")], stdout=subprocess.PIPE, text=True)
     try:
         assert read_line(holder.stdout).strip() == "held"
-        result = render_episode(CAT, episode, StreamSpec("sim", 16, 16), renders=renders, variants=work / "variants")
+        result = render_episode(CAT, episode, StreamSpec("sim", 16, 16), renders=renders, variants=knob_recording / "variants")
         assert holder.wait(timeout=120) == 0
     finally:
         holder.kill()

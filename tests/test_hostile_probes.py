@@ -15,49 +15,41 @@ from test_hostile_input import one_line, tree
 
 from rik.errors import RikError
 from rik.registry import load_catalog
-from rik.sim.record import record
 
 CAT = load_catalog()
 KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 EXPORT = ["--repo-id", "local/probes", "--res", "16", "--streams", "sim", "--codec", "h264"]
 
 
-@pytest.fixture(scope="module")
-def work(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    root = tmp_path_factory.mktemp("probes")
-    record(CAT, KNOB, "grasp_vertical", seed=3, out=root / "episodes", variants=root / "variants", max_seconds=0.3)
-    return root
-
-
 @pytest.fixture
-def episode(work: Path) -> Path:
-    return next((work / "episodes").iterdir())
+def episode(knob_recording: Path) -> Path:
+    return next((knob_recording / "episodes").iterdir())
 
 
-def test_workers_beyond_the_machine_are_refused_first(rik, work: Path, episode: Path, tmp_path: Path) -> None:
+def test_workers_beyond_the_machine_are_refused_first(rik, knob_recording: Path, episode: Path, tmp_path: Path) -> None:
     renders = tmp_path / "renders"
     msg = one_line(rik("render", str(episode), "--res", "16", "--workers", "100000", "--out", str(renders),
-                       "--variants", str(work / "variants")))
+                       "--variants", str(knob_recording / "variants")))
     assert msg.startswith("--workers 100000: give 1 to ") and "per core of this machine's" in msg
     msg = one_line(rik("record", "--split", "train", "-s", "grasp_vertical", "--episodes", "2", "--workers",
-                       "100000", "--out", str(tmp_path / "eps"), "--variants", str(work / "variants")))
+                       "100000", "--out", str(tmp_path / "eps"), "--variants", str(knob_recording / "variants")))
     assert msg.startswith("--workers 100000: give 1 to ")
     assert tree(tmp_path) == []
 
 
-def test_episode_counts_are_bounded_before_anything_is_drawn(rik, work: Path, tmp_path: Path) -> None:
+def test_episode_counts_are_bounded_before_anything_is_drawn(rik, knob_recording: Path, tmp_path: Path) -> None:
     msg = one_line(rik("record", "--split", "train", "-s", "grasp_vertical", "--episodes", str(10**12), "--out",
-                       str(tmp_path / "eps"), "--variants", str(work / "variants")))
+                       str(tmp_path / "eps"), "--variants", str(knob_recording / "variants")))
     assert msg == "--episodes 1000000000000: give 1 to 1,000,000 episodes per command"
     assert tree(tmp_path) == []
 
 
-def test_bench_refuses_empty_and_enormous_plans(rik, work: Path, tmp_path: Path) -> None:
+def test_bench_refuses_empty_and_enormous_plans(rik, knob_recording: Path, tmp_path: Path) -> None:
     out = tmp_path / "bench"
-    msg = one_line(rik("bench", "--presets", ",", "--out", str(out), "--variants", str(work / "variants")))
+    msg = one_line(rik("bench", "--presets", ",", "--out", str(out), "--variants", str(knob_recording / "variants")))
     assert msg == "--presets: empty; give at least one"
     msg = one_line(rik("bench", "--episodes-per-cell", str(10**12), "--out", str(out), "--variants",
-                       str(work / "variants")))
+                       str(knob_recording / "variants")))
     assert msg == ("--episodes-per-cell 1000000000000: 27,000,000,000,000 episodes in all; give 1 or more, and at "
                    "most 1,000,000 episodes in all")
     assert tree(tmp_path) == []
@@ -65,10 +57,10 @@ def test_bench_refuses_empty_and_enormous_plans(rik, work: Path, tmp_path: Path)
 
 @pytest.mark.parametrize("command", ["record", "render", "replay", "robot-check", "variants build", "bench",
                                      "fidelity", "export"])
-def test_a_file_where_a_folder_belongs(rik, work: Path, episode: Path, tmp_path: Path, command: str) -> None:
+def test_a_file_where_a_folder_belongs(rik, knob_recording: Path, episode: Path, tmp_path: Path, command: str) -> None:
     file = tmp_path / "a-file"
     file.write_text("not a folder\n")
-    variants = ["--variants", str(work / "variants")]
+    variants = ["--variants", str(knob_recording / "variants")]
     args, option = {
         "record": (["record", KNOB, "-s", "grasp_vertical", "--out", str(file), *variants], "--out"),
         "render": (["render", str(episode), "--res", "16", "--out", str(file), *variants], "--out"),
@@ -105,10 +97,10 @@ def test_a_name_too_long_for_the_file_system_is_one_line(rik, tmp_path: Path, mo
     assert msg.startswith("a" * 200 + "...: File name too long (ENAMETOOLONG); give a path that is a folder")
 
 
-def test_export_sizes_are_bounded_before_anything_is_written(rik, work: Path, episode: Path, tmp_path: Path) -> None:
+def test_export_sizes_are_bounded_before_anything_is_written(rik, knob_recording: Path, episode: Path, tmp_path: Path) -> None:
     out = tmp_path / "ds"
     common = [str(episode), "--out", str(out), "--repo-id", "local/probes", "--res", "16", "--renders",
-              str(tmp_path / "renders"), "--variants", str(work / "variants")]
+              str(tmp_path / "renders"), "--variants", str(knob_recording / "variants")]
     msg = one_line(rik("export-lerobot", *common, "--streams", "rerendered", "--spp", str(10**12)))
     assert msg == "--spp 1000000000000: give 1 to 4096 samples per pixel"
     msg = one_line(rik("export-lerobot", *common, "--streams", "sim", "--codec", "h264", "--fps", str(10**9)))
@@ -116,13 +108,13 @@ def test_export_sizes_are_bounded_before_anything_is_written(rik, work: Path, ep
     assert tree(tmp_path) == []
 
 
-def test_a_render_larger_than_the_scene_framebuffer(rik, work: Path, episode: Path, tmp_path: Path) -> None:
+def test_a_render_larger_than_the_scene_framebuffer(rik, knob_recording: Path, episode: Path, tmp_path: Path) -> None:
     """The scenes' offscreen buffer is 1280 x 960; --res allows up to 4096 a side."""
     from PIL import Image
 
     renders = tmp_path / "renders"
     result = rik("render", str(episode), "--res", "2048x8", "--cameras", "front", "--out", str(renders),
-                 "--variants", str(work / "variants"))
+                 "--variants", str(knob_recording / "variants"))
     assert result.code == 0, result.err
     with Image.open(next(renders.rglob("front/000000.png"))) as im:
         assert im.size == (2048, 8)
@@ -171,11 +163,11 @@ def test_visual_gap_bounds_its_work(rik, tmp_path: Path) -> None:
     ({"images": True, "cameras": ()}, "cameras: give at least one camera"),
     ({"episode_length": math.nan}, "episode_length nan: must be a whole number of control steps, at least 1"),
 ])
-def test_gym_env_checks_its_arguments(work: Path, kwargs: dict, message: str) -> None:
+def test_gym_env_checks_its_arguments(knob_recording: Path, kwargs: dict, message: str) -> None:
     from rik.sim.env import OpenFrontEnv
 
     with pytest.raises(RikError) as exc:
-        OpenFrontEnv(KNOB, variants_dir=work / "variants", **kwargs)
+        OpenFrontEnv(KNOB, variants_dir=knob_recording / "variants", **kwargs)
     assert str(exc.value).startswith(message)
 
 
