@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
-from pathlib import Path
 
 
 class RikError(Exception):
@@ -37,15 +36,3 @@ class UnknownIdError(RikError, LookupError):
         hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
         super().__init__(f"no {kind} '{wanted}' in the catalog{hint}")
 
-
-def check_folder(path: Path, what: str) -> Path:
-    """``path``, a folder a command reads or creates, unless it or the nearest existing folder above it is a file
-    (or another non-folder): then a :class:`RikError` naming the option, checked before any work is done."""
-    path = Path(path)
-    for p in (path, *path.parents):
-        if p.is_dir():
-            return path
-        if p.exists() or p.is_symlink():
-            where = "" if p == path else f" ({p} is not a folder)"
-            raise RikError(f"{what} {path}: a file is there, where a folder is expected{where}")
-    return path

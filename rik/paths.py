@@ -39,6 +39,21 @@ def inside(root: Path, *parts: str, what: str = "path") -> Path:
     return path
 
 
+def check_folder(path: Path, what: str) -> Path:
+    """``path``, a folder a command reads or creates, unless it or the nearest existing folder above it is a file
+    (or another non-folder): then a :class:`RikError` naming the option, checked before any work is done."""
+    from rik.errors import RikError
+
+    path = Path(path)
+    for p in (path, *path.parents):
+        if p.is_dir():
+            return path
+        if p.exists() or p.is_symlink():
+            where = "" if p == path else f" ({p} is not a folder)"
+            raise RikError(f"{what} {path}: a file is there, where a folder is expected{where}")
+    return path
+
+
 @contextmanager
 def atomic_path(path: Path) -> Iterator[Path]:
     """A temporary path beside ``path`` to write to; renamed onto ``path`` when the block ends without an error,

@@ -121,7 +121,7 @@ def fidelity(ids: IdsArg = None, everything: AllOpt = False,
     paper's Figure 5) and thumbnail.png. The repository's pictures are made with --out docs/catalog."""
     from rik.assets.fidelity import check_points
     from rik.assets.report import FIDELITY_COLUMNS, fidelity_row, handle_ids, merge_csv, run_rows, summarise_fidelity
-    from rik.errors import check_folder
+    from rik.paths import check_folder
     from rik.registry.load import load_catalog
 
     check_points(points)

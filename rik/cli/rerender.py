@@ -34,7 +34,7 @@ class _Quality(TypedDict, total=False):
 
 def _run(episodes: list[Path], kind: StreamKind, res: str, cameras: str | None, out: Path, variants: Path, workers: int,
          catalog: list[Path] | None, sheet: bool = False, **quality: Unpack[_Quality]) -> None:
-    from rik.errors import check_folder
+    from rik.paths import check_folder
     from rik.registry.load import load_catalog
     from rik.render.episodes import check_renders_outside, render_episodes
     from rik.render.streams import StreamSpec, parse_resolution

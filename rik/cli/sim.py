@@ -216,8 +216,7 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
           robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """The resistance benchmark: randomised drawer-opening episodes, F/P/S per handle type, strategy and preset
     (the paper's Table 3), with the Hand-E or an arm (--robot)."""
-    from rik.errors import check_folder
-    from rik.paths import write_atomic
+    from rik.paths import check_folder, write_atomic
     from rik.registry.load import load_catalog
     from rik.sim import bench as b
 

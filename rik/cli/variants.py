@@ -162,7 +162,7 @@ def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g
     """Build variants into --out/<id>/ (model.xml, scene.xml, meshes/, report.json); valid ones are skipped."""
     from rik.combinator.build import MANIFEST, build_variants, resolve_collision
     from rik.combinator.ids import parse_variant_id
-    from rik.errors import check_folder
+    from rik.paths import check_folder
     from rik.registry.load import load_catalog
 
     check_folder(out, "--out")

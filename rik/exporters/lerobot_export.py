@@ -25,7 +25,7 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rik.errors import RikError, check_folder
+from rik.errors import RikError
 from rik.exporters.lerobot_frames import (
     LAYOUT,
     LAYOUT_1_STATE_NAMES,
@@ -35,7 +35,7 @@ from rik.exporters.lerobot_frames import (
     episode_metadata,
     features,
 )
-from rik.paths import write_atomic
+from rik.paths import check_folder, write_atomic
 from rik.sim.observation import STREAM_SUFFIX
 
 if TYPE_CHECKING:

@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rik.errors import RikError, check_folder
-from rik.paths import inside
+from rik.errors import RikError
+from rik.paths import check_folder, inside
 from rik.sim.episode import DEFAULT_EPISODES, EpisodeRecorder, episode_id, run_operator, write_episode
 from rik.sim.gripper import HAND_E, GripperSpec
 from rik.sim.operators import make_operator
