@@ -36,3 +36,13 @@ class UnknownIdError(RikError, LookupError):
         hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
         super().__init__(f"no {kind} '{wanted}' in the catalog{hint}")
 
+
+def os_error_text(exc: OSError, longest_name: int = 200) -> str:
+    """An OSError in a few words, for one line: ``episodes/x/states.parquet: No space left on device (ENOSPC)`` (the
+    file's name cut at ``longest_name`` characters; none when the error names no file)."""
+    import errno
+
+    code = errno.errorcode.get(exc.errno or 0, "")
+    name = "" if exc.filename is None else str(exc.filename)
+    name = name if len(name) <= longest_name else name[:longest_name] + "..."
+    return f"{name + ': ' if name else ''}{exc.strerror or exc}{f' ({code})' if code else ''}"

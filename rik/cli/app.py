@@ -8,7 +8,7 @@ import typer
 
 from rik.cli import assets, catalog, dataset, export, policy, render, rerender, serve, sim, sysid, variants
 from rik.cli.common import CatalogOption, overlays
-from rik.errors import RikError
+from rik.errors import RikError, os_error_text
 
 
 def _print_version(value: bool) -> None:
@@ -119,14 +119,11 @@ def main() -> None:
 
         if exc.errno in (errno.ENOTDIR, errno.EISDIR, errno.EEXIST, errno.ENAMETOOLONG):
             # a path the user gave: a file where a folder belongs (or the reverse), or a name too long to be one
-            name = str(exc.filename)
-            name = name if len(name) <= 200 else name[:200] + "..."
-            print(f"rik: error: {name}: {exc.strerror} ({errno.errorcode[exc.errno]}); give a path that is a folder "
-                  "where a folder is expected, a file where a file is", file=sys.stderr)
+            print(f"rik: error: {os_error_text(exc)}; give a path that is a folder where a folder is expected, a file "
+                  "where a file is", file=sys.stderr)
             sys.exit(2)
         if exc.errno not in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS):
             raise
-        where = f"{exc.filename}: " if exc.filename else ""
-        print(f"rik: error: {where}{exc.strerror} ({errno.errorcode[exc.errno]}); files being written were removed, "
-              "finished ones kept", file=sys.stderr)
+        print(f"rik: error: {os_error_text(exc)}; files being written were removed, finished ones kept",
+              file=sys.stderr)
         sys.exit(1)

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rik.errors import RikError
+from rik.errors import RikError, os_error_text
 from rik.sim.teleop_keys import FINE_FACTOR
 
 if TYPE_CHECKING:
@@ -72,15 +72,6 @@ class Client:
         with self.lock:
             items, self.slots = list(self.slots.values()), {}
         return items
-
-
-def write_failure(exc: OSError) -> str:
-    """Why a write failed, in a few words: ``No space left on device (ENOSPC): episodes/x/states.parquet``."""
-    import errno
-
-    code = errno.errorcode.get(exc.errno or 0, "")
-    where = f": {exc.filename}" if exc.filename else ""
-    return f"{exc.strerror or exc}{f' ({code})' if code else ''}{where}"
 
 
 def frame_message(header: dict[str, Any], jpeg: bytes) -> bytes:
@@ -357,7 +348,7 @@ class Station:
                 try:
                     path = session.keep_draft()
                 except OSError as exc:
-                    self.message = f"could not keep a draft ({write_failure(exc)}); {KEPT_IN_MEMORY}"
+                    self.message = f"could not keep a draft ({os_error_text(exc)}); {KEPT_IN_MEMORY}"
                 else:
                     self.draft = None if path is None else str(path)
             return
@@ -371,7 +362,7 @@ class Station:
             try:
                 session.save()
             except OSError as exc:  # a full disk, a quota: the episode stays recorded, and Save works again later
-                self.message = f"could not save {session.episode} ({write_failure(exc)}); {KEPT_IN_MEMORY}"
+                self.message = f"could not save {session.episode} ({os_error_text(exc)}); {KEPT_IN_MEMORY}"
                 return
             self.draft, self.paused = None, False
         elif name == "discard":
@@ -472,7 +463,7 @@ class Station:
             except OSError as exc:
                 import sys
 
-                print(f"rik: error: could not keep the draft of {s.episode} ({write_failure(exc)}); "
+                print(f"rik: error: could not keep the draft of {s.episode} ({os_error_text(exc)}); "
                       f"{s.recorder.steps} steps lost", file=sys.stderr)
         return None
 
