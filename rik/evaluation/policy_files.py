@@ -99,17 +99,16 @@ def member(root: Path, name: str, where: str) -> Path:
 def read_json(root: Path, name: str) -> Any:
     """The JSON file ``root / name`` (see :func:`member`), refused unread when larger than
     :data:`MAX_JSON_BYTES`."""
+    from rik import paths
+
     file = member(root, name, f"{Path(root) / name}")
     try:
-        with file.open("rb") as f:
-            raw = f.read(MAX_JSON_BYTES + 1)
+        if file.stat().st_size > MAX_JSON_BYTES:
+            raise RikError(f"{file}: larger than {MAX_JSON_BYTES // 2**20} MiB; a policy's JSON files are a few kB")
+        return paths.read_json(file, MAX_JSON_BYTES)
     except OSError as e:
         raise RikError(f"{file}: not readable ({e})") from None
-    if len(raw) > MAX_JSON_BYTES:
-        raise RikError(f"{file}: larger than {MAX_JSON_BYTES // 2**20} MiB; a policy's JSON files are a few kB")
-    try:
-        return json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError, RecursionError) as e:  # RecursionError: nested too deeply
+    except ValueError as e:  # not UTF-8, not JSON, nested too deeply (or grown past the bound since the stat)
         raise RikError(f"{file}: not readable JSON ({_first_line(e)})") from None
 
 
