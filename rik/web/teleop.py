@@ -130,16 +130,19 @@ def parse_message(text: str) -> tuple[Any, str]:
     """A tab's text message as JSON, or (None, the notice saying why it was ignored): not JSON, nested too deeply,
     or holding a non-finite number (``NaN``, ``Infinity``: JSON has none, Python's parser reads them)."""
 
+    class NonFinite(ValueError):
+        pass
+
     def non_finite(name: str) -> Any:
-        raise ValueError(f"non-finite number {name}")
+        raise NonFinite(name)
 
     try:
         return json.loads(text, parse_constant=non_finite), ""
     except RecursionError:
         return None, "ignored a message nested too deeply"
-    except ValueError as exc:
-        if "non-finite" in str(exc):
-            return None, "ignored a message holding NaN or Infinity: numbers must be finite"
+    except NonFinite:
+        return None, "ignored a message holding NaN or Infinity: numbers must be finite"
+    except ValueError:
         return None, "ignored a message that is not JSON"
 
 
