@@ -186,11 +186,11 @@ def check_robot(catalog: Catalog, spec: DatasetSpec, source: str) -> None:
 def check_codec(spec: DatasetSpec, source: str) -> None:
     """The spec's image size is one its codec encodes (libsvtav1 crashes on frames under 25 px wide), checked
     before any work instead of when the first shard is encoded."""
-    from rik.exporters.lerobot_export import MIN_WIDTH
+    from rik.exporters.lerobot_export import least_width
 
-    least = MIN_WIDTH.get(spec.codec)
     width, height = spec.size
-    if spec.streams and least is not None and width < least:
+    least = least_width(spec.codec, width, bool(spec.streams))
+    if least is not None:
         raise RikError(f"{source}, field 'resolution': codec {spec.codec} encodes frames at least {least} pixels wide "
                        f"(narrower ones crash its encoder), got {width}x{height}; give a width of {least} or more, or "
                        "codec: h264")

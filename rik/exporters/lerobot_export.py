@@ -140,11 +140,18 @@ def _check_spec(spec: ExportSpec) -> None:
     check_codec_size(spec)
 
 
+def least_width(codec: str, width: int, images: bool) -> int | None:
+    """The narrowest frame ``codec`` encodes (:data:`MIN_WIDTH`, px) when ``width`` is narrower and images are
+    exported; None when the width is fine."""
+    least = MIN_WIDTH.get(codec)
+    return least if images and least is not None and width < least else None
+
+
 def check_codec_size(spec: ExportSpec) -> None:
     """Refuse (one line) an image size that ``spec.codec`` cannot encode (:data:`MIN_WIDTH`), before any work: the
     encoder would otherwise crash its process once the frames are rendered."""
-    least = MIN_WIDTH.get(spec.codec)
-    if spec.streams and least is not None and spec.width < least:
+    least = least_width(spec.codec, spec.width, bool(spec.streams))
+    if least is not None:
         raise RikError(f"--res {spec.width}x{spec.height}: --codec {spec.codec} encodes frames at least {least} "
                        f"pixels wide (narrower ones crash its encoder); give a width of {least} or more, or "
                        f"--codec h264")
