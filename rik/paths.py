@@ -155,6 +155,18 @@ def check_replaceable(folder: Path, kind: MadeFolder) -> None:
                    f"so nothing was written: {advice}")
 
 
+def check_own_files(folder: Path, names: Collection[str], made: Callable[[Path], bool], tool: str,
+                    mark: str) -> None:
+    """Refuse (:class:`rik.errors.RikError`, one line) to write the files ``names`` into ``folder`` when one of them
+    is there and ``made(folder)`` does not recognise the folder as ``tool``'s earlier output (by ``mark``, the file
+    it writes there): a rerun may write over its own results, never a user's file."""
+    from rik.errors import RikError
+
+    taken = [name for name in names if os.path.lexists(Path(folder) / name)]
+    if taken and not made(Path(folder)):
+        raise RikError(f"{Path(folder) / taken[0]}: exists and was not written by {tool} (no {mark} of its own beside "
+                       "it), so nothing was run: choose another --out, or move it away yourself")
+
 def remove_directory(folder: Path, kind: MadeFolder) -> None:
     """Remove ``folder`` (rik's own earlier output) if it is there: only after :func:`check_replaceable`."""
     import shutil

@@ -175,30 +175,6 @@ def replay(episodes: Annotated[list[Path], typer.Argument(help="Episode director
         raise typer.Exit(1)
 
 
-BENCH_FILES = ("results.csv", "table.md", "sweep.png", "sweep.md")
-"""What ``rik bench`` writes into ``--out``."""
-BENCH_COLUMNS = {"variant", "strategy", "preset", "outcome"}
-"""Columns every ``results.csv`` of ``rik bench`` has."""
-
-
-def check_bench_out(out: Path) -> None:
-    """Refuse an ``--out`` where a file ``rik bench`` writes is there and the folder is not one rik bench wrote
-    (its ``results.csv`` with the bench's columns): a rerun may write over its own results, never a user's file."""
-    import os
-
-    taken = [name for name in BENCH_FILES if os.path.lexists(out / name)]
-    if not taken:
-        return
-    try:
-        with (out / "results.csv").open(encoding="utf-8") as handle:
-            ours = BENCH_COLUMNS <= set(handle.readline().strip().split(","))
-    except (OSError, UnicodeDecodeError):
-        ours = False
-    if not ours:
-        raise RikError(f"{out / taken[0]}: exists and was not written by rik bench (no results.csv of its own "
-                       "beside it), so nothing was run: choose another --out, or move it away yourself")
-
-
 def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "-t", help="Handle types "
                                                                     "(repeatable; default: all three).")] = None,
           presets: Annotated[str, typer.Option("--presets", help="Comma-separated presets.")] = "smooth,normal,high",
@@ -221,7 +197,7 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
     from rik.sim import bench as b
 
     check_folder(out, "--out")  # before the episodes, not after them
-    check_bench_out(out)
+    b.check_bench_out(out)
     cat = load_catalog(overlays(catalog))
     robot_entry(cat, robot)  # an unknown robot (or its model's package missing): one line, before any work
     grip_forces: tuple[Any, ...] = (None,)

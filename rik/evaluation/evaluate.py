@@ -265,15 +265,13 @@ def check_eval_out(out: Path, policy_folders: Sequence[str] = ()) -> None:
     """Refuse (one line), before any episode, an ``--out`` (or a policy's folder in it, ``policy_folders``) where a
     file rik eval writes (:data:`EVAL_FILES`) is there and the folder is not an earlier rik eval's output: a rerun
     may write over its own results, never a user's file."""
-    import os
+    from rik.paths import check_own_files
 
     out = Path(out)
     ours_below = any(_is_eval(out / f) for f in policy_folders)
     for folder in (out, *(out / f for f in policy_folders)):
-        taken = [name for name in EVAL_FILES if os.path.lexists(folder / name)]
-        if taken and not (_is_eval(folder) or (folder == out and ours_below)):
-            raise RikError(f"{folder / taken[0]}: exists and was not written by rik eval (no eval_info.json of its "
-                           "own beside it), so nothing was run: choose another --out, or move it away yourself")
+        check_own_files(folder, EVAL_FILES, lambda d: _is_eval(d) or (d == out and ours_below), "rik eval",
+                        "eval_info.json")
 
 
 def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,

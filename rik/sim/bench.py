@@ -247,3 +247,25 @@ def sweep_markdown(rows: Sequence[dict[str, Any]]) -> str:
             cells.append(f"{np.mean(sel):.2f}" if sel else "-")
         lines.append(f"| {g:g} | {p} | {ratio:.2f} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+BENCH_FILES = ("results.csv", "table.md", "sweep.png", "sweep.md")
+"""What ``rik bench`` writes into ``--out``."""
+BENCH_COLUMNS = {"variant", "strategy", "preset", "outcome"}
+"""Columns every ``results.csv`` of ``rik bench`` has."""
+
+
+def is_bench_out(folder: Path) -> bool:
+    """Whether ``folder`` holds an earlier ``rik bench``'s results (its ``results.csv`` with the bench's columns)."""
+    try:
+        with (Path(folder) / "results.csv").open(encoding="utf-8") as handle:
+            return BENCH_COLUMNS <= set(handle.readline().strip().split(","))
+    except (OSError, UnicodeDecodeError):
+        return False
+
+
+def check_bench_out(out: Path) -> None:
+    """Refuse an ``--out`` where a file ``rik bench`` writes is there and the folder is not one rik bench wrote."""
+    from rik.paths import check_own_files
+
+    check_own_files(out, BENCH_FILES, is_bench_out, "rik bench", "results.csv")
