@@ -92,13 +92,11 @@ def demo_folders(out: Path) -> list[tuple[Path, MadeFolder]]:
     """The folders the demo's export replaces: its dataset ``out`` (a finished rik export: lerobot's
     ``meta/info.json`` and rik's ``meta/rik_card.json``, and nothing else at its top) and ``<out>.partial`` (an
     interrupted one: its plan, shards and merged dataset)."""
-    from rik.exporters.lerobot_card import CARD_FIELDS
-    from rik.exporters.lerobot_export import PLAN
+    from rik.exporters.lerobot_export import PLAN, is_rik_export
     from rik.paths import MadeFolder, holds_only, json_object
 
     def exported(p: Path) -> bool:
-        return (json_object(p / "meta" / "info.json") is not None and json_object(p / "meta" / CARD_FIELDS)
-                is not None and holds_only(p, DATASET_NAMES))
+        return is_rik_export(p) and holds_only(p, DATASET_NAMES)
 
     hint = "run the demo in another folder"
     return [(out, MadeFolder("a dataset rik export-lerobot made", exported, hint)),

@@ -313,11 +313,14 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                               workers=workers, overlays=overlays, progress=progress)
 
 
-def _is_rik_export(folder: Path) -> bool:
-    """Whether ``folder`` holds a finished rik export (lerobot's info.json and rik's card fields)."""
+def is_rik_export(folder: Path) -> bool:
+    """Whether ``folder`` holds a finished rik export: lerobot's ``meta/info.json`` and rik's card fields
+    (``meta/rik_card.json``), each a JSON object."""
     from rik.exporters.lerobot_card import CARD_FIELDS
+    from rik.paths import json_object
 
-    return (folder / "meta" / "info.json").is_file() and (folder / "meta" / CARD_FIELDS).is_file()
+    return json_object(folder / "meta" / "info.json") is not None and \
+        json_object(folder / "meta" / CARD_FIELDS) is not None
 
 
 def _check_out_free(out: Path, resume: bool) -> None:
@@ -326,7 +329,7 @@ def _check_out_free(out: Path, resume: bool) -> None:
         return
     if not resume:
         raise RikError(f"{out}: already exists; choose another --out (or delete it)")
-    if _is_rik_export(out):
+    if is_rik_export(out):
         raise RikError(f"{out}: the export is already complete (nothing to resume); choose another --out to export "
                        "again")
     raise RikError(f"{out}: exists and is not a rik export (no meta/info.json and meta/rik_card.json), so there is "
