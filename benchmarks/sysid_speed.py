@@ -45,9 +45,9 @@ def main() -> None:
 
     from rik.sysid.discover import discover, prepare_all, select_effects
     from rik.sysid.fit import all_rows, fit_all, fit_velocity, split_rows
-    from rik.sysid.generate import random_truth, simulate_trials, write_trials
     from rik.sysid.report import write_report
     from rik.sysid.select import select
+    from rik.sysid.synthetic.generate import random_truth, simulate_trials, write_trials
     from rik.sysid.trials import load_trials
 
     with tempfile.TemporaryDirectory() as tmp:

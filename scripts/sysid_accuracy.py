@@ -23,11 +23,11 @@ import numpy as np
 
 def _cases(generator: str, joint: str, kinds: list[str] | None) -> list[str]:
     if generator == "foreign":
-        from rik.sysid.foreign import FOREIGN_KINDS
+        from rik.sysid.synthetic.foreign import FOREIGN_KINDS
 
         known = list(FOREIGN_KINDS)
     else:
-        from rik.sysid.generate import EFFECT_KINDS
+        from rik.sysid.synthetic.generate import EFFECT_KINDS
 
         known = ["none", *EFFECT_KINDS]
     if kinds is None:
@@ -41,10 +41,10 @@ def _cases(generator: str, joint: str, kinds: list[str] | None) -> list[str]:
 def _trials(generator: str, kind: str, joint: str, seed: int, n_trials: int) -> list:
     rng = np.random.default_rng(seed)
     if generator == "foreign":
-        from rik.sysid.foreign import foreign_truth, simulate_foreign
+        from rik.sysid.synthetic.foreign import foreign_truth, simulate_foreign
 
         return simulate_foreign(foreign_truth(kind, joint, rng), n_trials=n_trials, seed=seed)
-    from rik.sysid.generate import random_truth, simulate_trials
+    from rik.sysid.synthetic.generate import random_truth, simulate_trials
 
     truth = random_truth(None if kind == "none" else kind, joint, rng)
     return simulate_trials(truth, n_trials=n_trials, seed=seed)

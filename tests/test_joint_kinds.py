@@ -14,9 +14,9 @@ from rik.joints.laws import DAMPING_LAWS, FORCE_LAWS, FRICTION_LAWS
 from rik.joints.mjcf import ACTUATOR_BIAS
 from rik.joints.runtime import CHANNELS
 from rik.schemas.joints import JointEffect, JointType
-from rik.sysid import generate
 from rik.sysid.effects import FAMILIES
-from rik.sysid.foreign import FOREIGN_KINDS
+from rik.sysid.synthetic import generate
+from rik.sysid.synthetic.foreign import FOREIGN_KINDS
 
 
 def test_the_table_holds_the_schemas_kinds() -> None:

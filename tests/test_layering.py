@@ -14,7 +14,8 @@ PACKAGE = Path(rik.__file__).parent
 FORBIDDEN = {
     "rik.joints": ("rik.sim", "rik.combinator", "rik.sysid"),
     "rik.combinator": ("rik.sim",),
-    "rik.sysid.foreign": ("rik.joints", "rik.sim", "rik.combinator", "rik.sysid.effects", "rik.sysid.generate"),
+    "rik.sysid.synthetic.foreign": ("rik.joints", "rik.sim", "rik.combinator", "rik.sysid.effects",
+                                    "rik.sysid.synthetic.generate"),
     **{m: ("rik.sim.env",) for m in ("rik.exporters", "rik.dataset", "rik.render", "rik.web", "rik.sim.operators",
                                      "rik.sim.record", "rik.sim.episode", "rik.sim.teleop")},
 }

@@ -43,7 +43,7 @@ def one_line(err: str) -> str:
 @pytest.fixture(scope="module")
 def trials():
     """Three simulated trials of a drawer with a self-closing spring (what ``rik sysid simulate`` writes)."""
-    from rik.sysid.generate import random_truth, simulate_trials
+    from rik.sysid.synthetic.generate import random_truth, simulate_trials
 
     truth = random_truth("self_close", "slide", np.random.default_rng(3))
     return simulate_trials(truth, n_trials=3, seed=3), truth
@@ -417,7 +417,7 @@ DEEP = "[" * 100_000 + "]" * 100_000
 
 
 def test_json_nested_too_deeply_is_one_line(rik, trials, tmp_path: Path) -> None:
-    from rik.sysid.generate import read_truth
+    from rik.sysid.synthetic.generate import read_truth
 
     report = tmp_path / "report"
     report.mkdir()
@@ -438,7 +438,7 @@ def test_json_nested_too_deeply_is_one_line(rik, trials, tmp_path: Path) -> None
 
 
 def test_ground_truth_that_is_not_utf8_names_the_file(tmp_path: Path) -> None:
-    from rik.sysid.generate import read_truth
+    from rik.sysid.synthetic.generate import read_truth
 
     (tmp_path / "truth.json").write_bytes(b'{"joint": "slide", "note": "\xb5"}')
     with pytest.raises(RikError, match=rf"^{tmp_path / 'truth.json'}: cannot read the ground truth \('utf-8' codec"):

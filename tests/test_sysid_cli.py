@@ -12,9 +12,9 @@ import pytest
 from rik.registry import load_catalog
 from rik.schemas.joints import JointType
 from rik.sysid.discover import discover
-from rik.sysid.generate import GroundTruth, random_truth, simulate_trials, write_trials
 from rik.sysid.preset import apply_report
 from rik.sysid.report import write_report
+from rik.sysid.synthetic.generate import GroundTruth, random_truth, simulate_trials, write_trials
 
 PLOTS = {"residual_time.png", "residual_position.png", "residual_velocity.png", "breakaway.png", "resimulated.png"}
 

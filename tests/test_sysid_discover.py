@@ -20,7 +20,7 @@ from rik.joints.laws import effect_force
 from rik.schemas.joints import JointType, Spring, Stiction
 from rik.sysid.discover import discover
 from rik.sysid.effects import INDISTINGUISHABLE
-from rik.sysid.generate import EFFECT_KINDS, GroundTruth, ground_truth_force, random_truth, simulate_trials
+from rik.sysid.synthetic.generate import EFFECT_KINDS, GroundTruth, ground_truth_force, random_truth, simulate_trials
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 

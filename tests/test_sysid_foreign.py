@@ -1,4 +1,4 @@
-"""The foreign generator (``rik.sysid.foreign``): physics sanity of its own integrator (LuGre sticking with
+"""The foreign generator (``rik.sysid.synthetic.foreign``): physics sanity of its own integrator (LuGre sticking with
 presliding only, compliant end stops, a self-closing spring that shuts the front), its excitation, determinism,
 trials that rik's preprocessing takes unchanged, a magnet law that is not rik's library law, and
 ``rik sysid simulate --generator foreign``."""
@@ -13,7 +13,8 @@ import pytest
 
 from rik.errors import RikError
 from rik.schemas.joints import JointType, MagneticCatch
-from rik.sysid.foreign import (
+from rik.sysid.preprocess import preprocess
+from rik.sysid.synthetic.foreign import (
     FOREIGN_KINDS,
     HINGE,
     SLIDE,
@@ -25,7 +26,6 @@ from rik.sysid.foreign import (
     run,
     simulate_foreign,
 )
-from rik.sysid.preprocess import preprocess
 from rik.sysid.trials import load_trials
 
 MM = 1e-3
@@ -190,7 +190,7 @@ def test_the_foreign_laws_import_nothing_of_riks_effect_laws() -> None:
     import ast
     import inspect
 
-    import rik.sysid.foreign as foreign
+    import rik.sysid.synthetic.foreign as foreign
 
     imported = set()
     for node in ast.walk(ast.parse(inspect.getsource(foreign))):
@@ -198,5 +198,6 @@ def test_the_foreign_laws_import_nothing_of_riks_effect_laws() -> None:
             imported.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
             imported.add(node.module or "")
-    forbidden = ("rik.sim", "rik.sysid.effects", "rik.combinator", "rik.sysid.generate", "rik.sysid.fit", "rik.joints")
+    forbidden = ("rik.sim", "rik.sysid.effects", "rik.combinator", "rik.sysid.synthetic.generate", "rik.sysid.fit",
+                 "rik.joints")
     assert not [m for m in imported if m.startswith(forbidden)], imported

@@ -1,4 +1,4 @@
-"""Hidden-effect tests on data rik did not generate: the foreign generator (:mod:`rik.sysid.foreign`: its own
+"""Hidden-effect tests on data rik did not generate: the foreign generator (:mod:`rik.sysid.synthetic.foreign`: its own
 integrator, LuGre friction, compliant end stops, a cubic magnet, a preloaded spring with play, a |v|^0.8 damper,
 a PID hand with its own excitation: strokes, creeps, pushes held against both stops, holds and releases).
 
@@ -18,7 +18,7 @@ import pytest
 from rik.schemas.joints import JointType, MagneticCatch
 from rik.sysid.discover import discover
 from rik.sysid.effects import INDISTINGUISHABLE
-from rik.sysid.foreign import FOREIGN_KINDS, foreign_truth, simulate_foreign
+from rik.sysid.synthetic.foreign import FOREIGN_KINDS, foreign_truth, simulate_foreign
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 

@@ -1,4 +1,4 @@
-"""The ground-truth generator (``rik.sysid.generate``): determinism, CSV round trip, the excitation, the delay
+"""The ground-truth generator (``rik.sysid.synthetic.generate``): determinism, CSV round trip, the excitation, the delay
 convention, physics sanity, truth shapes that differ from the library laws but keep their parameters, parameter
 ranges, and bad arguments."""
 
@@ -25,8 +25,9 @@ from rik.schemas.joints import (
     Stiction,
     Tilt,
 )
-from rik.sysid import generate as gen
-from rik.sysid.generate import (
+from rik.sysid.preprocess import preprocess
+from rik.sysid.synthetic import generate as gen
+from rik.sysid.synthetic.generate import (
     BASE_RANGES,
     EFFECT_KINDS,
     EFFECT_RANGES,
@@ -46,7 +47,6 @@ from rik.sysid.generate import (
     truth_parameters,
     write_trials,
 )
-from rik.sysid.preprocess import preprocess
 from rik.sysid.trials import load_trials
 
 SLIDE, HINGE = JointType.slide, JointType.hinge

@@ -10,8 +10,8 @@ import pytest
 from rik.schemas.joints import JointType
 from rik.sysid.breakaway import find_breakaways
 from rik.sysid.discover import discover, prepare_all
-from rik.sysid.generate import ExcitationPlan, Segment, measure, random_truth, simulate, simulate_trials
 from rik.sysid.preprocess import touching
+from rik.sysid.synthetic.generate import ExcitationPlan, Segment, measure, random_truth, simulate, simulate_trials
 
 SLIDE = JointType.slide
 

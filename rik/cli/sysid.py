@@ -160,14 +160,14 @@ def simulate(effect: Annotated[str, typer.Option("--effect", help="Hidden effect
     import numpy as np
 
     from rik.paths import check_replaceable
-    from rik.sysid.generate import random_truth, simulate_trials, write_trials
+    from rik.sysid.synthetic.generate import random_truth, simulate_trials, write_trials
     from rik.sysid.trials import simulated_folder
 
     check_replaceable(out, simulated_folder())  # before any work: a folder of the user's is never replaced
     kind = None if effect == "none" else effect
     if generator is GeneratorOpt.foreign:
         from rik.errors import RikError
-        from rik.sysid.foreign import FOREIGN_KINDS, foreign_truth, simulate_foreign, write_foreign
+        from rik.sysid.synthetic.foreign import FOREIGN_KINDS, foreign_truth, simulate_foreign, write_foreign
 
         if effect not in FOREIGN_KINDS:
             raise RikError(f"--effect '{effect}' is not an effect of the foreign generator; use one of "
@@ -241,9 +241,9 @@ def print_demo_sysid(overlay_paths: list[Path]) -> None:
 
     from rik.paths import check_replaceable, staged_directory
     from rik.sysid.discover import discover
-    from rik.sysid.generate import random_truth, simulate_trials, write_trials
     from rik.sysid.preset import apply_report
     from rik.sysid.report import REPORT_FOLDER, write_report
+    from rik.sysid.synthetic.generate import random_truth, simulate_trials, write_trials
     from rik.sysid.trials import simulated_folder
 
     con = console()

@@ -12,8 +12,9 @@ model and the gain on held-out data (``rik sysid``; docs/sysid.md).
 - :mod:`rik.sysid.discover`: the pipeline end to end, with MuJoCo re-simulation (:mod:`rik.sysid.resim`);
 - :mod:`rik.sysid.report`: report.md, plots and summary.json; :mod:`rik.sysid.preset`: the fitted joint as a
   user-catalog preset;
-- :mod:`rik.sysid.generate`: ground-truth data with a hidden effect (``rik sysid simulate`` and the tests);
-  :mod:`rik.sysid.foreign`: a second generator whose laws are written without rik's library;
+- :mod:`rik.sysid.synthetic`: simulated measurements for the demo and the tests. :mod:`rik.sysid.synthetic.generate`:
+  ground-truth data with a hidden effect (``rik sysid simulate`` and the tests); :mod:`rik.sysid.synthetic.foreign`:
+  a second generator whose laws are written without rik's library;
 - :mod:`rik.sysid.profile`, :mod:`rik.sysid.profile_fit`, :mod:`rik.sysid.profile_report`: quasi-static force
   profiles (force against position, no time axis: ``rik sysid fit --quasi-static``).
 

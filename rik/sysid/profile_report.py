@@ -30,12 +30,11 @@ from rik.sysid.profile_fit import (
     describe,
     predict,
 )
-from rik.sysid.report import REPORT, REPORT_FOLDER, SUMMARY, effect_dict
+from rik.sysid.report import PROFILE_PLOT, REPORT, REPORT_FOLDER, SUMMARY, effect_dict
 from rik.sysid.select import MIN_BIC_DROP, MIN_GAIN, OCCAM, TIE
 
 FORMAT = 1
 """Version of a profile ``summary.json``'s layout."""
-PLOT = "profile.png"
 GRID_POINTS = 60
 """Positions the median profile is evaluated at."""
 
@@ -164,7 +163,7 @@ def markdown(fit: ProfileFit, data: dict[str, Any]) -> str:
     sel = fit.selection
     unit = "N" if fit.force_unit.startswith("N at") else fit.force_unit
     lines = [f"# Quasi-static profile: {fit.group}", "", data["sentence"], "",
-             f"![force against position]({PLOT})", "",
+             f"![force against position]({PROFILE_PLOT})", "",
              f"{openings(len(fit.rows.names))}, {len(fit.rows)} points; held out: "
              f"{', '.join(data['trials']['heldout'])}"
              + (f" (every {SINGLE_TRIAL_EVERY}th point)" if len(fit.rows.names) == 1 else "") + ".", ""]
@@ -199,7 +198,7 @@ def slug(name: str) -> str:
 def _write_group(fit: ProfileFit, data: ProfileData, directory: Path) -> dict[str, object]:
     directory.mkdir(parents=True, exist_ok=True)
     info = summary(fit, data)
-    plot_profile(fit, directory / PLOT)
+    plot_profile(fit, directory / PROFILE_PLOT)
     write_atomic(directory / SUMMARY, json.dumps(info, indent=2) + "\n")
     write_atomic(directory / REPORT, markdown(fit, info))
     return info

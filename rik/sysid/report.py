@@ -36,6 +36,9 @@ if TYPE_CHECKING:
 
 SUMMARY = "summary.json"
 REPORT = "report.md"
+PROFILE_PLOT = "profile.png"
+"""The plot of a quasi-static profile report (:mod:`rik.sysid.profile_report`, which imports this module): named
+here because :func:`is_report` recognises both kinds of report."""
 FORMAT = 1
 """Version of ``summary.json``'s layout."""
 class _Units(TypedDict):
@@ -335,14 +338,12 @@ def markdown(d: Discovery, data: dict[str, Any]) -> str:
 def is_report(folder: Path) -> bool:
     """Whether ``folder`` is a report ``rik sysid fit`` wrote (of trials, or of quasi-static profiles, one group or
     several): its ``summary.json`` is a rik summary and it holds nothing else but the files rik writes there."""
-    from rik.sysid.profile_report import PLOT
-
     data = json_object(folder / SUMMARY)
     if data is None or data.get("format") != FORMAT:
         return False
     groups = data.get("groups") if data.get("mode") == "quasi-static" else None
     if not isinstance(groups, list):
-        return holds_only(folder, {SUMMARY, REPORT, PLOT, *PLOTS})
+        return holds_only(folder, {SUMMARY, REPORT, PROFILE_PLOT, *PLOTS})
     named = [g.get("directory") if isinstance(g, dict) else None for g in groups]
     subdirs = {s for s in named if isinstance(s, str) and "/" not in s and s not in ("", ".", "..")}
     return (len(subdirs) == len(named)

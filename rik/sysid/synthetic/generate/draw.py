@@ -20,12 +20,12 @@ from rik.schemas.joints import (
     Stiction,
     Tilt,
 )
-from rik.sysid.draws import joint_type as _joint
-from rik.sysid.draws import log_uniform as _log_uniform
-from rik.sysid.draws import tilt_phase
-from rik.sysid.draws import uniform as _uniform
-from rik.sysid.generate.constants import BASE_RANGES, EFFECT_KINDS, EFFECT_RANGES, GRAVITY, JOINT_KINDS
-from rik.sysid.generate.truth import Effect, GroundTruth
+from rik.sysid.synthetic.draws import joint_type as _joint
+from rik.sysid.synthetic.draws import log_uniform as _log_uniform
+from rik.sysid.synthetic.draws import tilt_phase
+from rik.sysid.synthetic.draws import uniform as _uniform
+from rik.sysid.synthetic.generate.constants import BASE_RANGES, EFFECT_KINDS, EFFECT_RANGES, GRAVITY, JOINT_KINDS
+from rik.sysid.synthetic.generate.truth import Effect, GroundTruth
 
 SECOND_CONFLICTS = {frozenset({"tilt", "stiction"}): "both set the Coulomb friction (tilt from its over_friction, "
                                                     "stiction from its own frictionloss range)"}

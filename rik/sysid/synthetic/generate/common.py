@@ -1,5 +1,5 @@
 """Argument checks shared by the generator's modules (one-line :class:`~rik.errors.RikError`); its random draws are
-in :mod:`rik.sysid.draws`, shared with the foreign generator."""
+in :mod:`rik.sysid.synthetic.draws`, shared with the foreign generator."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""The truth's force laws (the shapes of :mod:`rik.sysid.generate`'s table), each written once for floats (the step
-loop) and arrays."""
+"""The truth's force laws (the shapes of :mod:`rik.sysid.synthetic.generate`'s table), each written once for floats
+(the step loop) and arrays."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from rik.schemas.joints import (
     Stiction,
     Tilt,
 )
-from rik.sysid.generate.constants import (
+from rik.sysid.synthetic.generate.constants import (
     CUBIC_FRACTION,
     CUBIC_VREF,
     DIRECTION_FEPS,
@@ -32,7 +32,7 @@ from rik.sysid.generate.constants import (
     SOFT_CLOSE_VREF,
     STRIBECK_EXPONENT,
 )
-from rik.sysid.generate.truth import Effect, GroundTruth
+from rik.sysid.synthetic.generate.truth import Effect, GroundTruth
 
 
 def magnet_scale(decay: float, upper: float) -> float:

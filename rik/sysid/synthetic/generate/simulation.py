@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rik.schemas.joints import JointType
-from rik.sysid.generate.common import _positive
-from rik.sysid.generate.constants import (
+from rik.sysid.synthetic.generate.common import _positive
+from rik.sysid.synthetic.generate.constants import (
     CREEP_STIFFNESS,
     HAND_DEADBAND,
     HAND_MAX,
@@ -18,9 +18,9 @@ from rik.sysid.generate.constants import (
     SOLIMP_FRICTION,
     SOLREF_LIMIT,
 )
-from rik.sysid.generate.excitation import ExcitationPlan, Segment, _profile
-from rik.sysid.generate.laws import _scalar_laws, effect_laws
-from rik.sysid.generate.truth import GroundTruth
+from rik.sysid.synthetic.generate.excitation import ExcitationPlan, Segment, _profile
+from rik.sysid.synthetic.generate.laws import _scalar_laws, effect_laws
+from rik.sysid.synthetic.generate.truth import GroundTruth
 
 
 @dataclass(frozen=True, eq=False)

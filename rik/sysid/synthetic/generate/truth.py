@@ -11,8 +11,8 @@ from rik.errors import RikError
 from rik.joints.kinds import SCHEMAS
 from rik.paths import read_json
 from rik.schemas.joints import JointEffect, JointType, Spring, Tilt
-from rik.sysid.draws import joint_type as _joint
-from rik.sysid.generate.constants import TRUTH_FILE
+from rik.sysid.synthetic.draws import joint_type as _joint
+from rik.sysid.synthetic.generate.constants import TRUTH_FILE
 
 Effect = JointEffect | Spring
 

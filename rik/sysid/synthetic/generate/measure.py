@@ -11,12 +11,12 @@ import numpy as np
 from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
-from rik.sysid.draws import joint_type as _joint
-from rik.sysid.generate.common import _non_negative, _positive
-from rik.sysid.generate.constants import FORCE_NOISE, POSITION_NOISE, SOURCE
-from rik.sysid.generate.excitation import excitation_plan
-from rik.sysid.generate.simulation import Simulation, simulate
-from rik.sysid.generate.truth import GroundTruth
+from rik.sysid.synthetic.draws import joint_type as _joint
+from rik.sysid.synthetic.generate.common import _non_negative, _positive
+from rik.sysid.synthetic.generate.constants import FORCE_NOISE, POSITION_NOISE, SOURCE
+from rik.sysid.synthetic.generate.excitation import excitation_plan
+from rik.sysid.synthetic.generate.simulation import Simulation, simulate
+from rik.sysid.synthetic.generate.truth import GroundTruth
 from rik.sysid.trials import Trial, si_columns, write_simulated
 
 

@@ -1,6 +1,6 @@
 """A foreign generator of "measured" drawer and door trials: a second source of test data for ``rik sysid``, with
 force laws written independently of rik's effect library (nothing here imports :mod:`rik.joints`,
-:mod:`rik.sysid.effects`, :mod:`rik.combinator` or the laws of :mod:`rik.sysid.generate`).
+:mod:`rik.sysid.effects`, :mod:`rik.combinator` or the laws of :mod:`rik.sysid.synthetic.generate`).
 
 A :class:`ForeignTruth` is a 1-DOF joint (slide: m, N, kg; hinge: rad, N·m, kg·m²) integrated here in plain
 Python (semi-implicit Euler at :data:`TIMESTEP` = 0.1 ms; the LuGre bristle state implicitly, so it stays stable
@@ -56,10 +56,10 @@ import numpy as np
 from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialMeta, TrialUnits
-from rik.sysid.draws import joint_type as _joint
-from rik.sysid.draws import log_uniform as _log_uniform
-from rik.sysid.draws import tilt_phase
-from rik.sysid.draws import uniform as _uniform
+from rik.sysid.synthetic.draws import joint_type as _joint
+from rik.sysid.synthetic.draws import log_uniform as _log_uniform
+from rik.sysid.synthetic.draws import tilt_phase
+from rik.sysid.synthetic.draws import uniform as _uniform
 from rik.sysid.trials import Trial, si_columns, write_simulated
 
 FOREIGN_KINDS = ("none", "stiction", "magnetic_catch", "self_close", "soft_close", "quadratic_damping",

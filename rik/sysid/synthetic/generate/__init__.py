@@ -38,22 +38,24 @@ measured force. :func:`measure` samples it with noise, optional quantisation and
 time t is the true position at t - ``delay_s``, i.e. the position is recorded ``delay_s`` later than the force
 (positive delay in :mod:`rik.sysid.preprocess`).
 
-One module per job (everything public is re-exported here, so ``from rik.sysid.generate import X`` works):
+One module per job (everything public is re-exported here, so ``from rik.sysid.synthetic.generate import X``
+works):
 
-- :mod:`~rik.sysid.generate.constants`: effect kinds, the truth's solver settings, the constants of the shapes,
-  the hand, the sensors and the excitation, and the ranges of random truths;
-- :mod:`~rik.sysid.generate.common`: argument checks and random draws the modules share;
-- :mod:`~rik.sysid.generate.truth`: :class:`GroundTruth` and its ``truth.json``;
-- :mod:`~rik.sysid.generate.draw`: :func:`random_truth` and :func:`truth_parameters`;
-- :mod:`~rik.sysid.generate.laws`: the truth's force laws, each written once for floats and arrays;
-- :mod:`~rik.sysid.generate.excitation`: :class:`ExcitationPlan`, :func:`excitation_plan` and the hand's profiles;
-- :mod:`~rik.sysid.generate.simulation`: :func:`simulate` (MuJoCo) and :func:`hand_gains`;
-- :mod:`~rik.sysid.generate.measure`: :func:`measure`, :func:`simulate_trials` and :func:`write_trials`.
+- :mod:`~rik.sysid.synthetic.generate.constants`: effect kinds, the truth's solver settings, the constants of the
+  shapes, the hand, the sensors and the excitation, and the ranges of random truths;
+- :mod:`~rik.sysid.synthetic.generate.common`: argument checks and random draws the modules share;
+- :mod:`~rik.sysid.synthetic.generate.truth`: :class:`GroundTruth` and its ``truth.json``;
+- :mod:`~rik.sysid.synthetic.generate.draw`: :func:`random_truth` and :func:`truth_parameters`;
+- :mod:`~rik.sysid.synthetic.generate.laws`: the truth's force laws, each written once for floats and arrays;
+- :mod:`~rik.sysid.synthetic.generate.excitation`: :class:`ExcitationPlan`, :func:`excitation_plan` and the hand's
+  profiles;
+- :mod:`~rik.sysid.synthetic.generate.simulation`: :func:`simulate` (MuJoCo) and :func:`hand_gains`;
+- :mod:`~rik.sysid.synthetic.generate.measure`: :func:`measure`, :func:`simulate_trials` and :func:`write_trials`.
 """
 
 from __future__ import annotations
 
-from rik.sysid.generate.constants import (
+from rik.sysid.synthetic.generate.constants import (
     BASE_RANGES,
     BLOCK_MOVE_TIME,
     CREEP_STIFFNESS,
@@ -85,12 +87,19 @@ from rik.sysid.generate.constants import (
     TRUTH_FILE,
     Range,
 )
-from rik.sysid.generate.draw import SECOND_CONFLICTS, random_truth, truth_parameters
-from rik.sysid.generate.excitation import ExcitationPlan, Segment, SegmentKind, excitation_plan
-from rik.sysid.generate.laws import FrictionLaw, Law, direction_share, effect_laws, ground_truth_force, magnet_scale
-from rik.sysid.generate.measure import measure, simulate_trials, trial_units, write_trials
-from rik.sysid.generate.simulation import Simulation, hand_gains, simulate
-from rik.sysid.generate.truth import Effect, GroundTruth, read_truth
+from rik.sysid.synthetic.generate.draw import SECOND_CONFLICTS, random_truth, truth_parameters
+from rik.sysid.synthetic.generate.excitation import ExcitationPlan, Segment, SegmentKind, excitation_plan
+from rik.sysid.synthetic.generate.laws import (
+    FrictionLaw,
+    Law,
+    direction_share,
+    effect_laws,
+    ground_truth_force,
+    magnet_scale,
+)
+from rik.sysid.synthetic.generate.measure import measure, simulate_trials, trial_units, write_trials
+from rik.sysid.synthetic.generate.simulation import Simulation, hand_gains, simulate
+from rik.sysid.synthetic.generate.truth import Effect, GroundTruth, read_truth
 
 __all__ = [
     "BASE_RANGES", "BLOCK_MOVE_TIME", "CREEP_STIFFNESS", "CUBIC_FRACTION", "CUBIC_VREF", "DIRECTION_FEPS",

@@ -9,10 +9,10 @@ from typing import Literal
 import numpy as np
 
 from rik.schemas.joints import JointType
-from rik.sysid.draws import joint_type as _joint
-from rik.sysid.draws import log_uniform as _log_uniform
-from rik.sysid.draws import uniform as _uniform
-from rik.sysid.generate.constants import BLOCK_MOVE_TIME, EXCITE, MOVE_TIME, SLOW_RAMP
+from rik.sysid.synthetic.draws import joint_type as _joint
+from rik.sysid.synthetic.draws import log_uniform as _log_uniform
+from rik.sysid.synthetic.draws import uniform as _uniform
+from rik.sysid.synthetic.generate.constants import BLOCK_MOVE_TIME, EXCITE, MOVE_TIME, SLOW_RAMP
 
 SegmentKind = Literal["move", "slow", "creep", "hold", "release", "throw"]
 
