@@ -73,14 +73,14 @@ class Repeated:
         self._begin(scene)
 
     def _begin(self, scene: Any) -> None:
-        from rik.sim.operators import make_operator
+        from rik.episodes.operators import make_operator
 
         self.inner = make_operator(self.strategy)
         self.inner.reset(scene, self.rng)
         self.pulls += 1
 
     def act(self, scene: Any) -> Any:
-        from rik.sim.record import randomise_start
+        from rik.episodes.record import randomise_start
 
         if self.inner.done:
             self.log += [f"pull {self.pulls}: {line}" for line in self.inner.log]
@@ -96,10 +96,10 @@ def record_episode(catalog: Any, out: Path, frames: int, seed: int, repeat: bool
     """A recorded episode of exactly ``frames`` frames (rows) under ``out``, reused when already there."""
     import numpy as np
 
-    from rik.sim.episode import EpisodeRecorder, episode_id, read_meta, run_operator, write_episode
-    from rik.sim.operators import make_operator
-    from rik.sim.record import randomise_start, variant_dir
-    from rik.sim.scene import build_scene
+    from rik.episodes.episode import EpisodeRecorder, episode_id, read_meta, run_operator, write_episode
+    from rik.episodes.operators import make_operator
+    from rik.episodes.record import randomise_start, variant_dir
+    from rik.sim.build import build_scene
 
     scene = build_scene(variant_dir(catalog, VARIANT, VARIANTS))
     directory = out / episode_id(scene.info["id"], scene.front.id, STRATEGY, seed)
@@ -205,11 +205,11 @@ ROWS = ("render check (finished)", "scene build", "create", READ, "add_frame", "
 def install_timers() -> None:
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
+    import rik.episodes.replay as replay
     import rik.exporters.lerobot_card as card
     import rik.exporters.lerobot_check as check
     import rik.exporters.lerobot_export as export
     import rik.render.episodes as episodes
-    import rik.sim.replay as replay
 
     wrap = STAGES.wrap
     LeRobotDataset.create = staticmethod(wrap("create", LeRobotDataset.create))
@@ -239,9 +239,9 @@ def run_export(catalog: Any, work: Work, codec: str, out: Path, warmup: bool = F
 def bare_inputs(catalog: Any, work: Work, warmup: bool = False) -> dict[str, Any]:
     """What the bare loop is given, computed beforehand: the features, the task, the state and action of every
     frame (rik's own per-frame dicts without images) and the PNG paths of every frame and image key."""
+    from rik.episodes.episode import read_meta
     from rik.exporters.lerobot_frames import EpisodeSource, episode_frames, features, image_key
     from rik.render.streams import frame_name, read_manifest, stream_dir
-    from rik.sim.episode import read_meta
 
     directory = work.episode_dir(warmup)
     meta = read_meta(directory)

@@ -64,13 +64,13 @@ def main() -> None:
     args = parser.parse_args()
     os.environ.setdefault("MUJOCO_GL", "egl")
 
+    from rik.episodes.episode import read_episode, states
+    from rik.episodes.record import record
+    from rik.episodes.replay import episode_scene
     from rik.registry.load import load_catalog
     from rik.render.backend import available_variants
     from rik.render.renderers import MitsubaFrames, MujocoFrames
     from rik.render.streams import StreamSpec
-    from rik.sim.episode import read_episode, states
-    from rik.sim.record import record
-    from rik.sim.replay import episode_scene
 
     catalog = load_catalog()
     here = available_variants()

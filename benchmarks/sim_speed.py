@@ -79,8 +79,8 @@ def episode(directory: Path, front: str, seconds: float) -> dict[str, float]:
     import mujoco
     import numpy as np
 
-    from rik.sim.operators import make_operator
-    from rik.sim.scene import build_scene
+    from rik.episodes.operators import make_operator
+    from rik.sim.build import build_scene
 
     scene = build_scene(directory, front)
     m = scene.model
@@ -128,9 +128,9 @@ def robot_episode(directory: Path, front: str, seconds: float, robot: object | N
     with the arm's IK steps timed apart."""
     import numpy as np
 
-    from rik.sim import drive, ik
-    from rik.sim.operators import make_operator
-    from rik.sim.scene import build_scene
+    from rik.episodes.operators import make_operator
+    from rik.sim.build import build_scene
+    from rik.sim.robots import drive, ik
 
     scene = build_scene(directory, front, robot=robot)  # type: ignore[arg-type]
     op = make_operator("grasp_vertical")
@@ -164,8 +164,8 @@ def robot_episode(directory: Path, front: str, seconds: float, robot: object | N
 
 def robots_table(variants: list[str], robots: list[str], repeats: int, seconds: float) -> None:
     """Real-time factor and the IK's share of a control step per robot (see the module docstring)."""
+    from rik.episodes.record import variant_dir
     from rik.registry.load import load_catalog
-    from rik.sim.record import variant_dir
 
     catalog = load_catalog()
     header = (f"{'variant':<44} {'robot':<11} {'nq':>3} {'sim s':>5} {'opened':>6} {'control ms':>10} {'IK ms':>6} "
@@ -207,8 +207,8 @@ def main() -> None:
         robots_table(args.variant or list(VARIANTS), robots, args.repeats, args.seconds)
         return
 
+    from rik.episodes.record import variant_dir
     from rik.registry.load import load_catalog
-    from rik.sim.record import variant_dir
 
     catalog = load_catalog()
     header = (f"{'variant':<44} {'set-up':<9} {'colliders':>9} {'hull verts':>10} {'contacts':>8} {'sim s':>5} "

@@ -93,9 +93,9 @@ def floor(model_path: Path | None, sizes: tuple[tuple[int, int], ...], frames: i
 def demo_scene(robot: str = "hand-e"):
     """The demo variant's scene with ``robot`` (built into ``$RIK_BENCH_VARIANTS`` or ``variants`` if needed), as
     the station builds it."""
+    from rik.episodes.record import variant_dir
     from rik.registry import load_catalog
-    from rik.sim.record import variant_dir
-    from rik.sim.scene import build_scene
+    from rik.sim.build import build_scene
 
     catalog = load_catalog()
     entry = catalog.robot(robot)

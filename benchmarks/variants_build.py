@@ -33,7 +33,7 @@ def main() -> None:
 
     from rik.assets.build import build_assets
     from rik.combinator.build import build_variants
-    from rik.combinator.ids import select_variants
+    from rik.registry.ids import select_variants
     from rik.registry.load import load_catalog
 
     catalog = load_catalog()

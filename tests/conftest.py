@@ -69,8 +69,8 @@ def knob_recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A folder with ``episodes/`` holding one short episode of :data:`SHORT_KNOB` (grasp_vertical, seed 3, 0.3 s) and
     the ``variants/`` it was recorded in, made once per session (per worker): the input that tests of damaged or
     hostile input copy, or hand to a command that must refuse something else. Tests never write into it."""
+    from rik.episodes.record import record
     from rik.registry import load_catalog
-    from rik.sim.record import record
 
     root = tmp_path_factory.mktemp("knob-recording")
     record(load_catalog(), SHORT_KNOB, "grasp_vertical", seed=3, out=root / "episodes", variants=root / "variants",

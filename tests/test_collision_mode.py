@@ -10,10 +10,10 @@ from pathlib import Path
 import pytest
 
 from rik.combinator.build import build_variants, spec_hash
-from rik.combinator.ids import parse_variant_id
+from rik.episodes.record import variant_dir
 from rik.errors import RikError
 from rik.registry import load_catalog
-from rik.sim.record import variant_dir
+from rik.registry.ids import parse_variant_id
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 

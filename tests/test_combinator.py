@@ -11,10 +11,10 @@ import mujoco
 import pytest
 
 from rik.combinator.build import build_variant, check_variant, is_current
-from rik.combinator.ids import VariantKey, parse_variant_id, select_variants, variant_id
 from rik.combinator.placement import EDGE_INSET, place_handle
 from rik.errors import RikError, UnknownIdError
 from rik.registry import load_catalog
+from rik.registry.ids import VariantKey, parse_variant_id, select_variants, variant_id
 
 CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"

@@ -37,7 +37,7 @@ def _run(*cmd: str, cwd: Path, timeout: float = 300) -> subprocess.CompletedProc
 @pytest.fixture(scope="module")
 def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from rik.combinator.build import require_variants
-    from rik.sim.draw import Draw
+    from rik.episodes.draw import Draw
 
     drawn = Draw(*DRAW).episode(CAT, 0)
     assert (drawn.variant, drawn.front) == (VARIANT, FRONT), f"the draw changed: seed 0 now opens {drawn}"
@@ -50,7 +50,7 @@ def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def so100(variants: Path):
     import gymnasium as gym
 
-    import rik.sim.env  # noqa: F401
+    import rik.envs.open_front  # noqa: F401
 
     env = gym.make("rik/OpenFront-v0", variant=VARIANT, variants_dir=str(variants), robot="so100",
                    action_mode="joints").unwrapped
@@ -60,7 +60,7 @@ def so100(variants: Path):
 
 def test_so100_spaces_follow_its_layout(so100) -> None:
     from rik.sim.observation import ENV_STATE_NAMES
-    from rik.sim.robot_layout import robot_layout
+    from rik.sim.robots.layout import robot_layout
 
     layout = robot_layout(CAT.robot("so100"))
     assert so100.layout.state_names == layout.state_names
@@ -107,7 +107,7 @@ def test_joint_actions_replay_exactly(so100) -> None:
 def test_pose_actions_drive_an_arm_and_joint_actions_are_refused_for_the_hand_e(variants: Path) -> None:
     import gymnasium as gym
 
-    import rik.sim.env  # noqa: F401
+    import rik.envs.open_front  # noqa: F401
     from rik.errors import RikError
 
     env = gym.make("rik/OpenFront-v0", variant=VARIANT, variants_dir=str(variants), robot="panda-2f85",
@@ -155,7 +155,7 @@ def test_preprocess_observation_maps_ee_pose(variants: Path) -> None:
     import gymnasium as gym
     from lerobot.envs.utils import preprocess_observation
 
-    import rik.sim.env  # noqa: F401
+    import rik.envs.open_front  # noqa: F401
 
     env = gym.make("rik/OpenFront-v0", variant=VARIANT, variants_dir=str(variants), robot="panda-2f85",
                    action_mode="joints").unwrapped
@@ -172,15 +172,15 @@ def so100_policy(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> di
     """Two scripted SO-100 demonstrations, their state-only export (rik export-lerobot, in the arm's layout) and a
     tiny ACT trained on it for 4 steps by
     lerobot-train, which evaluates it once in rik's environment with the SO-100."""
-    from rik.sim.record import record
+    from rik.episodes.record import record
 
     root = tmp_path_factory.mktemp("so100-loop")
     # rik record VARIANT -s grasp_vertical --robot so100 -n 2, in the library: 3 s episodes keep it short
     record(CAT, VARIANT, "grasp_vertical", episodes=2, front=FRONT, out=root / "episodes", variants=variants,
            robot=CAT.robot("so100"), max_seconds=3.0)
     # rik export-lerobot EPISODES --out dataset --repo-id local/so100 --streams none, in the library
+    from rik.episodes.episode import find_episodes
     from rik.exporters.lerobot_export import ExportSpec, export_lerobot
-    from rik.sim.episode import find_episodes
 
     export_lerobot(CAT, find_episodes([root / "episodes"]), root / "dataset", ExportSpec("local/so100", streams=()),
                    variants=variants)
@@ -229,7 +229,7 @@ def test_the_exported_joint_actions_replay_a_recording(so100_policy: dict, so100
     """A recording's actions in the SO-100's layout (degrees and gripper percent, what the dataset holds), stepped
     in the joints mode from the recording's seed, redo the recording: the same start, and the drawer opens as it
     did (the degree-radian round trip changes the last bits, and contact amplifies them a little)."""
-    from rik.sim.episode import find_episodes, read_episode, states
+    from rik.episodes.episode import find_episodes, read_episode, states
 
     recorded = next(d for d in find_episodes([so100_policy["root"] / "episodes"]) if read_episode(d)[0].seed == 0)
     table = read_episode(recorded)[1]
@@ -250,7 +250,7 @@ def test_scripted_eval_with_an_arm_is_rik_record_with_it(so100_policy: dict, var
     """``rik eval strategy:S --robot so100`` runs the episode ``rik record --robot so100 --seed`` records: the
     recording of seed 0 (3 s, 60 control steps) and the evaluated episode of seed 0 cut off after 60 steps end at
     the same opening (a quarter open: the arm pulled)."""
-    from rik.sim.episode import find_episodes, read_episode
+    from rik.episodes.episode import find_episodes, read_episode
 
     recorded = next(d for d in find_episodes([so100_policy["root"] / "episodes"]) if read_episode(d)[0].seed == 0)
     opening = read_episode(recorded)[1].column("opening").to_pylist()

@@ -16,13 +16,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rik.episodes.episode import write_meta
+from rik.episodes.record import record
 from rik.errors import RikError
 from rik.exporters.lerobot_export import ExportSpec, export_lerobot
 from rik.exporters.lerobot_frames import resample_indices
 from rik.registry import load_catalog
-from rik.sim.episode import write_meta
 from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
-from rik.sim.record import record
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 
@@ -55,8 +55,8 @@ def dataset(work: Path) -> Path:
 def test_export_loads_with_both_streams_metadata_and_matching_counts(dataset: Path, work: Path) -> None:
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
+    from rik.episodes.episode import find_episodes, read_meta
     from rik.exporters.lerobot_check import check_frame_counts
-    from rik.sim.episode import find_episodes, read_meta
 
     ds = LeRobotDataset(REPO, root=dataset, video_backend="pyav")
     metas = {read_meta(d).id: read_meta(d) for d in find_episodes([work / "episodes"])}
@@ -177,7 +177,7 @@ def test_killed_export_resumes_to_the_same_dataset(dataset: Path, work: Path, tm
 def test_export_of_one_stream_and_camera_resampled(dataset: Path, work: Path, tmp_path: Path) -> None:
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
-    from rik.sim.episode import find_episodes, read_meta
+    from rik.episodes.episode import find_episodes, read_meta
 
     spec = ExportSpec(REPO, streams=("sim",), cameras=("front",), fps=10, **SPEC)
     result = export_lerobot(CAT, [work / "episodes"], tmp_path / "ds10", spec, renders=work / "renders",
@@ -330,8 +330,8 @@ def test_state_only_export_has_the_two_state_vectors_and_action(rik, work: Path,
 
 def test_resume_of_an_older_layout_says_to_export_again(rik, work: Path, tmp_path: Path) -> None:
     """A partial export written before the state split (plan.json without a layout) is not continued."""
+    from rik.episodes.episode import find_episodes, read_meta
     from rik.exporters.lerobot_export import _plan
-    from rik.sim.episode import find_episodes, read_meta
 
     out = tmp_path / "old"
     partial = tmp_path / "old.partial"
@@ -361,7 +361,7 @@ def test_check_names_the_state_layout(dataset: Path) -> None:
 
 
 def test_export_does_not_import_or_register_the_env(work: Path, tmp_path: Path) -> None:
-    """Exporting reads observations through rik.sim.observation: it does not import rik.sim.env, which would register
+    """Exporting reads observations through rik.sim.observation: it does not import rik.envs.open_front, which would register
     rik/OpenFront-v0 with gymnasium as a side effect. (gymnasium itself is loaded all the same: lerobot's dataset
     module imports it.) A fresh interpreter, as a user has."""
     code = ("import sys; from pathlib import Path; from rik.registry import load_catalog; "
@@ -369,7 +369,7 @@ def test_export_does_not_import_or_register_the_env(work: Path, tmp_path: Path) 
             f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(tmp_path / 'ds')!r}), "
             f"ExportSpec({REPO!r}, streams=(), shard_episodes=2), renders=Path({str(tmp_path / 'r')!r}), "
             f"variants=Path({str(work / 'variants')!r})); "
-            "import gymnasium; print('rik.sim.env' in sys.modules, 'rik/OpenFront-v0' in gymnasium.registry)")
+            "import gymnasium; print('rik.envs.open_front' in sys.modules, 'rik/OpenFront-v0' in gymnasium.registry)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip().splitlines()[-1] == "False False"

@@ -63,7 +63,7 @@ def recordings(root: Path) -> dict[str, tuple]:
     """Episode id -> (meta, states table as numpy columns) of the recorded episodes."""
     import pyarrow as pa
 
-    from rik.sim.episode import find_episodes, read_episode
+    from rik.episodes.episode import find_episodes, read_episode
 
     out = {}
     for d in find_episodes([root / "episodes"]):
@@ -195,7 +195,7 @@ def test_so100_export_with_a_camera_stream(tmp_path: Path, variants: Path) -> No
     """One tiny camera stream of a short SO-100 episode: the arm's wrist camera is ``wrist`` like the Hand-E's."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
-    from rik.sim.record import record
+    from rik.episodes.record import record
 
     record(CAT, BOW, "contact_rich", robot=CAT.robot("so100"), max_seconds=0.4, out=tmp_path / "episodes",
            variants=variants)
@@ -216,7 +216,7 @@ def test_panda_dataset_holds_joints_targets_and_its_ee_pose(panda: Path, variant
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
     from scipy.spatial.transform import Rotation
 
-    from rik.sim.robot_layout import EE_NAMES
+    from rik.sim.robots.layout import EE_NAMES
 
     ds = LeRobotDataset(REPO, root=panda / "ds", video_backend="pyav")
     names = [f"joint{i}.pos" for i in range(1, 8)] + ["gripper.pos"]
@@ -225,8 +225,8 @@ def test_panda_dataset_holds_joints_targets_and_its_ee_pose(panda: Path, variant
     assert feats["observation.state"]["names"] == names == feats["action"]["names"]
     assert feats["observation.ee_pose"]["names"] == list(EE_NAMES) and feats["observation.ee_pose"]["dtype"] == "float32"
     assert tuple(feats["observation.ee_pose"]["shape"]) == (6,)
-    from rik.sim.episode import find_episodes, read_episode, states
-    from rik.sim.replay import episode_scene
+    from rik.episodes.episode import find_episodes, read_episode, states
+    from rik.episodes.replay import episode_scene
 
     recs = recordings(panda)
     data = frames_by_episode(panda / "ds")
@@ -261,7 +261,7 @@ def test_panda_dataset_holds_joints_targets_and_its_ee_pose(panda: Path, variant
 
 # ---- one robot per dataset ---------------------------------------------------------------------------------------
 def test_a_dataset_holds_one_robot(rik, so100: Path, panda: Path, variants: Path, tmp_path: Path) -> None:
-    from rik.sim.episode import find_episodes
+    from rik.episodes.episode import find_episodes
 
     out = tmp_path / "mixed"
     r = rik("export-lerobot", str(so100 / "episodes"), str(panda / "episodes"), "--streams", "none", "--repo-id",
@@ -276,8 +276,8 @@ def test_a_dataset_holds_one_robot(rik, so100: Path, panda: Path, variants: Path
 def test_resume_takes_the_robot_as_part_of_the_plan(rik, panda: Path, variants: Path, tmp_path: Path) -> None:
     """An interrupted export's plan names the robot; one of another robot (or a plan from before robots, which was
     the Hand-E's) is not continued with these episodes; the right one is."""
+    from rik.episodes.episode import find_episodes, read_meta
     from rik.exporters.lerobot_export import ExportSpec, _plan
-    from rik.sim.episode import find_episodes, read_meta
 
     out, partial = tmp_path / "ds", tmp_path / "ds.partial"
     metas = {d: read_meta(d) for d in find_episodes([panda / "episodes"])}
@@ -310,7 +310,7 @@ def test_an_episode_whose_robot_the_catalog_lacks_is_named(rik, panda: Path, var
     not its catalog entry's."""
     import shutil
 
-    from rik.sim.episode import find_episodes, write_meta
+    from rik.episodes.episode import find_episodes, write_meta
 
     src = find_episodes([panda / "episodes"])[0]
     for field, value, expected in (
@@ -342,10 +342,10 @@ def test_a_format_2_hand_e_episode_exports_as_before(variants: Path, tmp_path: P
 
     import pyarrow.parquet as pq
 
+    from rik.episodes.episode import COLUMNS_2, meta_digest
+    from rik.episodes.record import record
     from rik.exporters.lerobot_export import ExportSpec, export_lerobot
-    from rik.sim.episode import COLUMNS_2, meta_digest
     from rik.sim.observation import ROBOT_STATE_NAMES
-    from rik.sim.record import record
 
     (meta,) = record(CAT, BOW, "contact_rich", max_seconds=0.3, out=tmp_path / "new", variants=variants)
     old = tmp_path / "old" / meta.id

@@ -18,10 +18,10 @@ import pytest
 import yaml
 from conftest import read_line
 
+from rik.episodes.episode import EpisodeError, meta_digest, read_episode, read_meta
 from rik.errors import RikError
 from rik.paths import inside
 from rik.registry import load_catalog
-from rik.sim.episode import EpisodeError, meta_digest, read_episode, read_meta
 
 CAT = load_catalog()
 KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
@@ -332,7 +332,7 @@ def test_two_renders_of_one_stream_render_it_once(episode: Path, knob_recording:
         "import sys, time; from pathlib import Path\n"
         "from rik.locks import exclusive; from rik.registry import load_catalog\n"
         "from rik.render.episodes import _render_stream; from rik.render.streams import StreamSpec, stream_dir\n"
-        "from rik.sim.episode import read_meta\n"
+        "from rik.episodes.episode import read_meta\n"
         "ep, renders, variants = map(Path, sys.argv[1:])\n"
         "spec = StreamSpec('sim', 16, 16); final = stream_dir(renders, read_meta(ep).id, spec)\n"
         "with exclusive(final, 'rik render'):\n"

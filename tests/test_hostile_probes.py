@@ -164,7 +164,7 @@ def test_visual_gap_bounds_its_work(rik, tmp_path: Path) -> None:
     ({"episode_length": math.nan}, "episode_length nan: must be a whole number of control steps, at least 1"),
 ])
 def test_gym_env_checks_its_arguments(knob_recording: Path, kwargs: dict, message: str) -> None:
-    from rik.sim.env import OpenFrontEnv
+    from rik.envs.open_front import OpenFrontEnv
 
     with pytest.raises(RikError) as exc:
         OpenFrontEnv(KNOB, variants_dir=knob_recording / "variants", **kwargs)
@@ -172,7 +172,7 @@ def test_gym_env_checks_its_arguments(knob_recording: Path, kwargs: dict, messag
 
 
 def test_gym_env_variants_dir_that_is_a_file(tmp_path: Path) -> None:
-    from rik.sim.env import OpenFrontEnv
+    from rik.envs.open_front import OpenFrontEnv
 
     file = tmp_path / "variants"
     file.write_text("")

@@ -221,7 +221,7 @@ VARIANT_EFFECTS = (Stiction(breakaway=2.0, stribeck_velocity=0.02), MagneticCatc
 def measured(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """A user catalog holding preset ``fitted`` (written by write_preset) and its smallest variant, built."""
     from rik.combinator.build import build_variant
-    from rik.combinator.ids import VariantKey
+    from rik.registry.ids import VariantKey
     from rik.sysid.preset import write_preset
 
     root = tmp_path_factory.mktemp("measured")
@@ -278,9 +278,9 @@ def test_variant_with_effects_in_mjcf_and_info(measured: tuple[Path, Path]) -> N
 
 
 def test_scene_with_effects_records_replays_exactly_and_opens(measured: tuple[Path, Path], tmp_path: Path) -> None:
-    from rik.sim.record import record
-    from rik.sim.replay import verify_episode
-    from rik.sim.scene import build_scene
+    from rik.episodes.record import record
+    from rik.episodes.replay import verify_episode
+    from rik.sim.build import build_scene
 
     catalog_dir, variants = measured
     catalog = load_catalog([catalog_dir])

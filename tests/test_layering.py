@@ -1,28 +1,73 @@
-"""Import rules between rik's packages, read from the source (ast): every import counts, also those inside
-functions and ``if TYPE_CHECKING:`` blocks."""
+"""rik's architecture as data: its packages on floors, each importing only from floors below it, read from the source
+(ast). Every import counts: at module level, inside functions and in ``if TYPE_CHECKING:`` blocks. The table
+(:data:`FLOORS`) is also what ``docs/architecture.md`` is generated from (``python tests/test_layering.py``), and a
+test keeps that page equal to it."""
 
 from __future__ import annotations
 
 import ast
+import sys
 from collections import defaultdict
 from pathlib import Path
 
 import rik
 
 PACKAGE = Path(rik.__file__).parent
+DOC = PACKAGE.parent / "docs" / "architecture.md"
+
+FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
+    (("rik", "The root: rik's version and the catalog format's; imports nothing."),),
+    (("rik.errors", "`RikError` and its kinds: the one-line messages every command ends with."),),
+    (("rik.paths", "Files and folders: atomic writes, bounded JSON reads, what may be replaced or removed."),
+     ("rik.locks", "Cross-process file locks (content-addressed caches, shared folders)."),
+     ("rik.schemas", "pydantic models of everything rik reads: catalog entries, episodes, dataset specs, "
+                     "measured trajectories. SI units.")),
+    (("rik.joints", "Joint mechanisms and resistance laws: MJCF for MuJoCo's own, runtime effects for the rest."),),
+    (("rik.registry", "The catalog: YAML files loaded, validated and indexed; ids, splits, the fit test, "
+                      "CATALOG.md."),),
+    (("rik.assets", "Meshes of handles and base units, CoACD collision (cached), the collision-fidelity metric."),
+     ("rik.sysid", "Model discovery from measured trajectories: trials, fits, effects, reports, presets; "
+                   "synthetic measurements.")),
+    (("rik.combinator", "Variants: base unit x handle x preset placed, checked by name and written as MJCF."),),
+    (("rik.sim", "The simulated scene (scene, build, pose, grasp, probe, observation, outcome) and the robots "
+                 "(sim/robots: gripper, arm, ik, drive, reach, checks, layout)."),),
+    (("rik.episodes", "Episodes: scripted strategies, the recorder, the format on disk, exact replay, the seeded "
+                      "draw."),),
+    (("rik.render", "Images of episodes: MuJoCo and Mitsuba streams, alignment, visual-gap metrics."),
+     ("rik.teleop", "Teleoperation: sessions, the keymap, the desktop viewer, the browser station."),
+     ("rik.benchmark", "The paper's resistance benchmark (`rik bench`): F/P/S per handle type, strategy, "
+                       "preset.")),
+    (("rik.envs", "The gymnasium environment rik/OpenFront-v0 that LeRobot and `rik eval` run policies in."),
+     ("rik.exporters", "LeRobot v3.0 export: frames, features, the card, the check of a finished export."),
+     ("rik.web", "The web app (`rik serve`): the catalog pages and the teleop station behind a launch-token "
+                 "gate.")),
+    (("rik.evaluation", "Policies on the benchmark (`rik eval`): a saved LeRobot policy checked, loaded and run."),),
+    (("rik.dataset", "`rik dataset build`: a spec planned into units, run locally or on Ray, merged, verified."),),
+    (("rik.cli", "The `rik` command (typer + rich): parses and prints, the library does the work."),),
+    (("rik.__main__", "`python -m rik`."),),
+)
+"""rik's packages from the bottom floor up, each with its job. A module may import its own package and the packages
+of lower floors, never a package of its own floor or of one above."""
 
 FORBIDDEN = {
-    "rik.joints": ("rik.sim", "rik.combinator", "rik.sysid"),
-    "rik.combinator": ("rik.sim",),
     "rik.sysid.synthetic.foreign": ("rik.joints", "rik.sim", "rik.combinator", "rik.sysid.effects",
                                     "rik.sysid.synthetic.generate"),
-    **{m: ("rik.sim.env",) for m in ("rik.exporters", "rik.dataset", "rik.render", "rik.web", "rik.sim.operators",
-                                     "rik.sim.record", "rik.sim.episode", "rik.sim.teleop")},
+    **{p: ("rik.envs",) for p in ("rik.dataset", "rik.evaluation")},
 }
-"""Package or module → packages and modules it must not import (joint effects sit below the combinator, the
-simulator and sysid; the combinator below the simulator; the foreign generator writes its laws independently of
-rik's; the gymnasium environment sits above the recorder, the operators, the exporters and the web app: they take
-observations from :mod:`rik.sim.observation`, so that none of them imports gymnasium's registration of the env)."""
+"""Rules finer than the floors: the foreign generator of measured data writes its laws independently of rik's, and the
+gymnasium environment stays out of the dataset build and ``rik eval`` (they take observations from
+:mod:`rik.sim.observation`, so that none of them imports gymnasium's registration of the env)."""
+
+HEAVY = ("numpy", "scipy", "mujoco", "torch", "lerobot", "mitsuba", "drjit", "coacd", "trimesh", "pyarrow", "pandas",
+         "PIL", "cv2", "av", "imageio", "ray", "fastapi", "starlette", "uvicorn", "matplotlib", "gymnasium", "pydantic",
+         "yaml", "manifold3d", "skimage", "sklearn", "glfw", "playwright", "huggingface_hub", "datasets")
+"""Libraries that take long to import: a module may import a module of its own package inside a function (rather
+than at its top) only when that module brings one of these that the importer does not already load."""
+
+
+def floor_of() -> dict[str, int]:
+    """Package -> floor number (0: the bottom)."""
+    return {package: i for i, floor in enumerate(FLOORS) for package, _ in floor}
 
 
 def _module(path: Path) -> str:
@@ -30,46 +75,61 @@ def _module(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _imports(path: Path, module: str | None = None) -> set[str]:
-    """Absolute names of the rik modules (or names in them) that ``path`` imports, relative imports resolved;
-    ``module``: the file's module name (default: from its place in the package)."""
+MODULE_FILES = {_module(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+"""Every module of rik -> its file."""
+
+
+def _type_only(tree: ast.AST) -> set[int]:
+    """ids of the nodes inside ``if TYPE_CHECKING:`` blocks."""
+    return {id(x) for node in ast.walk(tree) if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+            for sub in node.body for x in ast.walk(sub)}
+
+
+def _resolve(name: str) -> str:
+    """The rik module a dotted name lives in (``rik.sim.scene.SimScene`` -> ``rik.sim.scene``)."""
+    while name and name not in MODULE_FILES:
+        name = name.rpartition(".")[0]
+    return name
+
+
+def _imports(path: Path, module: str | None = None, *, types: bool = True, where: str = "all") -> set[str]:
+    """Absolute names of the rik modules that ``path`` imports, relative imports resolved (``from pkg import sub``
+    names ``pkg.sub``); ``module``: the file's module name (default: from its place in the package); ``types``: also
+    imports under ``TYPE_CHECKING``; ``where``: ``all``, ``top`` (module level) or ``function`` imports."""
     module = module or _module(path)
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skip = set() if types else _type_only(tree)
+    in_functions = {id(n) for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
+                    for n in ast.walk(f)}
+    nodes = [n for n in ast.walk(tree) if where == "all" or (id(n) in in_functions) == (where == "function")]
     found = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in nodes:
+        if id(node) in skip:
+            continue
         if isinstance(node, ast.Import):
             found.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
             base = package.split(".")
             base = base[:len(base) - node.level + 1] if node.level else []
             name = ".".join([*base, node.module] if node.module else base)
-            found.add(name)
-            found.update(f"{name}.{a.name}" for a in node.names)  # ``from rik import sim``
+            subs = {f"{name}.{a.name}" for a in node.names}
+            found.update(subs)
+            if not subs <= set(MODULE_FILES):
+                found.add(name)
     return {n for n in found if n == "rik" or n.startswith("rik.")}
 
 
-MODULES = {f"rik.{p.stem}" for p in PACKAGE.iterdir() if p.suffix == ".py" or (p / "__init__.py").exists()}
-"""rik's top-level modules and packages (``rik.sim``, ``rik.errors``)."""
-
-
 def _top(name: str) -> str:
+    """The package of a module on the floors: ``rik.sim.robots.drive`` -> ``rik.sim``, ``rik.errors`` -> itself."""
     return ".".join(name.split(".")[:2])
 
 
-def _graph() -> dict[str, set[str]]:
-    """Top-level package (``rik.sim``) → the top-level packages its modules import."""
-    edges: dict[str, set[str]] = defaultdict(set)
-    for path in sorted(PACKAGE.rglob("*.py")):
-        source = _top(_module(path))
-        edges[source].update(t for t in map(_top, _imports(path)) if t in MODULES and t != source)
-    return edges
-
-
 def _breaches(rules: dict[str, tuple[str, ...]], files: list[tuple[Path, str]] | None = None) -> list[str]:
-    """``<module> imports <name>`` for every import that breaks ``rules``, in ``files`` ((path, module) pairs;
-    default: all of rik)."""
+    """``<module> imports <name>`` for every import that breaks ``rules`` (module or package -> what it must not
+    import), in ``files`` ((path, module) pairs; default: all of rik)."""
     out = []
-    for path, module in files or [(p, _module(p)) for p in sorted(PACKAGE.rglob("*.py"))]:
+    for path, module in files or [(p, m) for m, p in MODULE_FILES.items()]:
         for package, forbidden in rules.items():
             if module == package or module.startswith(package + "."):
                 out += [f"{module} imports {n}" for n in sorted(_imports(path, module))
@@ -77,38 +137,153 @@ def _breaches(rules: dict[str, tuple[str, ...]], files: list[tuple[Path, str]] |
     return out
 
 
-def _reaches(edges: dict[str, set[str]], start: str) -> set[str]:
-    seen: set[str] = set()
-    todo = list(edges.get(start, ()))
-    while todo:
-        node = todo.pop()
-        if node not in seen:
-            seen.add(node)
-            todo += edges.get(node, ())
-    return seen
+def floor_breaches(files: list[tuple[Path, str]] | None = None) -> list[str]:
+    """``<module> (floor i) imports <name> (floor j)`` for every import of a package on the same floor or above."""
+    floors = floor_of()
+    out = []
+    for path, module in files or [(p, m) for m, p in MODULE_FILES.items()]:
+        own = _top(module)
+        for name in sorted(_imports(path, module)):
+            other = _top(name)
+            if other != own and other in floors and own in floors and floors[other] >= floors[own]:
+                out.append(f"{module} (floor {floors[own]}) imports {name} (floor {floors[other]})")
+    return out
 
 
-def test_the_import_rules_hold() -> None:
+def module_graph(*, types: bool = True) -> dict[str, set[str]]:
+    """Module -> the rik modules it imports (``types``: also under TYPE_CHECKING)."""
+    return {m: {r for n in _imports(p, m, types=types) if (r := _resolve(n)) and r != m}
+            for m, p in MODULE_FILES.items()}
+
+
+def circles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan's algorithm, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    for root in edges:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(edges.get(root, ()))))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(edges.get(child, ())))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.append(sorted(component))
+    return found
+
+
+def _heavy_at_import(module: str, seen: dict[str, set[str]]) -> set[str]:
+    """The heavy libraries (:data:`HEAVY`) that importing ``module`` loads: its own top-level imports and those of
+    the rik modules it imports at top level."""
+    if module in seen:
+        return seen[module]
+    seen[module] = set()
+    path = MODULE_FILES[module]
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skip = _type_only(tree)
+    heavy: set[str] = set()
+    for node in tree.body:
+        for sub in ast.walk(node):
+            if id(sub) in skip or isinstance(sub, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            names = ([a.name for a in sub.names] if isinstance(sub, ast.Import) else
+                     [sub.module or ""] if isinstance(sub, ast.ImportFrom) and sub.level == 0 else [])
+            heavy.update(n.split(".")[0] for n in names if n.split(".")[0] in HEAVY)
+    for name in _imports(path, module, types=False, where="top"):
+        target = _resolve(name)
+        if target and target != module:
+            heavy |= _heavy_at_import(target, seen)
+    seen[module] = heavy
+    return heavy
+
+
+def lazy_sibling_imports() -> list[str]:
+    """``<module> imports <sibling> inside a function`` for each import of a module of the same package inside a
+    function where that module loads no heavy library the importer does not already load."""
+    seen: dict[str, set[str]] = {}
+    out = []
+    for module, path in MODULE_FILES.items():
+        own = _top(module)
+        mine = _heavy_at_import(module, seen)
+        for name in sorted(_imports(path, module, types=False, where="function")):
+            target = _resolve(name)
+            if target and target != module and _top(target) == own and not _heavy_at_import(target, seen) - mine:
+                out.append(f"{module} imports {target} inside a function")
+    return sorted(set(out))
+
+
+# ---- the tests ----------------------------------------------------------------------------------------------------
+def test_every_package_is_on_one_floor() -> None:
+    placed = [package for floor in FLOORS for package, _ in floor]
+    assert len(placed) == len(set(placed))
+    assert set(placed) == {_top(m) for m in MODULE_FILES}
+
+
+def test_every_import_runs_down_the_floors() -> None:
+    assert floor_breaches() == []
+
+
+def test_the_finer_rules_hold() -> None:
     assert _breaches(FORBIDDEN) == []
 
 
-def test_joint_effects_are_in_no_package_cycle() -> None:
-    edges = _graph()
-    assert "rik.joints" in edges  # the package exists and imports something (rik.schemas)
-    assert "rik.joints" not in _reaches(edges, "rik.joints")
+def test_no_module_imports_another_that_imports_it_back() -> None:
+    """No circle between rik's modules, counting every import (also inside functions and under TYPE_CHECKING)."""
+    assert circles(module_graph()) == []
 
 
-def test_the_environment_is_in_no_module_cycle_of_the_simulator() -> None:
-    """rik.sim.env imports the recorder; nothing the recorder imports may import the env back (the cycle env ->
-    record -> operators -> env is cut)."""
-    modules = {_module(p): p for p in sorted((PACKAGE / "sim").glob("*.py"))}
-    edges = {m: {n for n in _imports(p) if n in modules and n != m} for m, p in modules.items()}
-    assert "rik.sim.record" in edges["rik.sim.env"]
-    assert "rik.sim.env" not in _reaches(edges, "rik.sim.env")
+def test_modules_of_one_package_import_each_other_at_the_top() -> None:
+    """A function-level import of a module of the same package hides a circle, unless the module loads a heavy
+    library (:data:`HEAVY`) that the importer does not."""
+    assert lazy_sibling_imports() == []
+
+
+def test_the_architecture_page_is_the_table() -> None:
+    assert DOC.read_text(encoding="utf-8") == architecture_page(), "run: uv run python tests/test_layering.py"
+
+
+# ---- the checker itself -------------------------------------------------------------------------------------------
+def test_the_floors_catch_what_main_had_before_the_layering(tmp_path: Path) -> None:
+    """The two arrows that ran up the floors before this table existed: the gym env imported the renderer (from
+    ``rik.sim``), and the catalog's checks imported the variant-id grammar from the combinator."""
+    env = tmp_path / "env.py"
+    env.write_text("def make():\n    from rik.render.renderers import make_renderer\n", encoding="utf-8")
+    checks = tmp_path / "checks.py"
+    checks.write_text("from rik.combinator.ids import variant_id\n", encoding="utf-8")
+    assert floor_breaches([(env, "rik.sim.env"), (checks, "rik.registry.checks")]) == [
+        f"rik.sim.env (floor {floor_of()['rik.sim']}) imports rik.render.renderers (floor {floor_of()['rik.render']})",
+        f"rik.registry.checks (floor {floor_of()['rik.registry']}) imports rik.combinator.ids "
+        f"(floor {floor_of()['rik.combinator']})"]
 
 
 def test_the_rules_see_imports_in_functions_and_type_checking_blocks(tmp_path: Path) -> None:
-    """The checker itself: a lazy import inside a function and one under TYPE_CHECKING both count."""
+    """A lazy import inside a function and one under TYPE_CHECKING both count."""
     source = tmp_path / "probe.py"
     source.write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from rik.sim.scene import SimScene\n"
                       "def f():\n    import rik.sysid.fit\n    from rik import combinator\n", encoding="utf-8")
@@ -116,3 +291,42 @@ def test_the_rules_see_imports_in_functions_and_type_checking_blocks(tmp_path: P
     assert {"rik.sim.scene", "rik.sysid.fit", "rik.combinator"} <= found
     assert _breaches({"rik.joints": ("rik.sim",)}, [(source, "rik.joints.probe")]) == [
         "rik.joints.probe imports rik.sim.scene", "rik.joints.probe imports rik.sim.scene.SimScene"]
+    assert "rik.sim.scene" not in _imports(source, module="rik.joints.probe", types=False)
+
+
+def test_circles_are_found_through_several_modules() -> None:
+    edges = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": {"e"}}
+    assert circles(edges) == [["a", "b", "c"]]
+
+
+# ---- docs/architecture.md -----------------------------------------------------------------------------------------
+def architecture_page() -> str:
+    """docs/architecture.md, from :data:`FLOORS` and the imports as they are."""
+    floors = floor_of()
+    uses: dict[str, set[str]] = defaultdict(set)
+    for module, path in MODULE_FILES.items():
+        for name in _imports(path, module):
+            if _top(name) != _top(module) and _top(name) in floors:
+                uses[_top(module)].add(_top(name))
+    lines = ["# rik's architecture", "",
+             "<!-- generated from tests/test_layering.py (FLOORS): `uv run python tests/test_layering.py`; "
+             "a test fails when it is stale -->", "",
+             "rik's packages stand on floors. A module imports its own package and packages of lower floors only: "
+             "never one of its own floor or above, and no module imports another that imports it back (every "
+             "import counts, also inside functions and under `TYPE_CHECKING`). `tests/test_layering.py` holds the "
+             "table and fails on any import against it.", "",
+             "Where to look: robots in `rik/sim/robots/`, episodes in `rik/episodes/`, teleoperation in "
+             "`rik/teleop/`, the benchmark in `rik/benchmark/`, evaluation of policies in `rik/evaluation/`.", "",
+             "| floor | package | job | imports (today) |", "|---|---|---|---|"]
+    for i in reversed(range(len(FLOORS))):
+        for package, job in FLOORS[i]:
+            used = ", ".join(f"`{u}`" for u in sorted(uses[package], key=lambda u: (-floors[u], u))) or "nothing"
+            folder = package.replace(".", "/") + ("" if package == "rik.__main__" else "/")
+            shown = folder if (PACKAGE.parent / folder).is_dir() else package.replace(".", "/") + ".py"
+            lines.append(f"| {i} | `{shown}` | {job} | {used} |")
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    DOC.write_text(architecture_page(), encoding="utf-8")
+    print(f"wrote {DOC}", file=sys.stderr)

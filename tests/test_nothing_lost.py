@@ -193,7 +193,7 @@ def test_stream_folder_of_the_user_is_not_replaced(tmp_path: Path) -> None:
 
 def test_variant_folder_of_the_user_is_not_replaced(tmp_path: Path) -> None:
     from rik.combinator.build import build_variant
-    from rik.combinator.ids import parse_variant_id
+    from rik.registry.ids import parse_variant_id
 
     cat = load_catalog()
     (tmp_path / KNOB).mkdir()
@@ -216,8 +216,8 @@ def test_manifest_of_the_user_in_variants_out_is_not_overwritten(rik, tmp_path: 
 
 
 def test_episode_folder_of_the_user_is_not_replaced(tmp_path: Path) -> None:
-    from rik.sim.episode import episode_id
-    from rik.sim.record import record, variant_dir
+    from rik.episodes.episode import episode_id
+    from rik.episodes.record import record, variant_dir
 
     cat = load_catalog()
     variants = tmp_path / "variants"
@@ -452,7 +452,7 @@ def test_ground_truth_that_is_not_utf8_names_the_file(tmp_path: Path) -> None:
 def test_resuming_a_finished_export_says_it_is_complete(rik, tmp_path: Path) -> None:
     """``export-lerobot --resume`` into a finished export: "already complete", not "not a rik export" (rik's card
     fields live in ``meta/``), and the dataset is left as it was."""
-    from rik.sim.record import record
+    from rik.episodes.record import record
 
     cat = load_catalog()
     record(cat, KNOB, "grasp_vertical", seed=3, out=tmp_path / "episodes", variants=tmp_path / "variants",

@@ -113,7 +113,7 @@ def _frames(path: Path) -> np.ndarray:
 
 
 def _handle_of(variant: str) -> str:
-    from rik.combinator.ids import parse_variant_id
+    from rik.registry.ids import parse_variant_id
 
     return parse_variant_id(CAT, variant).handle
 
@@ -170,9 +170,9 @@ def test_eval_rejects_unknown_split_preset_and_strategy(rik, tmp_path: Path) -> 
 def test_scripted_eval_is_rik_record_on_the_drawn_variant(rik, tmp_path: Path) -> None:
     """``rik eval strategy:S`` runs the episode ``rik record --seed`` records on the drawn variant: the same start
     and the same states up to the step the front reaches 90 % (where the environment ends the episode)."""
-    from rik.sim.draw import Draw
-    from rik.sim.episode import find_episodes, read_episode
-    from rik.sim.record import record
+    from rik.episodes.draw import Draw
+    from rik.episodes.episode import find_episodes, read_episode
+    from rik.episodes.record import record
 
     variants = tmp_path / "variants"
     r = rik("eval", "strategy:contact_rich", "--split", "test", *DRAW, "-n", "1", "--seed", "7", "--videos", "0",
@@ -198,9 +198,9 @@ def test_env_in_absolute_mode_replays_a_recording_exactly(tmp_path: Path) -> Non
     same seed reproduces its states bit for bit."""
     import gymnasium as gym
 
-    import rik.sim.env  # noqa: F401
-    from rik.sim.episode import read_episode, states
-    from rik.sim.record import record
+    import rik.envs.open_front  # noqa: F401
+    from rik.episodes.episode import read_episode, states
+    from rik.episodes.record import record
 
     variant = "drawer-bedside-45__knob-mushroom-30__normal"
     variants = tmp_path / "variants"
@@ -247,8 +247,8 @@ def test_plugin_maps_env_keys_to_the_export_features(tmp_path: Path) -> None:
 
 
 def test_draw_gives_n_episodes_per_cell_from_the_split() -> None:
+    from rik.episodes.draw import Draw
     from rik.registry.splits import split_handles
-    from rik.sim.draw import Draw
 
     draw = Draw("test", ("knob", "two_point"), ("smooth", "high"))
     episodes = [draw.episode(CAT, s) for s in range(1000, 1000 + 4 * 3)]
@@ -264,7 +264,7 @@ def test_env_renders_the_rerendered_stream_for_policies_trained_on_it(tmp_path: 
     stream of the same state (slow without a GPU: a low sample count here)."""
     import gymnasium as gym
 
-    import rik.sim.env  # noqa: F401
+    import rik.envs.open_front  # noqa: F401
 
     env = gym.make("rik/OpenFront-v0", variant="drawer-bedside-45__knob-mushroom-30__normal", streams=("sim",
                    "rerendered"), cameras=("front",), image_size=(24, 32), spp=2,

@@ -1,4 +1,4 @@
-"""``rik record --split``: each episode's variant and front drawn from its seed (:mod:`rik.sim.draw`), recorded in
+"""``rik record --split``: each episode's variant and front drawn from its seed (:mod:`rik.episodes.draw`), recorded in
 worker processes exactly as ``rik record VARIANT --front F --seed S`` records it; bad combinations get one line."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ DRAW_ARGS = ("--types", "knob", "--presets", "smooth")
 
 
 def test_record_split_draws_each_episode_and_writes_it_as_plain_record(rik, tmp_path: Path) -> None:
-    from rik.sim.draw import Draw
-    from rik.sim.episode import find_episodes, read_meta
+    from rik.episodes.draw import Draw
+    from rik.episodes.episode import find_episodes, read_meta
 
     out, variants = tmp_path / "drawn", tmp_path / "variants"
     res = rik("record", "--split", "all", *DRAW_ARGS, "--episodes", "2", "--seed", "3", "-s", "grasp_vertical",

@@ -10,15 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rik.episodes.episode import read_episode, states, write_meta
+from rik.episodes.record import record
+from rik.episodes.replay import episode_scene
 from rik.errors import RikError
 from rik.registry import load_catalog
 from rik.render.align import iou, mitsuba_silhouette, mujoco_silhouette
 from rik.render.backend import available_variants, use_variant
 from rik.render.episodes import render_episode
 from rik.render.streams import StreamSpec, parse_resolution, read_frame
-from rik.sim.episode import read_episode, states, write_meta
-from rik.sim.record import record
-from rik.sim.replay import episode_scene
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 

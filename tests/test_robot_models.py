@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rik.episodes.record import variant_dir
 from rik.registry import load_catalog
-from rik.sim.record import variant_dir
-from rik.sim.scene import build_scene
+from rik.sim.build import build_scene
 
 CAT = load_catalog([])
 VARIANT = "drawer-bedside-45__knob-mushroom-30__normal"
@@ -60,7 +60,7 @@ def test_robot_scene_compiles_and_holds_still(robot_id: str, variant: Path, offl
 
 @pytest.mark.parametrize("robot_id", [r.id for r in CAT.robots.values() if r.kind.value == "arm"])
 def test_arm_model_files_come_from_the_installed_package(robot_id: str, offline: None) -> None:
-    from rik.sim.arm import package_dir, robot_spec
+    from rik.sim.robots.arm import package_dir, robot_spec
 
     robot = CAT.robot(robot_id)
     folder = package_dir(robot).resolve()

@@ -128,7 +128,7 @@ def test_robots_doc_needs_its_markers(rik, tmp_path) -> None:
 
 # ---- the Hand-E's entry is the simulated gripper -------------------------------------------------------------------
 def test_hand_e_entry_equals_the_simulated_gripper() -> None:
-    from rik.sim.gripper import HAND_E
+    from rik.sim.robots.gripper import HAND_E
 
     g = load_catalog([]).robot("hand-e").gripper
     assert g.name == HAND_E.name

@@ -12,13 +12,14 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
+from rik.episodes.episode import COLUMNS_2, META, STATES, meta_digest, read_episode
+from rik.episodes.operators import make_operator
+from rik.episodes.record import randomise_start, record_one, variant_dir
+from rik.episodes.replay import verify_episode
 from rik.registry import load_catalog
-from rik.sim.episode import COLUMNS_2, META, STATES, meta_digest, read_episode
-from rik.sim.operators import make_operator
-from rik.sim.record import randomise_start, record_one, variant_dir
-from rik.sim.replay import verify_episode
-from rik.sim.robot_checks import reach_profile, reachable_opening, run_checks
-from rik.sim.scene import build_scene
+from rik.sim.build import build_scene
+from rik.sim.robots.checks import reach_profile, run_checks
+from rik.sim.robots.reach import reachable_opening
 
 CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"

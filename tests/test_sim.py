@@ -10,14 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rik.episodes.episode import EpisodeError, EpisodeRecorder, read_episode, replay, run_operator, write_episode
+from rik.episodes.operators import make_operator
+from rik.episodes.record import randomise_start, record, variant_dir
 from rik.errors import RikError
 from rik.registry import load_catalog
-from rik.sim.episode import EpisodeError, EpisodeRecorder, read_episode, replay, run_operator, write_episode
-from rik.sim.gripper import HAND_E
-from rik.sim.operators import make_operator
+from rik.sim.build import build_scene
 from rik.sim.outcome import classify
-from rik.sim.record import randomise_start, record, variant_dir
-from rik.sim.scene import build_scene
+from rik.sim.robots.gripper import HAND_E
 
 CAT = load_catalog()
 BOW_HIGH = "drawer-chest-80__two_point-bow-128__high"
@@ -82,7 +82,7 @@ def test_horizontal_jaws_cannot_pinch_a_long_bar(variants: Path) -> None:
 def test_recorded_episode_replays_bit_for_bit(variants: Path, tmp_path: Path) -> None:
     import mujoco
 
-    from rik.sim.replay import verify_episode
+    from rik.episodes.replay import verify_episode
 
     scene = build_scene(variants / KNOB, None)
     rng = np.random.default_rng(3)
@@ -179,7 +179,7 @@ def test_gymnasium_env_passes_the_checker(variants: Path) -> None:
     import gymnasium as gym
     from gymnasium.utils.env_checker import check_env
 
-    import rik.sim.env  # noqa: F401  (registers rik/OpenFront-v0)
+    import rik.envs.open_front  # noqa: F401  (registers rik/OpenFront-v0)
 
     env = gym.make("rik/OpenFront-v0", variant=KNOB, images=True, image_size=(24, 32),
                    variants_dir=str(variants)).unwrapped
@@ -194,7 +194,7 @@ def test_gymnasium_env_passes_the_checker(variants: Path) -> None:
 
 
 def test_policy_operator_plugs_into_the_recorder(variants: Path) -> None:
-    from rik.sim.operators import PolicyOperator
+    from rik.episodes.operators import PolicyOperator
 
     scene = build_scene(variants / KNOB, None)
     op = PolicyOperator(lambda obs: np.array([0.0, -0.5, 0.0, 0.0, 0.0, 0.0, 0.0]))
@@ -203,7 +203,7 @@ def test_policy_operator_plugs_into_the_recorder(variants: Path) -> None:
 
 
 def test_bench_small_table(variants: Path, tmp_path: Path) -> None:
-    from rik.sim.bench import plan_tasks, run_bench, summarise, table_markdown
+    from rik.benchmark.bench import plan_tasks, run_bench, summarise, table_markdown
 
     tasks = plan_tasks(CAT, types=["knob"], presets=["high"], strategies=["grasp_vertical", "contact_rich"],
                        per_cell=1, seed=2)
@@ -254,7 +254,7 @@ def test_env_reset_reproduces_the_first_state_of_rik_record(variants: Path, tmp_
     be compared pair by pair (also after other episodes have run in the same environment)."""
     import gymnasium as gym
 
-    import rik.sim.env  # noqa: F401  (registers rik/OpenFront-v0)
+    import rik.envs.open_front  # noqa: F401  (registers rik/OpenFront-v0)
 
     meta = record(CAT, KNOB, "grasp_vertical", seed=seed, out=tmp_path, variants=variants, max_seconds=0.2)[0]
     first = read_episode(tmp_path / meta.id)[1].column("state")[0].as_py()

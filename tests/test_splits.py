@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from rik.combinator.ids import select_variants
 from rik.errors import RikError
 from rik.registry import load_catalog
+from rik.registry.ids import select_variants
 from rik.registry.splits import SPLITS, SPLITS_VERSION, split_designs, split_handles, split_of, splits_version
 
 #: An overlay design of its own with one handle, for the overlay cases.

@@ -179,7 +179,7 @@ def test_applied_preset_builds_a_variant_that_matches_held_out_data_better(tmp_p
     import mujoco
 
     from rik.combinator.build import build_variant
-    from rik.combinator.ids import VariantKey
+    from rik.registry.ids import VariantKey
     from rik.sysid.resim import resimulate
 
     base, handle = "drawer/bedside-45", "knob/mushroom-30"

@@ -9,14 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rik.episodes.episode import read_meta
+from rik.episodes.record import variant_dir
+from rik.episodes.replay import verify_episode
 from rik.errors import RikError
 from rik.registry import load_catalog
-from rik.sim.episode import read_meta
-from rik.sim.record import variant_dir
-from rik.sim.replay import verify_episode
-from rik.sim.scene import build_scene
-from rik.sim.teleop_keys import LEAD, LINEAR_SPEED, MOTION_KEYS, keymap_rows, velocity
-from rik.sim.teleop_session import DRAFTS, TeleopSession
+from rik.sim.build import build_scene
+from rik.teleop.keys import LEAD, LINEAR_SPEED, MOTION_KEYS, keymap_rows, velocity
+from rik.teleop.session import DRAFTS, TeleopSession
 
 CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"
@@ -92,7 +92,7 @@ def test_an_arm_turned_past_its_angles_wrap_follows_the_keys_without_a_jump(vari
     moves the target at the keys' speed and no faster, the gripper follows within a few degrees and comes back to
     rest where it started, and its episode id names the robot."""
     from rik.sim.scene import gripper_rotation
-    from rik.sim.teleop_keys import ANGULAR_SPEED
+    from rik.teleop.keys import ANGULAR_SPEED
 
     s = TeleopSession(build_scene(variants / BOW, robot=CAT.robot("panda-2f85")), tmp_path)
     assert ".panda-2f85__" in s.episode and s.status()["robot"] == "panda-2f85"
@@ -164,7 +164,7 @@ def test_the_time_limit_stops_the_episode_and_bad_input_is_refused(variants: Pat
 
 
 def test_the_teleop_docs_show_the_keymap_the_code_uses() -> None:
-    """docs/teleop.md's key table is the keymap of rik.sim.teleop_keys, row for row (no drift)."""
+    """docs/teleop.md's key table is the keymap of rik.teleop.keys, row for row (no drift)."""
     from conftest import REPO
 
     text = (REPO / "docs" / "teleop.md").read_text(encoding="utf-8")

@@ -25,7 +25,7 @@ STATUS = re.compile(r"^(?P<episode>\S+) \| (?P<state>[a-z ]+) \| [\d.]+ s \((?P<
                     r"\| grip (?P<grip>\w+) \| handle (?P<ahead>[+-][\d.]+) ahead (?P<left>[+-][\d.]+) left "
                     r"(?P<up>[+-][\d.]+) up m .* roll (?P<roll>[+-]\d+) deg")
 LINEAR = 0.10
-"""m/s of a held translation key (rik.sim.teleop_keys.LINEAR_SPEED)."""
+"""m/s of a held translation key (rik.teleop.keys.LINEAR_SPEED)."""
 ROLL = 45.8
 """deg/s of a held rotation key (0.8 rad/s)."""
 
@@ -65,8 +65,8 @@ def _stop(proc: subprocess.Popen[bytes]) -> None:
 
 @pytest.fixture(scope="module")
 def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from rik.episodes.record import variant_dir
     from rik.registry import load_catalog
-    from rik.sim.record import variant_dir
 
     out = tmp_path_factory.mktemp("variants")
     variant_dir(load_catalog(), VARIANT, out)
@@ -256,7 +256,7 @@ def test_an_arms_wrist_camera_rides_on_its_wrist(variants: Path) -> None:
     import mujoco
 
     from rik.registry import load_catalog
-    from rik.sim.scene import build_scene
+    from rik.sim.build import build_scene
 
     scene = build_scene(variants / VARIANT, robot=load_catalog().robot("so100"))
     model = scene.model
@@ -278,7 +278,7 @@ def test_a_display_without_an_x_server_is_one_line(rik, monkeypatch: pytest.Monk
 def test_a_late_frame_drops_steps_instead_of_jumping() -> None:
     """The loop's pacing: steps due on time run; after a late frame at most CATCH_UP run and the rest are dropped,
     so the next frame is on time again (no burst)."""
-    from rik.sim.teleop import CATCH_UP, due_steps
+    from rik.teleop.desktop import CATCH_UP, due_steps
 
     assert due_steps(now=10.0, next_tick=10.01, dt=0.05) == (0, 10.01)
     assert due_steps(now=10.0, next_tick=9.96, dt=0.05) == (1, pytest.approx(10.01))

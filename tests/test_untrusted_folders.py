@@ -354,7 +354,7 @@ def test_model_file_through_a_symbolic_link_out_of_its_package(tmp_path: Path, f
     from rik.errors import CatalogError, RikError
     from rik.registry import load_catalog
     from rik.registry.robots import installed_package_dir, usable_robot
-    from rik.sim.arm import source_spec
+    from rik.sim.robots.arm import source_spec
 
     package = fake_packages / "rik_untrusted_arm"
     package.mkdir()

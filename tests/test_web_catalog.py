@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 from web_fixtures import app_client, browser, served, signed
 
-from rik.combinator.ids import parse_variant_id, variant_id
 from rik.registry.doc import csv_rows
+from rik.registry.ids import parse_variant_id, variant_id
 from rik.registry.index import build_index
 from rik.registry.load import load_catalog
 from rik.registry.stats import catalog_stats

@@ -35,7 +35,7 @@ needs_chromium = pytest.mark.skipif(shutil.which("chromium") is None, reason="De
 @pytest.fixture(scope="module")
 def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The demo variant, built once for the module (stations that open it start without building)."""
-    from rik.sim.record import variant_dir
+    from rik.episodes.record import variant_dir
 
     root = tmp_path_factory.mktemp("variants")
     variant_dir(CAT, BOW, root)
@@ -281,7 +281,7 @@ def test_a_save_on_a_full_disk_keeps_the_episode_and_the_station(variants: Path,
             statuses(ws, lambda s: s.get("paused") is True and s.get("role") == "controller", "the draft offer")
             ws.send(json.dumps({"type": "command", "name": "save"}))
             st = statuses(ws, lambda s: (s.get("session") or {}).get("last_saved") == episode, "the save")
-    from rik.sim.episode import read_meta
+    from rik.episodes.episode import read_meta
 
     meta = read_meta(episodes / episode)
     assert meta.steps >= 12 and not draft.exists()

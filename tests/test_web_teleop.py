@@ -86,7 +86,7 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
                                                                        pull: str) -> None:
     """Roll ~90 deg (Q), approach (W) until the pads reach the handle, grasp (Space), pull (the gamepad's left
     stick, or S) until the drawer is 90 % open, save (Enter); closed-loop on the status the page shows."""
-    from rik.sim.teleop_keys import keymap_rows
+    from rik.teleop.keys import keymap_rows
 
     episodes = tmp_path / "episodes"
     fresh = not any(variants.iterdir())
@@ -136,7 +136,7 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
 def _check_saved(rik, episode: Path, variants: Path, drive: Driver, stick: float, simulated: float,
                  shot: Path) -> None:
     """The saved episode is there, opened the drawer 90 %, and replays exactly; prints the drive's effort."""
-    from rik.sim.episode import read_meta
+    from rik.episodes.episode import read_meta
 
     assert (episode / "meta.json").is_file() and (episode / "states.parquet").is_file()
     meta = read_meta(episode)
@@ -148,7 +148,7 @@ def _check_saved(rik, episode: Path, variants: Path, drive: Driver, stick: float
 
 
 def test_second_tab_watches_and_a_lost_connection_keeps_a_draft(variants: Path, tmp_path: Path) -> None:
-    from rik.web.station import LEFT, PAUSED, WATCHING
+    from rik.teleop.station import LEFT, PAUSED, WATCHING
 
     episodes = tmp_path / "episodes"
     with served(config(variants, episodes)) as url, browser() as b:
@@ -210,8 +210,8 @@ def test_the_panda_opens_the_demo_drawer_from_the_keyboard_and_its_episode_repla
     IK: roll ~90 deg (Q), approach (W) until the pads reach the bar, grip (Space), pull (S) until the drawer is 90 %
     open, save (Enter). The episode names the Panda, records its 7 joints and its gripper, and replays exactly. A
     robot the catalog lacks gets a 404 page with the one-line message."""
-    from rik.sim.episode import read_episode, read_meta
-    from rik.sim.replay import verify_episode
+    from rik.episodes.episode import read_episode, read_meta
+    from rik.episodes.replay import verify_episode
 
     episodes = tmp_path / "episodes"
     with station_process("teleop", BOW, "--web", "--port", "0", "--robot", "panda-2f85", "--variants",

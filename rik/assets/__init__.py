@@ -1,3 +1,3 @@
 """Parametric handle and base-unit meshes, CoACD collision (content-addressed cache), collision fidelity.
 
-Not built yet; see ../shared/DESIGN.md. Heavy libraries are imported inside functions, never here."""
+Heavy libraries (mujoco, coacd, trimesh) are imported inside functions, never here."""

@@ -218,7 +218,7 @@ def list_command(as_json: JsonOpt = False) -> None:
 def show_command(root: Annotated[Path, typer.Argument(help="A built dataset's folder.", show_default=False)],
                  as_json: JsonOpt = False) -> None:
     """A built dataset: its spec, hash, counts, outcomes, size and the build's statistics."""
-    from rik.dataset.build import DATASET_META
+    from rik.dataset.meta import DATASET_META
     from rik.dataset.registry import describe_dataset
 
     info = describe_dataset(root)

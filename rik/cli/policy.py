@@ -67,7 +67,7 @@ def eval_policy(
 
     if label and len(policies) > 1:
         raise RikError("--label names one policy; with several, each is named by its type and training run")
-    from rik.sim.draw import Draw
+    from rik.episodes.draw import Draw
 
     cat = load_catalog(overlays(catalog))
     draw = Draw.parse(split, types, presets, kinds)

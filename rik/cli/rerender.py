@@ -34,11 +34,11 @@ class _Quality(TypedDict, total=False):
 
 def _run(episodes: list[Path], kind: StreamKind, res: str, cameras: str | None, out: Path, variants: Path, workers: int,
          catalog: list[Path] | None, sheet: bool = False, **quality: Unpack[_Quality]) -> None:
+    from rik.episodes.episode import find_episodes, read_meta
     from rik.paths import check_folder
     from rik.registry.load import load_catalog
     from rik.render.episodes import check_renders_outside, render_episodes
     from rik.render.streams import StreamSpec, parse_resolution
-    from rik.sim.episode import find_episodes, read_meta
 
     width, height = parse_resolution(res)
     spec = StreamSpec(kind, width, height, **quality)
@@ -112,13 +112,13 @@ def print_demo_renders(overlay_paths: list[Path], episodes: list[Path], out: Pat
                        variants: Path = Path("variants")) -> None:
     """Render the demo episodes' sim streams and their Mitsuba re-renders, check that the two agree in
     silhouette on the first episode's first state, and write the first episode's two streams side by side."""
+    from rik.episodes.episode import read_episode, read_meta, states
+    from rik.episodes.replay import episode_scene
     from rik.registry.load import load_catalog
     from rik.render.align import silhouette_iou
     from rik.render.episodes import render_episode
     from rik.render.sheet import contact_sheet
     from rik.render.streams import StreamSpec
-    from rik.sim.episode import read_episode, read_meta, states
-    from rik.sim.replay import episode_scene
 
     cat = load_catalog(overlay_paths)
     con = console()

@@ -35,7 +35,7 @@ def _strategies_help() -> str:
 
 
 ALL_SPLIT = "all"
-"""``rik record --split all``: draw from every handle of the catalog (``rik.sim.draw.ALL_SPLIT``, spelled here so
+"""``rik record --split all``: draw from every handle of the catalog (``rik.episodes.draw.ALL_SPLIT``, spelled here so
 that the help text needs no import of the simulator's modules)."""
 
 
@@ -64,9 +64,9 @@ def record(variant: Annotated[str | None, typer.Argument(
            robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """Record episodes of a scripted strategy on a variant, or on variants drawn from a catalog split (--split),
     into --out/<id>/ (meta.json, states.parquet)."""
+    from rik.episodes.record import record as run
+    from rik.episodes.record import record_split
     from rik.registry.load import load_catalog
-    from rik.sim.record import record as run
-    from rik.sim.record import record_split
 
     if variant is not None and split is not None:
         raise RikError(f"give a VARIANT or --split, not both (got {variant} and --split {split})")
@@ -89,7 +89,7 @@ def record(variant: Annotated[str | None, typer.Argument(
             progress.update(task, advance=1, last=f"{m.id} {m.outcome}")
 
         if split is not None:
-            from rik.sim.draw import Draw
+            from rik.episodes.draw import Draw
 
             metas = record_split(cat, Draw.parse(split, types, presets, kinds), strategy, episodes=episodes, seed=seed,
                                  out=out, variants=variants, workers=workers, overlays=overlays(catalog),
@@ -144,7 +144,7 @@ def teleop(variant: VariantArg,
                                                      f"localhost:{url.rsplit(':', 1)[1].split('/')[0]} THIS_HOST)",
                                                      soft_wrap=True))
         return
-    from rik.sim.teleop import teleoperate
+    from rik.teleop.desktop import teleoperate
 
     saved = teleoperate(cat, variant, device, out=out, variants=variants, front=front, seed=seed,
                         max_seconds=max_seconds, on_message=con.print, robot=arm)
@@ -159,9 +159,9 @@ def replay(episodes: Annotated[list[Path], typer.Argument(help="Episode director
            variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
     """Check recorded episodes: each loads whole, and setting its recorded states back and stepping on with its
     actions reproduces the recording bit for bit."""
+    from rik.episodes.episode import find_episodes
+    from rik.episodes.replay import verify_episode
     from rik.registry.load import load_catalog
-    from rik.sim.episode import find_episodes
-    from rik.sim.replay import verify_episode
 
     cat = load_catalog(overlays(catalog))
     con = console()
@@ -192,9 +192,9 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
           robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """The resistance benchmark: randomised drawer-opening episodes, F/P/S per handle type, strategy and preset
     (the paper's Table 3), with the Hand-E or an arm (--robot)."""
+    from rik.benchmark import bench as b
     from rik.paths import check_folder, write_atomic
     from rik.registry.load import load_catalog
-    from rik.sim import bench as b
 
     check_folder(out, "--out")  # before the episodes, not after them
     b.check_bench_out(out)
@@ -232,10 +232,10 @@ def robot_check(variant: VariantArg, robot: RobotOpt = DEFAULT_ROBOT, front: Fro
                 variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
     """Check a robot on a variant: it starts clear, reaches the handle over the front's travel, has the joint
     torque to hold the preset's resistance, and grips hard enough. Exit 1 when a check fails."""
+    from rik.episodes.record import variant_dir
     from rik.registry.load import load_catalog
-    from rik.sim.record import variant_dir
-    from rik.sim.robot_checks import run_checks
-    from rik.sim.scene import build_scene
+    from rik.sim.build import build_scene
+    from rik.sim.robots.checks import run_checks
 
     cat = load_catalog(overlays(catalog))
     arm: Any = robot_entry(cat, robot)

@@ -25,8 +25,8 @@ from rik.errors import RikError
 
 if TYPE_CHECKING:
     from rik.combinator.build import VariantResult
-    from rik.combinator.ids import VariantKey
     from rik.registry.catalog import Catalog
+    from rik.registry.ids import VariantKey
 
 app = typer.Typer(help="Validated MuJoCo variants: every base unit x handle x resistance preset.",
                   no_args_is_help=True)
@@ -49,7 +49,7 @@ def print_demo_variants(overlay_paths: list[Path], out: Path = Path("variants"))
     import json
 
     from rik.combinator.build import build_variant
-    from rik.combinator.ids import parse_variant_id
+    from rik.registry.ids import parse_variant_id
     from rik.registry.load import load_catalog
 
     cat = load_catalog(overlay_paths)
@@ -72,9 +72,9 @@ def print_demo_episode(overlay_paths: list[Path], out: Path = Path("episodes"), 
                        episodes: int = 2) -> list[Path]:
     """Record ``episodes`` contact-rich episodes (seeds 0, 1, ...) of the first demo variant into ``out``, check
     that each replays exactly and return their directories."""
+    from rik.episodes.record import record
+    from rik.episodes.replay import verify_episode
     from rik.registry.load import load_catalog
-    from rik.sim.record import record
-    from rik.sim.replay import verify_episode
 
     cat = load_catalog(overlay_paths)
     con = console()
@@ -93,7 +93,7 @@ def print_demo_episode(overlay_paths: list[Path], out: Path = Path("episodes"), 
 
 def _select(cat: Catalog, base: list[str] | None, handle_type: list[HandleTypeOpt] | None, handle: list[str] | None,
             preset: list[str] | None) -> list[VariantKey]:
-    from rik.combinator.ids import select_variants
+    from rik.registry.ids import select_variants
 
     return select_variants(cat, bases=base or (), handle_types=[t.value for t in handle_type or ()],
                            handles=handle or (), presets=preset or ())
@@ -161,8 +161,8 @@ def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g
           catalog: CatalogOption = None) -> None:
     """Build variants into --out/<id>/ (model.xml, scene.xml, meshes/, report.json); valid ones are skipped."""
     from rik.combinator.build import MANIFEST, build_variants, resolve_collision
-    from rik.combinator.ids import parse_variant_id
     from rik.paths import check_folder
+    from rik.registry.ids import parse_variant_id
     from rik.registry.load import load_catalog
 
     check_folder(out, "--out")
@@ -243,8 +243,8 @@ def show(variant: Annotated[str, typer.Argument(metavar="ID", help="A variant id
          height: Annotated[int, typer.Option(min=64, max=4096, help="Pixels.")] = 720,
          directory: DirOpt = Path("variants"), catalog: CatalogOption = None) -> None:
     """Render a variant's scene through its front camera (MuJoCo, headless) into a PNG."""
-    from rik.combinator.ids import parse_variant_id
     from rik.combinator.inspect import render_variant
+    from rik.registry.ids import parse_variant_id
     from rik.registry.load import load_catalog
 
     if png.is_dir():

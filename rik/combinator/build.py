@@ -27,9 +27,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.combinator.checks import GEOMETRY_CHECKS, CheckResult, ModelContext, run_model_checks
-from rik.combinator.ids import VariantKey
 from rik.errors import RikError
 from rik.paths import MadeFolder, atomic_path, check_replaceable, holds_only, inside, json_object
+from rik.registry.ids import VariantKey
 
 if TYPE_CHECKING:
     from rik.assets.build import Asset
@@ -376,7 +376,7 @@ def build_variant(catalog: Catalog, key: VariantKey, out: Path = DEFAULT_OUT, ca
 def _build_one(catalog: Catalog, variant: str, out: Path, cache_root: Path, force: bool,
                collision: str) -> VariantResult:
     from rik.assets.cache import AssetCache
-    from rik.combinator.ids import parse_variant_id
+    from rik.registry.ids import parse_variant_id
 
     return build_variant(catalog, parse_variant_id(catalog, variant), out, AssetCache(cache_root), force, collision)
 
@@ -418,7 +418,7 @@ def rejected_variants(catalog: Catalog, variant_ids: Iterable[str], out: Path = 
                       overlays: Sequence[Path] = ()) -> dict[str, VariantResult]:
     """Build the variants ``variant_ids`` name into ``out`` where missing or stale (in the folder's collision mode);
     the ones that fail a check, by id in id order. Callers decide whether a rejection stops them."""
-    from rik.combinator.ids import parse_variant_id
+    from rik.registry.ids import parse_variant_id
 
     keys = [parse_variant_id(catalog, v) for v in sorted(set(variant_ids))]
     return {r.id: r for r in build_variants(catalog, keys, out, workers=workers, overlays=overlays)

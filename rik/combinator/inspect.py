@@ -21,8 +21,8 @@ from rik.combinator.build import (
     spec_hash,
 )
 from rik.combinator.checks import CheckResult, ModelContext, run_model_checks
-from rik.combinator.ids import VariantKey, parse_variant_id
 from rik.errors import RikError
+from rik.registry.ids import VariantKey, parse_variant_id
 
 if TYPE_CHECKING:
     import mujoco

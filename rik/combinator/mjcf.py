@@ -31,10 +31,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rik.assets.base_units import Panel
-from rik.combinator.ids import VariantKey
 from rik.combinator.placement import HandlePlacement, front_motion, place_handle
 from rik.joints.mjcf import add_effect_actuators, add_front_joint, add_joint_classes, joint_model
 from rik.registry.geometry import vec3
+from rik.registry.ids import VariantKey
 
 if TYPE_CHECKING:
     from collections.abc import Sequence

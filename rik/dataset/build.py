@@ -22,22 +22,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.dataset.engines import Done, Engine, Job
+from rik.dataset.meta import BUILD_META, DATASET_META, read_dataset_meta
 from rik.dataset.plan import EpisodeUnit, Plan, RenderUnit, ShardUnit, export_settings
 from rik.errors import RikError
 from rik.paths import write_atomic
 
 if TYPE_CHECKING:
-    from pydantic import BaseModel
 
     from rik.exporters.lerobot_export import ExportSpec
     from rik.registry.catalog import Catalog
 
-DATASET_META = "rik_dataset.json"
-"""``meta/rik_dataset.json``: the spec, its hash, versions, variant hashes, counts, outcomes and file checksums;
-identical for identical builds."""
-BUILD_META = "rik_build.json"
-"""``meta/rik_build.json``: the build's statistics (engine, seconds per stage, units run and reused, failures);
-these vary from one build to the next."""
 STAGES = ("record", "render", "shard")
 DEFAULT_RETRIES = 2
 MARKER_FIELDS: dict[str, tuple[tuple[str, type | tuple[type, ...]], ...]] = {
@@ -78,42 +72,6 @@ class BuildResult:
 
 def default_work(out: Path) -> Path:
     return Path(out).with_name(f"{Path(out).name}.work")
-
-
-def read_dataset_meta(root: Path) -> dict[str, Any] | None:
-    """``meta/rik_dataset.json`` of a built dataset, or None when ``root`` holds none. One that is there but
-    damaged (not JSON, not an object, a field rik reads missing or of the wrong type) raises one line naming the
-    file and the field (:func:`read_meta_file`)."""
-    from rik.schemas.dataset import DatasetRecord
-
-    path = Path(root) / "meta" / DATASET_META
-    if not path.is_file():
-        return None
-    return read_meta_file(path, DatasetRecord)
-
-
-def read_meta_file(path: Path, model: type[BaseModel]) -> dict[str, Any]:
-    """The JSON object in ``path``, checked against ``model`` (which says what rik reads of it); a file that cannot
-    be read or is damaged raises a :class:`RikError` line naming the file and the field."""
-    from pydantic import ValidationError
-
-    from rik.paths import read_json
-
-    try:
-        data = read_json(path)
-    except OSError as exc:
-        raise RikError(f"{path}: cannot read it ({exc.strerror})") from None
-    except ValueError as exc:  # too large, not UTF-8, not JSON, nested too deeply
-        raise RikError(f"{path}: damaged: not the JSON rik wrote ({str(exc).splitlines()[0]})") from None
-    if not isinstance(data, dict):
-        raise RikError(f"{path}: damaged: holds a JSON {type(data).__name__}, not the object rik wrote")
-    try:
-        model.model_validate(data)
-    except ValidationError as exc:
-        first = exc.errors(include_url=False)[0]
-        where = ".".join(str(p) for p in first["loc"])
-        raise RikError(f"{path}, field '{where}': damaged: {first['msg'][0].lower()}{first['msg'][1:]}") from None
-    return data
 
 
 # ---- the units, as they run in a worker -------------------------------------------------------------------------
@@ -172,7 +130,7 @@ def read_marker(folders: Folders, stage: str, key: str) -> dict[str, Any] | None
 def _states_intact(episode: Path, sha256: object) -> bool:
     """Whether the episode's ``states.parquet`` still has the sha256 its marker recorded."""
     from rik.assets.cache import file_sha256
-    from rik.sim.episode import STATES
+    from rik.episodes.episode import STATES
 
     try:
         return file_sha256(episode / STATES) == sha256
@@ -182,8 +140,8 @@ def _states_intact(episode: Path, sha256: object) -> bool:
 
 def run_record(catalog: Catalog, arg: tuple[Folders, EpisodeUnit, float]) -> dict[str, Any]:
     """Record one episode (a job); returns its marker record."""
+    from rik.episodes.record import record_one
     from rik.paths import inside
-    from rik.sim.record import record_one
 
     folders, unit, max_seconds = arg
     t0 = time.perf_counter()
@@ -211,10 +169,10 @@ def run_render(catalog: Catalog, arg: tuple[Folders, RenderUnit, Any, tuple[str,
 
 def run_shard(catalog: Catalog, arg: tuple[Folders, ShardUnit, ExportSpec, dict[str, str]]) -> dict[str, Any]:
     """Write one shard dataset (a job); returns its marker record."""
+    from rik.episodes.episode import read_meta
     from rik.exporters.lerobot_export import write_shard
     from rik.exporters.lerobot_frames import EpisodeSource
     from rik.render.streams import read_manifest
-    from rik.sim.episode import read_meta
 
     folders, unit, spec, stream_dirs = arg
     t0 = time.perf_counter()
@@ -529,7 +487,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
     quiet_encoders()
     _aggregate(plan.spec.repo_id, roots, merged)
     _order_stats(merged)
-    from rik.sim.robot_layout import robot_layout
+    from rik.sim.robots.layout import robot_layout
 
     robot = catalog.robot(plan.spec.robot)
     checks = check_dataset(merged, plan.spec.repo_id, len(plan.episodes),

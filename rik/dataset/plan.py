@@ -39,7 +39,7 @@ class EpisodeUnit:
 
     @property
     def episode_id(self) -> str:
-        from rik.sim.episode import episode_id
+        from rik.episodes.episode import episode_id
 
         return episode_id(self.variant, self.front, self.operator.label, self.seed, self.robot)
 
@@ -109,7 +109,7 @@ def _field_error(source: str, field_name: str, exc: RikError) -> RikError:
 
 def select_variants(catalog: Catalog, spec: DatasetSpec, source: str) -> list[str]:
     """The variant ids the spec's ``variants`` selects, in catalog order (before any checks run)."""
-    from rik.combinator import ids as variant_ids
+    from rik.registry import ids as variant_ids
 
     sel = spec.variants
     if sel.ids:
@@ -166,7 +166,7 @@ def select_variants(catalog: Catalog, spec: DatasetSpec, source: str) -> list[st
 
 def check_operators(spec: DatasetSpec, source: str) -> None:
     """Every operator names a known strategy (with valid parameters)."""
-    from rik.sim.operators import make_operator
+    from rik.episodes.operators import make_operator
 
     for i, op in enumerate(spec.operators):
         try:
@@ -222,8 +222,8 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
     """Expand ``spec``: select its variants, build the ones missing into ``variants_dir`` (their checks decide
     which can be simulated), and lay out its units. Bad input raises one line naming ``source`` and the field."""
     from rik.combinator.build import rejected_variants, resolve_collision, spec_hash
-    from rik.combinator.ids import parse_variant_id
     from rik.dataset.spec import spec_hash as hash_of_spec
+    from rik.registry.ids import parse_variant_id
 
     check_robot(catalog, spec, source)
     check_operators(spec, source)

@@ -25,7 +25,8 @@ class VerifyResult:
 
 def verify_dataset(root: Path) -> VerifyResult:
     """Check the dataset at ``root``; problems are listed, not raised (a folder that is no built dataset is)."""
-    from rik.dataset.build import DATASET_META, file_checksums, read_dataset_meta
+    from rik.dataset.build import file_checksums
+    from rik.dataset.meta import DATASET_META, read_dataset_meta
 
     root = Path(root)
     meta = read_dataset_meta(root)

@@ -1,12 +1,12 @@
 """``rik eval``: a saved LeRobot policy (or a scripted strategy) on rik's benchmark, as the paper's Table 3.
 
-Episodes are the seeds ``seed .. seed + cells x N - 1`` of a draw (:mod:`rik.sim.draw`): each falls in one cell
+Episodes are the seeds ``seed .. seed + cells x N - 1`` of a draw (:mod:`rik.episodes.draw`): each falls in one cell
 (handle type x preset) and names one variant, front and start pose, the same as ``lerobot-eval --env.type=rik
 --seed S`` runs. A learned policy runs through lerobot's own ``rollout`` (``lerobot.scripts.lerobot_eval``) on a
 one-environment vector env made by the ``lerobot_env_rik`` config, so both tools execute the same code per
 episode. A scripted strategy (``strategy:contact_rich``) runs its operator in the same environment, so scripted
 and learned rows are paired episode by episode. ``robot`` (a catalog id) runs either with that robot: a learned
-policy must read and write that robot's layout (:mod:`rik.sim.robot_layout`; an arm takes joint actions), a
+policy must read and write that robot's layout (:mod:`rik.sim.robots.layout`; an arm takes joint actions), a
 scripted strategy drives any robot by target poses.
 
 Outputs (in ``--out``): ``table.md`` (F/P/S per handle type x preset, with Wilson intervals for S),
@@ -23,8 +23,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 from rik.errors import RikError
-from rik.sim.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 
 STRATEGY_PREFIX = "strategy:"
 DEFAULT_SEED = 1000
@@ -67,8 +67,8 @@ class EvalSpec:
 def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     """The spec checked (split, presets, types, the policy folder and its inputs, the strategy), with its label
     and the policy's needs filled in."""
-    from rik.sim.draw import Draw
-    from rik.sim.operators import make_operator
+    from rik.episodes.draw import Draw
+    from rik.episodes.operators import make_operator
 
     if spec.episodes_per_cell < 1:
         raise RikError(f"--episodes-per-cell {spec.episodes_per_cell}: must be at least 1")
@@ -81,7 +81,7 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
         return EvalSpec(**{**asdict(spec), "label": spec.label or spec.strategy})
     from rik.evaluation.load import policy_needs
     from rik.evaluation.policy_files import check_policy_folder
-    from rik.sim.robot_layout import robot_layout
+    from rik.sim.robots.layout import robot_layout
 
     layout = robot_layout(robot.as_arm)
     needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered, layout=layout)
@@ -214,7 +214,7 @@ def _policy_episode(ctx: dict[str, Any], seed: int, frames: list[Any] | None) ->
 
 
 def _scripted_episode(ctx: dict[str, Any], strategy: str, seed: int, frames: list[Any] | None) -> dict[str, Any]:
-    from rik.sim.operators import make_operator
+    from rik.episodes.operators import make_operator
 
     env = ctx["env"]
     env.reset(seed=seed)
@@ -282,7 +282,7 @@ def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
 
     from rik.assets.workers import map_ids
     from rik.combinator.build import require_variants
-    from rik.sim.draw import Draw
+    from rik.episodes.draw import Draw
 
     check_eval_out(out)
     draw = Draw(spec.split, spec.handle_types, spec.presets, spec.kinds)
@@ -326,8 +326,8 @@ def slug(label: str) -> str:
 def write_tables(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[str, Any]]) -> None:
     """``table.md`` and ``episodes.csv`` of one operator's rows, or of several operators' on the same episodes side
     by side (with ``success.png``)."""
+    from rik.benchmark.bench import rows_csv, table_markdown
     from rik.paths import write_atomic
-    from rik.sim.bench import rows_csv, table_markdown
 
     first, n = specs[0], len(specs[0].seeds())
     seeds = f"seeds {first.seed}..{first.seed + n - 1}, {first.episodes_per_cell} per cell"
@@ -347,8 +347,8 @@ def success_plot(rows: Sequence[dict[str, Any]], png: Path, title: str = "") -> 
     per operator."""
     import numpy as np
 
+    from rik.benchmark.bench import wilson
     from rik.paths import pyplot, save_figure
-    from rik.sim.bench import wilson
 
     operators = list(dict.fromkeys(r["strategy"] for r in rows))
     groups = ["all", *dict.fromkeys(r["handle_type"] for r in rows)]

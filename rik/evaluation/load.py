@@ -6,7 +6,7 @@ or any folder with a policy's ``config.json``, processors and weights, of a type
 input features say what the environment renders: ``observation.images.<camera>`` asks for MuJoCo's image of that
 camera, ``observation.images.<camera>_rerendered`` for Mitsuba's (only when the re-render is allowed: it is slow
 without a GPU), at the size the policy was trained on. Its state and action must be those of the robot it runs
-with (``--robot``, :mod:`rik.sim.robot_layout`): a policy trained on an arm's export reads that arm's joints and
+with (``--robot``, :mod:`rik.sim.robots.layout`): a policy trained on an arm's export reads that arm's joints and
 writes its joint targets.
 """
 
@@ -21,7 +21,7 @@ from rik.evaluation.policy_files import CONFIG
 from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, STREAM_SUFFIX
 
 if TYPE_CHECKING:
-    from rik.sim.robot_layout import RobotLayout
+    from rik.sim.robots.layout import RobotLayout
 
 OLD_STATE_WIDTH = 14
 """``observation.state`` of exports made before the state split (robot and front state in one vector)."""
@@ -61,7 +61,7 @@ def policy_config(policy_dir: Path) -> dict[str, Any]:
 def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: RobotLayout | None = None) -> PolicyNeeds:
     """What the policy in ``policy_dir`` reads, checked against what rik's environment supplies with the robot of
     ``layout`` (default: the Hand-E's)."""
-    from rik.sim.robot_layout import EE_NAMES, robot_layout
+    from rik.sim.robots.layout import EE_NAMES, robot_layout
 
     layout = layout or robot_layout(None)
     config = policy_config(policy_dir)

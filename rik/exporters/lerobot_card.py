@@ -12,7 +12,7 @@ if TYPE_CHECKING:
     from rik.exporters.lerobot_export import ExportSpec
     from rik.registry.catalog import Catalog
     from rik.schemas.robots import Robot
-    from rik.sim.robot_layout import RobotLayout
+    from rik.sim.robots.layout import RobotLayout
 
 CITATION = """@misc{realikea,
   title  = {Real-IKEA: Physical Fidelity is the Prerequisite for Robust Manipulation},
@@ -77,7 +77,7 @@ def robot_text(robot: Robot, layout: RobotLayout) -> str:
                      f"{_range([x.speed for x in j.joints], 'rad/s')}, stiffness "
                      f"{_range([x.stiffness for x in j.joints], 'N·m/rad')}; gravity {gravity}. Sources: {j.source}.")
     else:
-        from rik.sim.gripper import HAND_E
+        from rik.sim.robots.gripper import HAND_E
 
         lines.append(f"- **Base:** six servoed axes, forces capped at {HAND_E.arm_force:g} N and torques at "
                      f"{HAND_E.arm_torque:g} N·m (a collaborative arm's order of magnitude; an assumption).")
@@ -101,7 +101,7 @@ def robot_text(robot: Robot, layout: RobotLayout) -> str:
 
 def _layout_bullets(layout: RobotLayout) -> tuple[str, str]:
     """The card's bullets of an arm: on ``observation.state`` (and ``observation.ee_pose``), and on ``action``."""
-    from rik.sim.robot_layout import EE_NAMES
+    from rik.sim.robots.layout import EE_NAMES
 
     numbers = ", ".join(f"`{name}` ({UNIT_WORDS[unit]})"
                         for name, (_, unit) in zip(layout.state_names, layout.joints, strict=True))
@@ -134,7 +134,7 @@ and for diffusion (its defaults normalise state and action by min and max)
 def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str, Any], info: dict[str, Any],
                  robot: Robot) -> str:
     import rik
-    from rik.sim.robot_layout import robot_layout
+    from rik.sim.robots.layout import robot_layout
 
     layout = robot_layout(robot.as_arm)
     images = [k for k, f in info["features"].items() if f.get("dtype") == "video"]

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 from rik.errors import RikError
 
 if TYPE_CHECKING:
-    from rik.sim.robot_layout import RobotLayout
+    from rik.sim.robots.layout import RobotLayout
 
 TOLERANCE_S = 1e-4
 
@@ -69,7 +69,7 @@ def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> 
     14-number ``observation.state``, Hand-E exports made before the split), or None (not a rik layout)."""
     from rik.exporters.lerobot_frames import LAYOUT_1_STATE_NAMES
     from rik.sim.observation import ENV_STATE_NAMES
-    from rik.sim.robot_layout import robot_layout
+    from rik.sim.robots.layout import robot_layout
 
     robot = robot or robot_layout(None)
 
@@ -99,7 +99,7 @@ def check_robot(root: Path, robot_type: str | None, feats: dict[str, Any], robot
     """The dataset's ``robot_type`` and its features ``action`` and ``observation.ee_pose`` are those of
     ``robot``'s layout."""
     from rik.exporters.lerobot_frames import EE_POSE
-    from rik.sim.robot_layout import EE_NAMES
+    from rik.sim.robots.layout import EE_NAMES
 
     if robot_type != robot.robot_type:
         raise RikError(f"{root}: robot_type is {robot_type!r}, robot {robot.robot_id}'s is {robot.robot_type!r}")
@@ -127,7 +127,7 @@ def check_dataset(root: Path, repo_id: str, episodes: int, robot: RobotLayout | 
     if missing:
         raise RikError(f"{root}: meta/episodes lacks rik's columns {missing}")
     from rik.exporters.lerobot_frames import LAYOUT
-    from rik.sim.robot_layout import robot_layout
+    from rik.sim.robots.layout import robot_layout
 
     robot = robot or robot_layout(None)
     layout = state_layout(ds.meta.features, robot)

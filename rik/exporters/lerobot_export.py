@@ -41,7 +41,7 @@ from rik.sim.observation import STREAM_SUFFIX
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
-    from rik.sim.robot_layout import RobotLayout
+    from rik.sim.robots.layout import RobotLayout
 
 STREAMS = tuple(STREAM_SUFFIX)
 """The image streams an export can hold: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
@@ -182,8 +182,8 @@ def one_robot(metas: dict[Path, EpisodeMeta]) -> str:
 
 def _check_same_features(dirs: list[Path]) -> None:
     """Every episode loads whole (sha256 checked) and records the action rik exports, before any work starts."""
+    from rik.episodes.episode import read_episode
     from rik.exporters.lerobot_frames import ACTION_NAMES
-    from rik.sim.episode import read_episode
 
     for d in dirs:
         table = read_episode(d)[1]
@@ -233,7 +233,7 @@ def quiet_encoders() -> None:
 
 def sources_layout(catalog: Catalog, sources: Sequence[EpisodeSource]) -> RobotLayout:
     """The robot layout of episodes that share one robot (:func:`one_robot` checks that they do)."""
-    from rik.sim.episode import read_meta
+    from rik.episodes.episode import read_meta
 
     metas = {s.directory: read_meta(s.directory) for s in sources}
     one_robot(metas)
@@ -340,9 +340,9 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                    variants: Path, resume: bool, workers: int, overlays: Sequence[Path],
                    progress: Callable[[str, int, int], None] | None) -> ExportResult:
     """:func:`export_lerobot` once it holds the lock of ``out``."""
+    from rik.episodes.episode import find_episodes, read_meta
     from rik.render.episodes import render_episode
     from rik.render.streams import StreamSpec
-    from rik.sim.episode import find_episodes, read_meta
 
     _check_out_free(out, resume)  # again, now that it is ours: another export may have finished it meanwhile
     partial_dir = out.with_name(f"{out.name}.partial")

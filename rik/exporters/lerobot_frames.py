@@ -5,7 +5,7 @@ Features follow LeRobot's conventions: ``observation.state`` (the robot's state)
 ``observation.environment_state`` (the front's state), named, as the gym environment's ``agent_pos`` and
 ``environment_state`` (:mod:`rik.sim.observation`); ``action``, and one video feature per camera and stream:
 ``observation.images.<camera>`` for the sim stream, ``observation.images.<camera>_rerendered`` for the Mitsuba one.
-What ``observation.state`` and ``action`` hold is the episode's robot's layout (:mod:`rik.sim.robot_layout`): for
+What ``observation.state`` and ``action`` hold is the episode's robot's layout (:mod:`rik.sim.robots.layout`): for
 the Hand-E its pose state and the recorded absolute target pose and gripper command (what the environment takes
 with ``action_mode="absolute"``); for an arm its joint positions and the joint targets its servos were given, in
 LeRobot's names and units for that robot, with ``observation.ee_pose`` where the robot's entry asks for it. A
@@ -30,13 +30,13 @@ if TYPE_CHECKING:
 
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
-    from rik.sim.robot_layout import RobotLayout
+    from rik.sim.robots.layout import RobotLayout
 
 ACTION_NAMES = ("target_x", "target_y", "target_z", "target_pitch", "target_yaw", "target_roll", "gripper")
 """The recorded action (``states.parquet``'s ``action``, every robot's): target pose of the gripper base (m, rad) and
 gripper command (0 open, 1 closed); the Hand-E's exported ``action`` too."""
 EE_POSE = "observation.ee_pose"
-"""The feature of an arm's end-effector pose in its base frame (:data:`rik.sim.robot_layout.EE_NAMES`), where its
+"""The feature of an arm's end-effector pose in its base frame (:data:`rik.sim.robots.layout.EE_NAMES`), where its
 catalog entry asks for one."""
 META_PREFIX = "rik/"
 META_FIELDS = ("episode_id", "variant", "base_unit", "handle", "handle_type", "preset", "front", "operator",
@@ -65,7 +65,7 @@ def features(cameras: Sequence[str], streams: Sequence[str], width: int, height:
              layout: RobotLayout | None = None) -> dict[str, dict[str, Any]]:
     """The LeRobot feature dict of an export of one robot's episodes (``layout``; None: the Hand-E's)."""
     from rik.sim.observation import ENV_STATE_NAMES
-    from rik.sim.robot_layout import EE_NAMES, robot_layout
+    from rik.sim.robots.layout import EE_NAMES, robot_layout
 
     layout = layout or robot_layout(None)
     out: dict[str, dict[str, Any]] = {"observation.state": _vector(layout.state_names)}
@@ -81,10 +81,10 @@ def features(cameras: Sequence[str], streams: Sequence[str], width: int, height:
 
 
 def episode_layout(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> RobotLayout:
-    """The LeRobot layout of an episode's robot (:func:`rik.sim.robot_layout.robot_layout`); an arm's recorded
+    """The LeRobot layout of an episode's robot (:func:`rik.sim.robots.layout.robot_layout`); an arm's recorded
     joints must be its catalog entry's, as the layout reads them by name."""
-    from rik.sim.replay import episode_robot
-    from rik.sim.robot_layout import robot_layout
+    from rik.episodes.replay import episode_robot
+    from rik.sim.robots.layout import robot_layout
 
     robot = episode_robot(catalog, directory, meta)
     if robot.as_arm is None:
@@ -134,10 +134,10 @@ class EpisodeSource:
 def episode_frames(catalog: Catalog, source: EpisodeSource, cameras: Sequence[str], fps: int,
                    variants: Path) -> tuple[EpisodeMeta, str, Iterator[dict[str, np.ndarray]], int]:
     """(meta, task, frame dicts for ``add_frame`` without the task, frame count) of one episode."""
+    from rik.episodes.episode import read_episode, states
+    from rik.episodes.replay import episode_scene
     from rik.render.streams import read_frame
-    from rik.sim.episode import read_episode, states
     from rik.sim.observation import environment_state
-    from rik.sim.replay import episode_scene
 
     meta, table = read_episode(source.directory)
     layout = episode_layout(catalog, source.directory, meta)

@@ -8,9 +8,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
-from rik.combinator.ids import SEPARATOR
 from rik.errors import UnknownIdError
 from rik.registry.geometry import cross, dot, site_axes, sub
+from rik.registry.ids import SEPARATOR
 from rik.registry.sources import RawEntry, display_path
 from rik.schemas import BaseUnit, Front, Handle, HandleDesign, HandleType, JointType
 
@@ -46,7 +46,7 @@ def check_variant_id_parts(parsed: Parsed, section: str, noun: str) -> None:
     """Ids that go into variant ids must keep them unambiguous: no ``__`` (the separator), no ``/`` in a preset
     id, and no two ids of a section written the same once ``/`` becomes ``-`` (``drawer-chest-80`` and
     ``drawer/chest-80`` would share every variant folder)."""
-    from rik.combinator.ids import slug
+    from rik.registry.ids import slug
 
     first: dict[str, RawEntry] = {}
     for entry, model in parsed:

@@ -9,6 +9,7 @@ the field (``model.package``, ``model.files.N``), as the loader's own errors do.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -81,3 +82,19 @@ def usable_robot(catalog: Catalog, robot_id: str) -> Robot:
             raise entry_error(catalog, "robots", robot.id, f"model.files.{i}",
                               f"'{file}' is not in the installed package '{name}' ({folder})")
     return robot
+
+
+@functools.cache
+def builtin_robot(robot_id: str) -> Robot:
+    """A robot of the built-in catalog, read from its own file (``rik/registry/data/robots.yaml``) and validated
+    alone: what code that needs one robot's figures reads (the Hand-E's live only there)."""
+    from rik.registry.entries import parse_entry
+    from rik.registry.sources import BUILTIN_DIR, read_file
+    from rik.schemas.robots import Robot
+
+    for entry in read_file(BUILTIN_DIR / "robots.yaml", builtin=True):
+        if entry.section == "robots" and isinstance(entry.data, dict) and entry.data.get("id") == robot_id:
+            robot = parse_entry(entry)
+            assert isinstance(robot, Robot)
+            return robot
+    raise CatalogError("rik/registry/data/robots.yaml", f"robots '{robot_id}'", None, "no such built-in robot")

@@ -59,8 +59,8 @@ def scene_cameras(model: mujoco.MjModel, wanted: Sequence[str] | None, where: st
 
 
 def _episode_scene(catalog: Catalog, directory: Path, variants: Path) -> tuple[EpisodeMeta, pa.Table, SimScene]:
-    from rik.sim.episode import read_episode
-    from rik.sim.replay import episode_scene
+    from rik.episodes.episode import read_episode
+    from rik.episodes.replay import episode_scene
 
     meta, table = read_episode(directory)
     try:
@@ -76,8 +76,8 @@ def render_episode(catalog: Catalog, directory: Path, spec: StreamSpec, *, rende
                    progress: Callable[[int], None] | None = None) -> StreamResult:
     """Render one stream of the episode in ``directory`` into ``renders``; resumes an interrupted render and
     returns at once when the stream is already finished. ``progress(n)`` is called as frames are done."""
+    from rik.episodes.episode import read_meta
     from rik.locks import exclusive
-    from rik.sim.episode import read_meta
 
     meta = read_meta(directory)
     final = stream_dir(renders, meta.id, spec)
@@ -108,7 +108,7 @@ def _finished(final: Path, meta: EpisodeMeta, cameras: Sequence[str] | None,
 def _render_stream(catalog: Catalog, directory: Path, spec: StreamSpec, final: Path, variants: Path,
                    cameras: Sequence[str] | None, progress: Callable[[int], None] | None) -> StreamResult:
     """Render (or resume) the stream of the episode in ``directory`` into ``final``, holding its lock."""
-    from rik.sim.episode import states
+    from rik.episodes.episode import states
 
     meta, table, scene = _episode_scene(catalog, directory, variants)
     cams = scene_cameras(scene.model, cameras, str(directory))
@@ -153,7 +153,7 @@ def render_episodes(catalog: Catalog, episodes: Sequence[Path], spec: StreamSpec
     """Render ``spec``'s stream of every episode (in ``workers`` processes when more than one), yielding each
     result as it finishes. With one worker, ``progress`` advances frame by frame; with more, episode by episode."""
     from rik.assets.workers import map_ids
-    from rik.sim.episode import read_meta
+    from rik.episodes.episode import read_meta
 
     metas = {str(d): read_meta(d) for d in episodes}  # every episode readable before any work starts
     check_renders_outside(renders, {Path(d): m.id for d, m in metas.items()})

@@ -11,7 +11,7 @@ from rik.schemas.common import CatalogId, Frozen, SimpleId
 
 SPEC_FORMAT = 1
 STRATEGY_PARAMS = ("jitter", "regrasps")
-"""Parameters of a scripted strategy a spec may set (:func:`rik.sim.operators.make_operator`)."""
+"""Parameters of a scripted strategy a spec may set (:func:`rik.episodes.operators.make_operator`)."""
 
 
 class VariantSelection(Frozen):

@@ -71,4 +71,4 @@ class EpisodeMeta(Frozen):
     log: tuple[str, ...] = ()
     states_sha256: str = Field(pattern=r"^[0-9a-f]{64}$")
     meta_sha256: str | None = Field(default=None, pattern=r"^[0-9a-f]{64}$")
-    """sha256 of this file's other fields (:func:`rik.sim.episode.meta_digest`); required from format 2 on."""
+    """sha256 of this file's other fields (:func:`rik.episodes.episode.meta_digest`); required from format 2 on."""

@@ -3,12 +3,11 @@ mount, its joints' limits, its gripper with the sources of its figures, its wris
 
 Two kinds:
 
-- ``floating``: rik's Robotiq Hand-E on a force-limited six-axis base (:mod:`rik.sim.gripper`), the paper's
-  set-up; its figures live in :data:`rik.sim.gripper.HAND_E` and this entry records them (a test keeps the two
-  equal);
+- ``floating``: rik's Robotiq Hand-E on a force-limited six-axis base (:mod:`rik.sim.robots.gripper`), the paper's
+  set-up; its gripper's figures live in this entry, which :data:`rik.sim.robots.gripper.HAND_E` reads;
 - ``arm``: a robot arm read from the MJCF files of an installed Python package (never downloaded at run time),
   attached to the scene through ``mujoco.MjSpec`` and driven through differential inverse kinematics
-  (:mod:`rik.sim.ik`), so that it takes the same target pose as the Hand-E.
+  (:mod:`rik.sim.robots.ik`), so that it takes the same target pose as the Hand-E.
 
 Units are SI: m, rad, N, N·m, rad/s; joint stiffness N·m/rad, damping N·m·s/rad, armature kg·m².
 """

@@ -137,4 +137,4 @@ def pose_is_free(scene: SimScene, pose: np.ndarray, opening: float) -> bool:
     """Whether the gripper at base ``pose`` with each finger ``opening`` from the centre touches nothing (the
     furniture, the floor); an arm is solved to the pose and all of it must be free. The scene's state is left as
     it was."""
-    return scene._drive.pose_is_free(scene, np.asarray(pose, np.float64), opening)
+    return scene.robot_drive.pose_is_free(scene, np.asarray(pose, np.float64), opening)

@@ -6,64 +6,34 @@ from __future__ import annotations
 import errno
 import socket
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.teleop.station import StationConfig
 from rik.web.guard import new_token, with_token
+from rik.web.pages import STATIC
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
 
-    from rik.registry.catalog import Catalog
 
-STATIC = Path(__file__).parent / "static"
-"""Pages, scripts and styles of the app (no build step: plain HTML, CSS and JavaScript)."""
 DEFAULT_PORT = 8765
 DEFAULT_HOST = "127.0.0.1"
-DEFAULT_MAX_STATIONS = 4
-MAX_STATIONS_LIMIT = 64
-DEFAULT_IDLE_RELEASE = 600.0
 
 
 @dataclass
-class AppConfig:
-    """What the app serves: the catalog, where variants are built and episodes written, and teleop settings."""
+class AppConfig(StationConfig):
+    """What the app serves: the teleop stations' settings (:class:`rik.teleop.station.StationConfig`: the catalog,
+    where variants are built and episodes written) and the gate's."""
 
-    catalog: Catalog
-    variants: Path = Path("variants")
-    episodes: Path = Path("episodes")
-    overlays: tuple[Path, ...] = ()
-    max_seconds: float | None = None
-    """Time limit of a teleoperated episode, simulated s (None: no limit)."""
-    seed: int = 0
-    """First seed of teleoperated episodes; each new episode takes the next free one."""
-    front: str | None = None
-    """Front to operate (None: each variant's first)."""
-    robot: str = "hand-e"
-    """Robot of a station whose page names none (``?robot=`` picks another): a catalog robot id."""
     token: str = field(default_factory=new_token)
     """The launch token every request must show (:mod:`rik.web.guard`): in the printed address, then a cookie."""
     allowed_hosts: tuple[str, ...] = ()
     """Host names the app answers to besides localhost's, the ``--host`` it listens on and IP literals."""
-    max_stations: int = DEFAULT_MAX_STATIONS
-    """Teleop stations alive at once (each holds a scene and renderers: 100-300 MB)."""
-    idle_release: float = DEFAULT_IDLE_RELEASE
-    """A station no tab has watched for this long (s) is released; its episode in progress is kept as a draft."""
 
     def check(self) -> None:
         """Settings a user gave that cannot work fail here, before the server starts."""
-        from rik.sim.record import check_seeds
-        from rik.sim.teleop_session import check_time_limit
-
-        check_seeds(self.seed, 1)
-        check_time_limit(self.max_seconds)
-        self.catalog.robot(self.robot)  # an unknown robot: one line with close ids
-        if not 1 <= self.max_stations <= MAX_STATIONS_LIMIT:
-            raise RikError(f"--max-stations {self.max_stations}: give 1 to {MAX_STATIONS_LIMIT} (each station holds "
-                           "a scene and its renderers)")
-        if not 1.0 <= self.idle_release <= 7 * 24 * 3600:
-            raise RikError(f"--idle-release {self.idle_release}: give 1 s to a week")
+        super().check()
         if len(self.token) < 16:
             raise RikError("the launch token must be at least 16 characters")
 
@@ -94,8 +64,8 @@ def serve_station(config: AppConfig, variant: str, *, host: str = DEFAULT_HOST, 
     scene."""
     from urllib.parse import quote
 
-    from rik.combinator.ids import parse_variant_id
-    from rik.web.station import build_station_scene
+    from rik.registry.ids import parse_variant_id
+    from rik.teleop.station import build_station_scene
 
     config.check()
     vid = parse_variant_id(config.catalog, variant).id

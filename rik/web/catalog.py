@@ -33,7 +33,7 @@ def catalog_view(request: Request) -> CatalogView:
 
 
 def _page() -> FileResponse:
-    from rik.web.app import STATIC
+    from rik.web.pages import STATIC
 
     return FileResponse(STATIC / "catalog.html", media_type="text/html")
 

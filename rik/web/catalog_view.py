@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import rik
-from rik.combinator.ids import variant_id
 from rik.registry.doc import PICTURES_DIR, csv_rows, picture_dir
+from rik.registry.ids import variant_id
 from rik.registry.index import CatalogIndex, build_index
 from rik.registry.views import srgb_hex, table
 

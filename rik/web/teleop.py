@@ -1,5 +1,5 @@
 """The browser teleop station: ``GET /teleop/{variant}`` serves the page, ``WS /teleop/{variant}/ws`` streams
-the cameras and the status and takes the operator's input; the sessions live in :mod:`rik.web.station`.
+the cameras and the status and takes the operator's input; the sessions live in :mod:`rik.teleop.station`.
 
 Every request passes the gate of :mod:`rik.web.guard` first (this server's Host, the launch token, the app's
 own Origin on the websocket). Opening the page starts nothing; opening its websocket starts the station, within
@@ -28,7 +28,7 @@ Server -> browser, text: JSON status {"type": "status", "variant", "robot", "rea
 "message" (the station's last message), "controlled" (whether a tab controls), "paused" and "draft" (a draft
 kept after the controlling tab's connection was lost: the page offers Continue / Save / Discard), "replay"
 (null or {episode, row, rows}), "seq", "fps" (frames rendered per second), "size" ([w, h] of this tab's frames),
-"session": :meth:`rik.sim.teleop_session.TeleopSession.status` (with "pose": gripper base x, y, z m, pitch, yaw,
+"session": :meth:`rik.teleop.session.TeleopSession.status` (with "pose": gripper base x, y, z m, pitch, yaw,
 roll rad) plus "roll_deg"}.
 
 Browser -> server, text JSON (anything else: a binary frame, text that is not JSON or holds ``NaN``/``Infinity``,
@@ -57,12 +57,12 @@ from fastapi import APIRouter, Request, WebSocket, WebSocketDisconnect
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 
 from rik.errors import RikError
-from rik.web.app import STATIC
+from rik.web.pages import STATIC
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
 
-    from rik.web.station import Stations
+    from rik.teleop.station import Stations
 
 router = APIRouter()
 
@@ -73,7 +73,7 @@ def _stations(app: Any) -> Stations:
 
 def _variant(app: Any, text: str) -> str:
     """The canonical id of the variant ``text`` names, or a RikError with the catalog's one-line message."""
-    from rik.combinator.ids import parse_variant_id
+    from rik.registry.ids import parse_variant_id
 
     return parse_variant_id(app.state.config.catalog, text).id
 
@@ -94,8 +94,8 @@ def robots(request: Request) -> JSONResponse:
 
 @router.get("/teleop/keymap.json", include_in_schema=False)
 def keymap() -> JSONResponse:
-    """The keymap shared with the viewer (:mod:`rik.sim.teleop_keys`), for the page's keyboard and its table."""
-    from rik.sim import teleop_keys as k
+    """The keymap shared with the viewer (:mod:`rik.teleop.keys`), for the page's keyboard and its table."""
+    from rik.teleop import keys as k
 
     motion = [{"code": b.code, "label": b.label, "axis": b.axis, "sign": b.sign, "does": b.does}
               for b in k.MOTION_KEYS]
@@ -150,7 +150,7 @@ def parse_message(text: str) -> tuple[Any, str]:
 async def stream(websocket: WebSocket, variant: str, robot: str | None = None) -> None:
     """One tab's connection: frames and status out, input and commands in (see the module docstring). Opening it
     starts the station (building the variant in its thread when needed), within the app's bound on stations."""
-    from rik.web.station import Client
+    from rik.teleop.station import Client
 
     await websocket.accept()
     try:
@@ -200,7 +200,7 @@ def install(app: FastAPI, scenes: dict[tuple[str, str], Any] | None = None) -> N
     threads stop and episodes in progress are kept as drafts."""
     from contextlib import asynccontextmanager
 
-    from rik.web.station import Stations
+    from rik.teleop.station import Stations
 
     stations = Stations(app.state.config, scenes)
     app.state.stations = stations

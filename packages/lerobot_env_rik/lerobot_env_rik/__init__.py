@@ -3,10 +3,10 @@
 LeRobot 0.6.1 imports this package at start-up (``register_third_party_plugins`` imports every installed
 distribution named ``lerobot_env_*``), which registers :class:`RikEnvConfig` under the name ``rik``. The
 environment is rik's ``rik/OpenFront-v0``, drawing each episode's variant from a catalog split by its seed
-(``rik.sim.draw``), so ``lerobot-eval --seed S`` and ``rik eval --seed S`` run the same episodes.
+(``rik.episodes.draw``), so ``lerobot-eval --seed S`` and ``rik eval --seed S`` run the same episodes.
 
 ``--env.robot`` picks the robot (a catalog id: ``hand-e``, the default, ``so100`` or ``panda-2f85``); the features
-follow that robot's LeRobot layout (:mod:`rik.sim.robot_layout`), so a policy trained on a robot's export runs
+follow that robot's LeRobot layout (:mod:`rik.sim.robots.layout`), so a policy trained on a robot's export runs
 with that robot: the Hand-E takes the absolute action (target pose and gripper, 7 numbers), an arm its joint
 action (``action_mode="joints"``: the joint targets and gripper in its export's names and units, e.g. the SO-100's
 6 numbers in degrees and gripper percent). Observations map onto exactly the feature names of
@@ -38,8 +38,8 @@ from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE, OBS_STR
 
-import rik.sim.env  # noqa: F401  (registers rik/OpenFront-v0 with gymnasium)
-from rik.sim.robot_layout import EE_NAMES, RobotLayout, robot_layout
+import rik.envs.open_front  # noqa: F401  (registers rik/OpenFront-v0 with gymnasium)
+from rik.sim.robots.layout import EE_NAMES, RobotLayout, robot_layout
 
 __all__ = ["RikEnvConfig", "env_kwargs", "robot_layout_of"]
 
@@ -120,8 +120,8 @@ class RikEnvConfig(EnvConfig):
 
 
 def env_kwargs(cfg: RikEnvConfig) -> dict:
-    """The keyword arguments of ``rik.sim.env.OpenFrontEnv`` for a config."""
-    from rik.sim.draw import Draw
+    """The keyword arguments of ``rik.envs.open_front.OpenFrontEnv`` for a config."""
+    from rik.episodes.draw import Draw
 
     draw = Draw.parse(cfg.split, cfg.handle_types, cfg.presets, cfg.kinds)
     cameras = _names(cfg.cameras)

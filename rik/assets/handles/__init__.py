@@ -8,15 +8,14 @@ handle's long axis (see :mod:`rik.schemas.handles`).
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from rik.assets.handles.generator import Generator
 
 if TYPE_CHECKING:
     import trimesh
 
-    from rik.schemas.handles import Handle, HandleDesign, HandleGeometry, Mount
-
-Generator = Callable[[Any, "HandleGeometry", "Mount"], "trimesh.Trimesh"]
+    from rik.schemas.handles import Handle, HandleDesign
 
 
 def generators() -> dict[str, Generator]:

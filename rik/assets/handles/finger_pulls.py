@@ -37,7 +37,7 @@ from rik.schemas.generators import CupPull, EdgeProfile, RecessLip, TabPull
 from rik.schemas.handles import HandleGeometry, Mount
 
 if TYPE_CHECKING:
-    from rik.assets.handles import Generator
+    from rik.assets.handles.generator import Generator
 
 EDGE_CAP_DEPTH = 0.016
 """How far an edge profile's cap lies over the front's edge, from the face toward the back, m (the thinnest

@@ -26,7 +26,7 @@ from rik.schemas.generators import KnobLathe, KnobPrism, KnobRing
 from rik.schemas.handles import HandleGeometry, Mount
 
 if TYPE_CHECKING:
-    from rik.assets.handles import Generator
+    from rik.assets.handles.generator import Generator
 
 _EPS = 1e-9
 ROSE_HEIGHT = 1.2e-3

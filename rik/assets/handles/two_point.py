@@ -35,7 +35,7 @@ from rik.assets.meshkit import difference, segments, union
 from rik.errors import RikError
 
 if TYPE_CHECKING:
-    from rik.assets.handles import Generator
+    from rik.assets.handles.generator import Generator
     from rik.schemas.generators import BarPull, BowPull
     from rik.schemas.handles import HandleGeometry, Mount
 

@@ -1,6 +1,6 @@
 // The catalog pages of rik serve: handle and base-unit cards from /api/catalog/*, filters (type, size, finish,
 // text) applied in the page, a side panel with one entry, and a pairing picker that links to /teleop/<variant id>
-// (the variant ids come from the server, made by rik.combinator.ids). Plain JavaScript, no build step.
+// (the variant ids come from the server, made by rik.registry.ids). Plain JavaScript, no build step.
 "use strict";
 
 const TYPE_LABEL = {knob: "Knob", two_point: "Two-point", finger_pull: "Finger pull"};

@@ -1,7 +1,7 @@
 """Differential inverse kinematics for an arm, with mink (quadratic programs on MuJoCo's kinematics).
 
 One IK step per control step turns the target pose of rik's gripper frame into the arm's joint targets, as
-:mod:`rik.sim.arm` servos them: a frame task on the gripper frame, a light posture task towards the mount's home
+:mod:`rik.sim.robots.arm` servos them: a frame task on the gripper frame, a light posture task towards the mount's home
 posture (it settles the redundant joints of a 7-joint arm), and three limits: the joints' ranges, their speeds
 (over the control step) and a distance to the floor for every link (mink's collision-avoidance limit).
 
@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rik.sim.arm import ROBOT_PREFIX, TCP_SITE, Placement, robot_spec
+from rik.sim.robots.arm import ROBOT_PREFIX, TCP_SITE, Placement, robot_spec
 
 if TYPE_CHECKING:
     from rik.schemas.robots import Robot

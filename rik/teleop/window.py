@@ -1,7 +1,7 @@
 """The viewer teleop's window: a GLFW window of its own (no MuJoCo viewer, so no viewer shortcut collides with a
 teleop key) that MuJoCo renders a scene into, with text overlays, three cameras (the front camera, the wrist
 camera, a free camera the mouse orbits) and the keyboard polled for held keys. No session logic here:
-:mod:`rik.sim.teleop` runs the loop."""
+:mod:`rik.teleop.desktop` runs the loop."""
 
 from __future__ import annotations
 

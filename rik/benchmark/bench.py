@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, choose_variant
 from rik.errors import RikError
-from rik.sim.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, choose_variant
 from rik.sim.outcome import OUTCOMES
 
 if TYPE_CHECKING:
@@ -60,8 +60,8 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
                robot: str = "hand-e") -> list[BenchTask]:
     """Every episode of the benchmark. The same episode index of every strategy (and grip force, and robot) gets
     the same variant, front and start pose, so strategies and robots are compared on the same draws."""
-    from rik.combinator.ids import select_variants
-    from rik.sim.operators import make_operator
+    from rik.episodes.operators import make_operator
+    from rik.registry.ids import select_variants
 
     if not 0 <= seed <= MAX_BENCH_SEED:
         raise RikError(f"--seed {seed}: the benchmark's seed must lie in 0 .. {MAX_BENCH_SEED} (each episode's seed is "
@@ -97,12 +97,12 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
 
 def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) -> dict[str, object]:
     """Run one benchmark episode (not written to disk); returns its row for the results table."""
-    from rik.sim.episode import run_operator
-    from rik.sim.gripper import HAND_E
-    from rik.sim.operators import PULL_SPEED, make_operator
+    from rik.episodes.episode import run_operator
+    from rik.episodes.operators import PULL_SPEED, make_operator
+    from rik.episodes.record import randomise_start
+    from rik.sim.build import build_scene
     from rik.sim.outcome import classify
-    from rik.sim.record import randomise_start
-    from rik.sim.scene import build_scene
+    from rik.sim.robots.gripper import HAND_E
 
     task = BenchTask(**json.loads(encoded))
     gripper = HAND_E if task.grip_force is None else HAND_E.with_(grip_force=task.grip_force)
@@ -111,7 +111,8 @@ def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) 
     gripper = scene.gripper
     reach = 1.0
     if arm is not None:
-        from rik.sim.robot_checks import reach_profile, reachable_opening
+        from rik.sim.robots.checks import reach_profile
+        from rik.sim.robots.reach import reachable_opening
 
         reach = reachable_opening(reach_profile(scene))
     rng = np.random.default_rng(task.seed)

@@ -1,7 +1,7 @@
 """Teleoperation in a window of its own: the keyboard (held keys move the target continuously) or a 3Dconnexion
-SpaceMouse drive a :class:`rik.sim.teleop_session.TeleopSession`, which records at the scene's control rate.
+SpaceMouse drive a :class:`rik.teleop.session.TeleopSession`, which records at the scene's control rate.
 
-Keymap (the same as the browser station's, :mod:`rik.sim.teleop_keys`; directions as seen facing the front):
+Keymap (the same as the browser station's, :mod:`rik.teleop.keys`; directions as seen facing the front):
 
 ======================  ==============================================================
 W / S                   towards / away from the furniture (hold: 0.10 m/s)
@@ -44,8 +44,8 @@ if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
     from rik.schemas.robots import Robot
-    from rik.sim.teleop_session import TeleopSession
-    from rik.sim.teleop_window import TeleopWindow
+    from rik.teleop.session import TeleopSession
+    from rik.teleop.window import TeleopWindow
 
 CATCH_UP = 2
 """Control steps at most per frame when the loop has fallen behind real time; older missed steps are dropped."""
@@ -55,7 +55,7 @@ STATUS_PERIOD = 1.0
 """Seconds between status lines in the terminal."""
 EXTRA_KEYS = (("Esc", "quit (an unsaved episode is discarded)"), ("1 / 2 / 3", "camera: front / wrist / free"),
               ("drag / wheel", "orbit / zoom the free camera"), ("F1", "hide / show this keymap"))
-"""Rows of the on-screen keymap beyond :func:`rik.sim.teleop_keys.keymap_rows`."""
+"""Rows of the on-screen keymap beyond :func:`rik.teleop.keys.keymap_rows`."""
 
 
 class DeviceError(RikError):
@@ -160,13 +160,13 @@ class Controls:
         elif key == glfw.KEY_F1:
             self.show_keys = not self.keys_shown
         elif key in (glfw.KEY_1, glfw.KEY_2, glfw.KEY_3) and self.window is not None:
-            from rik.sim.teleop_window import CAMERAS
+            from rik.teleop.window import CAMERAS
 
             self.window.camera = CAMERAS[key - glfw.KEY_1]
 
     def held(self) -> frozenset[str]:
         """Browser codes of the motion keys held now (Shift as ``fine``)."""
-        from rik.sim.teleop_keys import COMMAND_KEYS, MOTION_KEYS
+        from rik.teleop.keys import COMMAND_KEYS, MOTION_KEYS
 
         assert self.window is not None
         codes = {k.code for k in MOTION_KEYS if self.window.held(_glfw_key(k.glfw))}
@@ -176,7 +176,7 @@ class Controls:
 
     def apply(self, held: frozenset[str]) -> None:
         """Set the session's velocity command from the held keys (and the SpaceMouse)."""
-        from rik.sim.teleop_keys import velocity
+        from rik.teleop.keys import velocity
 
         command = velocity(held, fine="fine" in held)
         grip = None
@@ -197,8 +197,8 @@ def overlays(session: TeleopSession, camera: str, fps: float, show_keys: bool = 
     when hidden) for the window."""
     import mujoco
 
-    from rik.sim.teleop_keys import keymap_rows
-    from rik.sim.teleop_session import handle_text, time_text
+    from rik.teleop.keys import keymap_rows
+    from rik.teleop.session import handle_text, time_text
 
     st = session.status()
     state = st["state"] + (": Enter saves, Backspace discards" if st["state"] == "time up" else "")
@@ -226,8 +226,8 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
     window opens): Enter saves an episode to ``out/<id>`` (each with its own id: nothing is overwritten),
     Backspace discards it, Esc or closing the window quits and discards the unsaved one. Returns the saved
     episodes' metas."""
-    from rik.sim.record import check_seeds
-    from rik.sim.teleop_session import check_time_limit
+    from rik.episodes.record import check_seeds
+    from rik.teleop.session import check_time_limit
 
     say = on_message or _print
     check_seeds(seed, 1)
@@ -238,11 +238,11 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
                           "VARIANT --web for the browser station, or rik record VARIANT --strategy NAME")
     if "mujoco" not in sys.modules:
         os.environ["MUJOCO_GL"] = "glfw"  # the window's own OpenGL context, not an offscreen one
-    from rik.sim.record import variant_dir
-    from rik.sim.robot_checks import require_reach
-    from rik.sim.scene import build_scene
-    from rik.sim.teleop_session import TeleopSession
-    from rik.sim.teleop_window import TeleopWindow, open_display
+    from rik.episodes.record import variant_dir
+    from rik.sim.build import build_scene
+    from rik.sim.robots.checks import require_reach
+    from rik.teleop.session import TeleopSession
+    from rik.teleop.window import TeleopWindow, open_display
 
     open_display()  # before the (slow) scene: a display that cannot take a window fails at once
     try:

@@ -1,16 +1,12 @@
 """The parallel-jaw gripper rik simulates, on a force-limited 6-DoF base that follows a target pose.
 
 **The gripper is a Robotiq Hand-E** (a true parallel-jaw gripper, common on UR and Franka arms in teleoperation
-data sets). Its figures, with where they come from:
-
-- stroke 50 mm (25 mm per finger), finger speed 20-150 mm/s, mass about 1 kg: Robotiq Hand-E specifications;
-- grip force: the manual's friction-payload example uses the gripper's maximum force, 130 N
-  (Robotiq Hand-E instruction manual, section 6 "Payload and force", W = 2 F Cf / Sf);
-- fingers: synchronised (the manual: "finger movement is always synchronized");
-- pad friction: 0.3, the manual's tested static coefficient of its silicone fingertips (HND-TIP-SLC-KIT), measured
-  on lubricated steel (same page). It is the only pad friction Robotiq publishes; dry lacquer or metal is
-  grippier, so this is a conservative figure. ``rik bench --sweep`` varies it.
-- finger and palm dimensions: approximate, from the Hand-E's outline drawings (fingertip 20 mm wide).
+data sets). Its figures (stroke, grip force, pad friction, finger speed, finger and pad sizes) and their sources live
+once, in the built-in catalog's ``robots.yaml`` (entry ``hand-e``; ``rik catalog show hand-e``), which
+:data:`HAND_E` reads. The fingers are synchronised (the manual: "finger movement is always synchronized"); the pad
+friction there is the only one Robotiq publishes, measured on lubricated steel, so dry lacquer or metal is
+grippier and the figure is conservative (``rik bench --sweep`` varies it). Palm size and mass (about 1 kg) are
+approximate, from the Hand-E's outline drawings and specifications.
 
 **The arm** is not modelled link by link: the gripper's base is a chain of three slides and three hinges driven by
 position servos whose force is capped, so the gripper cannot push or pull harder than an arm could. The caps
@@ -30,8 +26,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rik.registry.robots import builtin_robot
+
 if TYPE_CHECKING:
     import mujoco
+
+    from rik.schemas.robots import Robot
 
 GRIPPER_PREFIX = "gripper/"
 BASE_JOINTS = ("x", "y", "z", "pitch", "yaw", "roll")
@@ -42,15 +42,23 @@ BASE_JOINTS = ("x", "y", "z", "pitch", "yaw", "roll")
 class GripperSpec:
     """A parallel-jaw gripper and the arm that carries it. SI units; sources in the module docstring."""
 
-    name: str = "Robotiq Hand-E"
-    stroke: float = 0.050
+    name: str
+    stroke: float
     """Jaw opening at full open, m (both fingers together)."""
-    grip_force: float = 130.0
+    grip_force: float
     """Force each jaw presses with when closed on an object, N."""
-    finger_speed: float = 0.150
+    finger_speed: float
     """Closing speed of each finger, m/s."""
-    pad_friction: float = 0.3
+    pad_friction: float
     """Static friction coefficient of the fingertip pads."""
+    finger_length: float
+    """m."""
+    finger_width: float
+    """m."""
+    finger_thickness: float
+    """Along the closing direction, pad included, m."""
+    pad_length: float
+    """m."""
     mass: float = 1.0
     """kg."""
     arm_force: float = 150.0
@@ -65,11 +73,6 @@ class GripperSpec:
     """Reflected inertia of the arm on each translational axis, kg."""
     arm_rot_armature: float = 0.01
     """Reflected inertia on each rotational axis, kg·m²."""
-    finger_length: float = 0.045
-    finger_width: float = 0.020
-    finger_thickness: float = 0.008
-    """Along the closing direction, pad included, m."""
-    pad_length: float = 0.030
     palm: tuple[float, float, float] = (0.090, 0.050, 0.060)
     """Palm (housing) size along x, y, z, m."""
     fixed_jaw: float | None = None
@@ -99,7 +102,21 @@ class GripperSpec:
         return 2.0 * self.pad_friction * self.grip_force
 
 
-HAND_E = GripperSpec()
+def gripper_spec(robot: Robot) -> GripperSpec:
+    """The :class:`GripperSpec` of a catalog robot (what the strategies plan with and episodes record); the arm and
+    palm figures of the floating base (not in the catalog) keep their defaults."""
+    g = robot.gripper
+    spec = GripperSpec(name=g.name, stroke=g.stroke, grip_force=g.grip_force.value,
+                       pad_friction=g.pad_friction.value, finger_speed=g.finger_speed.value,
+                       finger_length=g.finger_length, finger_width=g.finger_width,
+                       finger_thickness=g.finger_thickness, pad_length=g.pad_length)
+    if robot.as_arm is not None:
+        spec = spec.with_(tcp_distance=g.tcp_offset, fixed_jaw=g.fixed_jaw)
+    return spec
+
+
+HAND_E = gripper_spec(builtin_robot("hand-e"))
+"""The Robotiq Hand-E, its figures (and their sources) read from the built-in catalog's ``robots.yaml``."""
 
 
 BASE_QUAT = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)

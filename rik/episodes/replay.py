@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from rik.sim.episode import EpisodeError, read_episode, states
+from rik.episodes.episode import EpisodeError, read_episode, states
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -42,9 +42,9 @@ def episode_robot(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> Robot
 
 def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: EpisodeMeta) -> SimScene:
     """The scene an episode was recorded in (its variant is built first if missing), with its gripper."""
-    from rik.sim.gripper import HAND_E
-    from rik.sim.record import variant_dir
-    from rik.sim.scene import build_scene
+    from rik.episodes.record import variant_dir
+    from rik.sim.build import build_scene
+    from rik.sim.robots.gripper import HAND_E
 
     g = meta.gripper
     gripper = HAND_E.with_(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,

@@ -1,10 +1,10 @@
 """``rik/OpenFront-v0``: a gymnasium environment that asks a policy to open a front of a rik variant.
 
 - **episodes**: one variant (``variant=``), or drawn from a catalog split by the reset's seed (``split=``,
-  :mod:`rik.sim.draw`: the same seed gives the same variant, front and start pose everywhere); a reset may also
+  :mod:`rik.episodes.draw`: the same seed gives the same variant, front and start pose everywhere); a reset may also
   name ``options={"variant": ..., "front": ..., "preset": ...}``. The gripper starts at a randomised pose in front of
   the handle: a reset with seed ``S`` starts where ``rik record --seed S`` starts on that variant;
-- **robot** (``robot=``, a catalog id, :mod:`rik.sim.robot_layout`): ``hand-e`` (rik's floating gripper, the
+- **robot** (``robot=``, a catalog id, :mod:`rik.sim.robots.layout`): ``hand-e`` (rik's floating gripper, the
   default), ``so100`` or ``panda-2f85`` (an arm at its mount beside the handle);
 - **observation** (a dict, shaped as LeRobot's environments return them): ``agent_pos`` = the robot's state as
   its export's ``observation.state`` holds it (the Hand-E's :data:`rik.sim.observation.ROBOT_STATE_NAMES`; an
@@ -27,7 +27,7 @@
   ``max_opening``, and the episode's variant, front, handle type and preset. The last finished episode's
   result stays in :attr:`OpenFrontEnv.last_result` (vector environments reset a finished one at once).
 
-Use: ``import rik.sim.env`` (registers the id), then ``gymnasium.make("rik/OpenFront-v0", variant=...)``.
+Use: ``import rik.envs.open_front`` (registers the id), then ``gymnasium.make("rik/OpenFront-v0", variant=...)``.
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ from rik.sim.observation import (
     image_name,
 )
 from rik.sim.outcome import SUCCESS_OPENING, classify
-from rik.sim.robot_layout import EE_NAMES, RobotLayout, robot_layout
+from rik.sim.robots.layout import EE_NAMES, RobotLayout, robot_layout
 from rik.sim.scene import CONTROL_FPS, SimScene
 
 if TYPE_CHECKING:
@@ -77,8 +77,8 @@ class OpenFrontEnv(gym.Env):
                  cameras: tuple[str, ...] = CAMERAS, image_size: tuple[int, int] = (96, 128), spp: int = 16,
                  episode_length: int = EPISODE_LENGTH, variants_dir: str | Path = "variants",
                  render_mode: str | None = None, catalog_paths: tuple[str, ...] = ()) -> None:
+        from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, Draw
         from rik.registry.load import load_catalog
-        from rik.sim.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, Draw
 
         if action_mode not in ACTION_MODES:
             raise RikError(f"action_mode '{action_mode}': use one of {', '.join(ACTION_MODES)}")
@@ -150,8 +150,8 @@ class OpenFrontEnv(gym.Env):
 
     # ---- scenes and images ----------------------------------------------------------------------------------
     def _scene(self, variant: str, front: str | None) -> SimScene:
-        from rik.sim.record import variant_dir
-        from rik.sim.scene import build_scene
+        from rik.episodes.record import variant_dir
+        from rik.sim.build import build_scene
 
         key = (variant, front)
         if key in self._scenes:
@@ -184,9 +184,9 @@ class OpenFrontEnv(gym.Env):
 
     # ---- gym API ----------------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
-        from rik.combinator.ids import VariantKey, parse_variant_id
+        from rik.episodes.record import randomise_start
+        from rik.registry.ids import VariantKey, parse_variant_id
         from rik.sim.observation import instruction
-        from rik.sim.record import randomise_start
 
         super().reset(seed=seed)
         options = options or {}
@@ -311,4 +311,4 @@ def joint_action_bounds(layout: RobotLayout) -> tuple[np.ndarray, np.ndarray]:
 
 
 if ENV_ID not in gym.registry:
-    gym.register(id=ENV_ID, entry_point="rik.sim.env:OpenFrontEnv")
+    gym.register(id=ENV_ID, entry_point="rik.envs.open_front:OpenFrontEnv")

@@ -8,7 +8,6 @@ the gripper command (0 open, 0.5 closed without force, 1 closed with the full gr
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -16,16 +15,16 @@ from typing import Any, Protocol
 import numpy as np
 
 from rik.errors import RikError
-from rik.sim.probe import APPROACH, CLEARANCE, find_hooks, front_face_y, handle_extent, pose_is_free
-from rik.sim.scene import SimScene, base_for_tcp
+from rik.sim.grasp import PULL_SPEED, GraspPlan, hook_plans, pinch_fits, pinch_plan
+from rik.sim.pose import base_for_tcp
+from rik.sim.probe import APPROACH
+from rik.sim.scene import SimScene
 
 ACTION_NAMES = ("x", "y", "z", "pitch", "yaw", "roll", "gripper")
 MOVE_SPEED = 0.25
 """Free-space speed of the gripper, m/s."""
 APPROACH_SPEED = 0.08
 """Speed of the last few centimetres onto the handle, m/s."""
-PULL_SPEED = 0.12
-"""Speed of the pull, m/s."""
 PULL_LEAD = 0.06
 """How far the commanded point may run ahead of the gripper in a pull, m (beyond the servo's force cap)."""
 CLOSE_TIME = 0.6
@@ -35,9 +34,6 @@ SLIP_DISTANCE = 0.015
 STALL_TIME = 1.5
 """A pull that gains less than :data:`STALL_PROGRESS` of the range in this time has stalled, s."""
 STALL_PROGRESS = 0.01
-SWING_MARGIN = 0.008
-"""A swinging gripper's fixed jaw comes this far clear of the handle (beyond :data:`CLEARANCE`), m: a hobby arm's servos
-sag a few millimetres under its own weight."""
 DONE_OPENING = 0.97
 """A strategy stops pulling when the front is this far open (fraction of its range)."""
 
@@ -51,68 +47,6 @@ class Operator(Protocol):
     def reset(self, scene: SimScene, rng: np.random.Generator) -> None: ...
 
     def act(self, scene: SimScene) -> np.ndarray: ...
-
-
-@dataclass(frozen=True)
-class GraspPlan:
-    """Where to put the pads (``tcp``, world), how to turn the gripper, and where to come from."""
-
-    mode: str
-    tcp: np.ndarray
-    angles: np.ndarray
-    approach: np.ndarray
-    """Unit vector from the grasp towards the pre-grasp pose."""
-    detail: str = ""
-    key: str = ""
-    """Plans with the same key are one way of grasping; a re-grasp tries another."""
-
-
-# ---- grasp planning (ground truth) ------------------------------------------------------------------------------
-def pinch_plan(scene: SimScene, vertical: bool) -> GraspPlan:
-    """Friction grasp: fingers towards the front, jaws horizontal or vertical, pads on the handle's outer part."""
-    g = scene.gripper
-    lo, hi = handle_extent(scene)
-    centre = scene.grasp_point()
-    face = min(front_face_y(scene, centre[0], centre[2], hi[1] + 0.05), lo[1])
-    pad_y = max(hi[1] - g.pad_length / 2, face + CLEARANCE + 0.001 + g.pad_length / 2)
-    tcp = np.array([centre[0], pad_y, centre[2]])
-    angles = np.array([0.0, 0.0, math.pi / 2 if vertical else 0.0])
-    mode = "pinch_vertical" if vertical else "pinch_horizontal"
-    if g.fixed_jaw is not None:  # a swinging jaw closes the handle against the fixed one: put that one beside it
-        from rik.sim.scene import gripper_rotation
-
-        closing = gripper_rotation(angles)[:, 0]
-        half = 0.5 * float(np.abs(closing) @ (hi - lo))
-        tcp = tcp + closing * (half + CLEARANCE + SWING_MARGIN - g.fixed_jaw)
-    return GraspPlan(mode, tcp, angles, np.array([0.0, 1.0, 0.0]), key=mode)
-
-
-def hook_plans(scene: SimScene, limit: int = 6) -> list[GraspPlan]:
-    """Form-closure grasps: a finger behind material of the front (see :func:`rik.sim.probe.find_hooks`), with
-    the jaws open across the handle and the whole gripper clear of the furniture there and on the way in."""
-    g = scene.gripper
-    plans: list[GraspPlan] = []
-    for h in find_hooks(scene, g.finger_thickness, g.finger_width, g.stroke, g.pad_length):
-        sign = 1.0 if h.side == "above" else -1.0
-        tcp = h.pad + h.normal * g.finger_travel
-        angles = np.array([sign * h.tilt, 0.0, math.pi / 2])
-        if not all(pose_is_free(scene, base_for_tcp(g, tcp - h.finger * k * APPROACH, angles), g.finger_travel)
-                   for k in (0.0, 0.5, 1.0)):
-            continue
-        plan = GraspPlan(f"hook_{h.side}", tcp, angles, -h.finger,
-                         f"tilt {math.degrees(h.tilt):.0f} deg, bite {h.engagement * 1000:.0f} mm",
-                         f"hook_{h.side}_{math.degrees(h.tilt):.0f}")
-        if all(np.linalg.norm(plan.tcp - p.tcp) > 0.006 or p.mode != plan.mode for p in plans):
-            plans.append(plan)
-        if len(plans) >= limit:
-            break
-    return plans
-
-
-def pinch_fits(scene: SimScene) -> bool:
-    """Whether the handle is narrower vertically than horizontally (so a vertical pinch is the natural one)."""
-    lo, hi = handle_extent(scene)
-    return (hi[2] - lo[2]) <= (hi[0] - lo[0])
 
 
 # ---- the scripted operator ------------------------------------------------------------------------------------
@@ -306,7 +240,7 @@ def make_operator(name: str, params: Mapping[str, float | int] | None = None) ->
 @dataclass
 class PolicyOperator:
     """A learned (or any) policy as an operator: ``policy(observation) -> action`` where the action is the
-    environment's (a target-pose delta and a gripper command, see :mod:`rik.sim.env`)."""
+    environment's (a target-pose delta and a gripper command, see :mod:`rik.envs.open_front`)."""
 
     policy: Callable[[dict[str, Any]], np.ndarray]
     name: str = "policy"

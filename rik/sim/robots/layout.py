@@ -52,12 +52,9 @@ class RobotLayout:
             from rik.sim.observation import robot_state
 
             return robot_state(scene)
-        from rik.sim.drive import ArmDrive
-
-        drive = scene.drive
-        assert isinstance(drive, ArmDrive)
+        drive = scene.robot_drive
         names = list(self.robot.joint_names)
-        q = scene.data.qpos[drive.qpos]
+        q = drive.joint_positions(scene)
         closure = min(max(drive.closure(scene), 0.0), 1.0)
         return np.array([_to_unit(float(q[names.index(j)]), unit) if j is not None else _grip_to_unit(closure, unit)
                          for j, unit in self.joints], np.float64)
@@ -92,12 +89,10 @@ class RobotLayout:
         """The gripper frame in the arm's base frame: x, y, z (m) and a rotation vector (rad)."""
         from scipy.spatial.transform import Rotation
 
-        from rik.sim.drive import ArmDrive
-
-        drive = scene.drive
-        assert isinstance(drive, ArmDrive)
-        base = Rotation.from_euler("z", drive.placement.yaw)
-        position = base.inv().apply(scene.tcp() - drive.placement.pos)
+        mount = scene.robot_drive.mount
+        assert mount is not None  # an ee pose layout is an arm's, which stands on a mount
+        base = Rotation.from_euler("z", mount.yaw)
+        position = base.inv().apply(scene.tcp() - mount.pos)
         rotation = base.inv() * Rotation.from_matrix(scene.gripper_rotation())
         return np.concatenate([position, rotation.as_rotvec()]).astype(np.float64)
 

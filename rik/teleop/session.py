@@ -4,7 +4,7 @@ station). Devices set a velocity command and a grip; :meth:`TeleopSession.tick` 
 - the gripper starts at rest in front of the operated handle (:func:`rik.sim.scene.start_pose`), in view of the
   front camera, and recording starts with the operator's first input (no idle frames before it);
 - the target moves at the commanded velocity per *control step* and never runs more than
-  :data:`rik.sim.teleop_keys.LEAD` ahead of the gripper, so a slow frame or a blocked gripper never turns into
+  :data:`rik.teleop.keys.LEAD` ahead of the gripper, so a slow frame or a blocked gripper never turns into
   a jump;
 - every episode gets its own id: the seed advances to the next one with no episode (nor draft) in ``out``, so
   nothing is ever overwritten; saving writes ``out/<id>``, discarding writes nothing, and a draft (a connection
@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rik.sim.teleop_keys import ANGULAR_SPEED, LEAD, LINEAR_SPEED
+from rik.teleop.keys import ANGULAR_SPEED, LEAD, LINEAR_SPEED
 
 if TYPE_CHECKING:
+    from rik.episodes.episode import EpisodeRecorder
     from rik.schemas.episodes import EpisodeMeta
-    from rik.sim.episode import EpisodeRecorder
     from rik.sim.scene import SimScene
 
 DRAFTS = ".drafts"
@@ -55,7 +55,7 @@ class TeleopSession:
 
     def __init__(self, scene: SimScene, out: Path, *, operator: str = "keyboard", seed: int = 0,
                  max_seconds: float | None = None) -> None:
-        from rik.sim.record import check_seeds
+        from rik.episodes.record import check_seeds
 
         check_seeds(seed, 1)
         check_time_limit(max_seconds)
@@ -76,21 +76,21 @@ class TeleopSession:
     # ---- episodes ---------------------------------------------------------------------------------------------
     @property
     def episode(self) -> str:
-        from rik.sim.episode import episode_id
+        from rik.episodes.episode import episode_id
 
         return episode_id(self.scene.info["id"], self.scene.front.id, self.operator, self.seed, self.scene.robot_id)
 
     def _taken(self, seed: int) -> bool:
-        from rik.sim.episode import episode_id
+        from rik.episodes.episode import episode_id
 
         name = episode_id(self.scene.info["id"], self.scene.front.id, self.operator, seed, self.scene.robot_id)
         return (self.out / name).exists() or (self.out / DRAFTS / name).exists()
 
     def _start(self) -> None:
         """A new episode: the next free seed, the scene at its start pose, nothing recorded."""
+        from rik.episodes.episode import EpisodeRecorder
+        from rik.episodes.record import check_seeds
         from rik.errors import RikError
-        from rik.sim.episode import EpisodeRecorder
-        from rik.sim.record import check_seeds
 
         for seed in range(self.seed, self.seed + MAX_FREE_SEEDS):
             if not self._taken(seed):
@@ -116,7 +116,7 @@ class TeleopSession:
     def save(self) -> Saved | None:
         """Write the episode to ``out/<id>`` and start the next one; None (and nothing written) when nothing was
         recorded yet."""
-        from rik.sim.episode import write_episode
+        from rik.episodes.episode import write_episode
 
         if not self.recording:
             self.message = "nothing recorded yet: move first"
@@ -139,7 +139,7 @@ class TeleopSession:
     def keep_draft(self) -> Path | None:
         """Write the episode so far to ``out/.drafts/<id>`` (replaced by each later draft, removed on save or
         discard); the session goes on. None when nothing was recorded."""
-        from rik.sim.episode import write_episode
+        from rik.episodes.episode import write_episode
 
         if not self.recording:
             return None
@@ -221,7 +221,7 @@ class TeleopSession:
 def nearest_angles(angles: np.ndarray, near: np.ndarray) -> np.ndarray:
     """The pitch, yaw, roll (rad) of the same gripper rotation as ``angles`` that lie nearest ``near``.
 
-    An arm's pose gives its angles as principal Euler angles (:func:`rik.sim.drive.angles_of`: roll wraps at
+    An arm's pose gives its angles as principal Euler angles (:func:`rik.sim.pose.angles_of`: roll wraps at
     +-pi, and past a yaw of +-pi/2 pitch and roll flip by pi), while a held key moves the target's angles on
     without a wrap: compared as they are, a roll past pi would read as a lead of -2 pi. Every triple
     ``(p, y, r) + 2 pi k`` and ``(p + pi, pi - y, r + pi) + 2 pi k`` is the same rotation

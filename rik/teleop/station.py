@@ -1,7 +1,7 @@
 """The browser teleop station's sessions: one :class:`Station` per variant, each running its own thread at the
-control rate (20 Hz) that owns the :class:`rik.sim.teleop_session.TeleopSession` and a ``mujoco.Renderer``, and
+control rate (20 Hz) that owns the :class:`rik.teleop.session.TeleopSession` and a ``mujoco.Renderer``, and
 pushes camera frames and status to every connected browser through a latest-frame slot per client (a slow client
-skips frames, never queues them). The wire protocol is described in :mod:`rik.web.teleop`.
+skips frames, never queues them). The wire protocol is described in :mod:`rik.web.teleop`, which serves the stations.
 
 Threads: websocket handlers (the event loop) only hand inputs and commands to the station under its lock; the
 station thread does all simulation and rendering (a MuJoCo GL context belongs to the thread that made it).
@@ -23,12 +23,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.errors import RikError, os_error_text
-from rik.sim.teleop_keys import FINE_FACTOR
+from rik.teleop.keys import FINE_FACTOR
 
 if TYPE_CHECKING:
+    from rik.registry.catalog import Catalog
     from rik.sim.scene import SimScene
-    from rik.sim.teleop_session import TeleopSession
-    from rik.web.app import AppConfig
+    from rik.teleop.session import TeleopSession
 
 OPERATOR = "browser"
 """Operator name of episodes recorded in the browser."""
@@ -43,6 +43,48 @@ LEFT = "the controlling tab left; press Take control to drive"
 BUILDING = "building the variant..."
 KEPT_IN_MEMORY = "the episode is kept in memory: free some space and press Save again"
 PAUSED = "a draft was kept: Continue, Save or Discard first"
+
+
+DEFAULT_MAX_STATIONS = 4
+MAX_STATIONS_LIMIT = 64
+DEFAULT_IDLE_RELEASE = 600.0
+
+
+@dataclass
+class StationConfig:
+    """What teleop stations work with: the catalog, where variants are built and episodes written, and their
+    settings."""
+
+    catalog: Catalog
+    variants: Path = Path("variants")
+    episodes: Path = Path("episodes")
+    overlays: tuple[Path, ...] = ()
+    max_seconds: float | None = None
+    """Time limit of a teleoperated episode, simulated s (None: no limit)."""
+    seed: int = 0
+    """First seed of teleoperated episodes; each new episode takes the next free one."""
+    front: str | None = None
+    """Front to operate (None: each variant's first)."""
+    robot: str = "hand-e"
+    """Robot of a station whose page names none (``?robot=`` picks another): a catalog robot id."""
+    max_stations: int = DEFAULT_MAX_STATIONS
+    """Teleop stations alive at once (each holds a scene and renderers: 100-300 MB)."""
+    idle_release: float = DEFAULT_IDLE_RELEASE
+    """A station no tab has watched for this long (s) is released; its episode in progress is kept as a draft."""
+
+    def check(self) -> None:
+        """Settings a user gave that cannot work fail here, before a station starts."""
+        from rik.episodes.record import check_seeds
+        from rik.teleop.session import check_time_limit
+
+        check_seeds(self.seed, 1)
+        check_time_limit(self.max_seconds)
+        self.catalog.robot(self.robot)  # an unknown robot: one line with close ids
+        if not 1 <= self.max_stations <= MAX_STATIONS_LIMIT:
+            raise RikError(f"--max-stations {self.max_stations}: give 1 to {MAX_STATIONS_LIMIT} (each station holds "
+                           "a scene and its renderers)")
+        if not 1.0 <= self.idle_release <= 7 * 24 * 3600:
+            raise RikError(f"--idle-release {self.idle_release}: give 1 s to a week")
 
 
 @dataclass
@@ -112,12 +154,12 @@ def parse_input(msg: dict[str, Any]) -> tuple[np.ndarray, float | None, int] | s
     return np.clip(axes, -1.0, 1.0), (None if grip is None else min(max(grip, 0.0), 1.0)), seq
 
 
-def build_station_scene(config: AppConfig, variant: str, robot: str) -> SimScene:
+def build_station_scene(config: StationConfig, variant: str, robot: str) -> SimScene:
     """The scene of a station: ``variant`` (built into ``config.variants`` when needed) operated by the catalog
     robot ``robot``; an arm that cannot reach the operated handle is refused (one line naming the handle)."""
-    from rik.sim.record import variant_dir
-    from rik.sim.robot_checks import require_reach
-    from rik.sim.scene import build_scene
+    from rik.episodes.record import variant_dir
+    from rik.sim.build import build_scene
+    from rik.sim.robots.checks import require_reach
 
     c = config
     entry = c.catalog.robot(robot)
@@ -131,7 +173,8 @@ class Station:
     """One variant's teleop session with one robot, shared by every tab that opens it; one tab controls, the
     others watch. ``scene``: the scene already built (``rik teleop --web`` builds it to check it first)."""
 
-    def __init__(self, config: AppConfig, variant: str, robot: str = "hand-e", scene: SimScene | None = None) -> None:
+    def __init__(self, config: StationConfig, variant: str, robot: str = "hand-e",
+                 scene: SimScene | None = None) -> None:
         self.config = config
         self.variant = variant
         self.robot = robot
@@ -242,7 +285,7 @@ class Station:
 
     # ---- the station thread -----------------------------------------------------------------------------------
     def _build(self) -> None:
-        from rik.sim.teleop_session import TeleopSession
+        from rik.teleop.session import TeleopSession
 
         c = self.config
         try:
@@ -377,7 +420,7 @@ class Station:
             self.message = PAUSED
 
     def _start_replay(self) -> None:
-        from rik.sim.episode import read_episode, states
+        from rik.episodes.episode import read_episode, states
 
         session = self.session
         assert session is not None
@@ -474,7 +517,7 @@ class Stations:
     (its thread stopped, its renderers and scene freed, its episode in progress kept as a draft). ``scenes``:
     scenes already built, by (variant id, robot id), that those stations start from."""
 
-    def __init__(self, config: AppConfig, scenes: dict[tuple[str, str], SimScene] | None = None) -> None:
+    def __init__(self, config: StationConfig, scenes: dict[tuple[str, str], SimScene] | None = None) -> None:
         self.config = config
         self.lock = threading.Lock()
         self.stations: dict[tuple[str, str], Station] = {}

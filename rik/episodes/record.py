@@ -8,17 +8,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rik.episodes.episode import DEFAULT_EPISODES, EpisodeRecorder, episode_id, run_operator, write_episode
+from rik.episodes.operators import make_operator
 from rik.errors import RikError
 from rik.paths import check_folder, inside
-from rik.sim.episode import DEFAULT_EPISODES, EpisodeRecorder, episode_id, run_operator, write_episode
-from rik.sim.gripper import HAND_E, GripperSpec
-from rik.sim.operators import make_operator
-from rik.sim.scene import SimScene, build_scene, start_pose
+from rik.sim.build import build_scene
+from rik.sim.robots.gripper import HAND_E, GripperSpec
+from rik.sim.scene import SimScene, start_pose
 
 if TYPE_CHECKING:
+    from rik.episodes.draw import Draw
     from rik.registry.catalog import Catalog
     from rik.schemas.robots import Robot
-    from rik.sim.draw import Draw
 
 MAX_SECONDS = 30.0
 """Longest episode, simulated s."""
@@ -30,7 +31,7 @@ def variant_dir(catalog: Catalog, variant: str, variants: Path) -> Path:
     """The directory of a built variant, building it (with its checks, in the folder's collision mode:
     :func:`rik.combinator.build.resolve_collision`) first when it is missing or stale."""
     from rik.combinator.build import build_variant
-    from rik.combinator.ids import parse_variant_id
+    from rik.registry.ids import parse_variant_id
 
     key = parse_variant_id(catalog, variant)
     check_folder(variants, "--variants")
@@ -75,7 +76,7 @@ def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, 
     make_operator(strategy)  # unknown strategy: fail before building anything
     directory = variant_dir(catalog, variant, variants)
     if robot is not None:
-        from rik.sim.robot_checks import require_reach
+        from rik.sim.robots.checks import require_reach
 
         require_reach(build_scene(directory, front, gripper, robot=robot))
     metas = []
@@ -120,7 +121,7 @@ def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int =
                  progress: Callable[[Any], None] | None = None,
                  skipped: list[tuple[int, str, str]] | None = None, robot: Robot | None = None) -> list[Any]:
     """Record ``episodes`` episodes of ``strategy`` whose variant and front come from ``draw``
-    (:class:`rik.sim.draw.Draw`) for seeds ``seed``, ``seed + 1``, ...: each exactly as :func:`record` writes that
+    (:class:`rik.episodes.draw.Draw`) for seeds ``seed``, ``seed + 1``, ...: each exactly as :func:`record` writes that
     variant, front and seed. Builds the variants first, then records in ``workers`` processes; metas in seed
     order. A seed whose variant fails its checks in ``variants`` (e.g. a handle whose single convex hull sinks
     into the front, in a ``--collision hull`` folder) is not recorded: it is appended to ``skipped`` as (seed,

@@ -3,7 +3,7 @@ Hand-E's base) and a gripper command (0 open, 1 closed with the full grip force)
 
 - :class:`FloatingDrive`: the Hand-E on six servoed axes: the pose is the axes' targets, as it always was;
 - :class:`ArmDrive`: an arm: the pose of its gripper frame is turned into joint targets by one IK step per control
-  step (:mod:`rik.sim.ik`). The IK starts from the joints' previous targets (the servos' controls), so a blocked
+  step (:mod:`rik.sim.robots.ik`). The IK starts from the joints' previous targets (the servos' controls), so a blocked
   arm's targets run ahead of its joints and its servos push, but never further ahead than full torque needs (or
   one control step at full speed): it cannot wind up. Everything the IK reads is in MuJoCo's integration state
   (positions and controls), so a recorded episode re-simulates exactly.
@@ -14,11 +14,14 @@ Every operator (the scripted strategies, the teleop front-ends, the gym env's po
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rik.sim.gripper import GripperSpec, jaw_target
+from rik.sim.pose import angles_of, base_for_tcp, gripper_rotation
+from rik.sim.robots.gripper import jaw_target
+from rik.sim.robots.reach import OPENINGS, handle_words, natural_grasp, reachable_opening, reached, set_opening
+from rik.sim.robots.results import CheckResult, ReachPoint
 
 PROBE_ITERATIONS = 40
 """IK steps a planner's collision probe of an arm takes towards the probed pose (the floor is then checked by
@@ -33,44 +36,9 @@ if TYPE_CHECKING:
     import mujoco
 
     from rik.schemas.robots import Robot
-    from rik.sim.arm import Placement
-    from rik.sim.ik import ArmIK
+    from rik.sim.robots.arm import Placement
+    from rik.sim.robots.ik import ArmIK
     from rik.sim.scene import SimScene
-
-
-class Drive(Protocol):
-    """What a scene asks of its robot."""
-
-    robot_id: str
-    joint_names: tuple[str, ...]
-    """Names of :meth:`joints` (the robot's joints, then the gripper)."""
-
-    def pose(self, scene: SimScene) -> np.ndarray: ...
-
-    def place(self, scene: SimScene, pose: np.ndarray, grip: float) -> None: ...
-
-    def command(self, scene: SimScene, action: np.ndarray) -> None: ...
-
-    def jaw(self, scene: SimScene, command: float) -> tuple[float, float]: ...
-
-    def finger_opening(self, scene: SimScene) -> float: ...
-
-    def joints(self, scene: SimScene) -> np.ndarray: ...
-
-    def targets(self, scene: SimScene, action: np.ndarray) -> np.ndarray: ...
-
-    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float) -> bool: ...
-
-
-def angles_of(rotation: np.ndarray) -> np.ndarray:
-    """Pitch, yaw, roll (rad) of a gripper frame's world rotation: the inverse of
-    :func:`rik.sim.scene.gripper_rotation` (yaw in [-pi/2, pi/2], the others in (-pi, pi])."""
-    from scipy.spatial.transform import Rotation
-
-    from rik.sim.scene import GRIPPER_BASE_QUAT
-
-    base = Rotation.from_quat(GRIPPER_BASE_QUAT, scalar_first=False)
-    return (base.inv() * Rotation.from_matrix(rotation)).as_euler("XYZ")
 
 
 def _touches(scene: SimScene, geoms: frozenset[int]) -> bool:
@@ -141,6 +109,37 @@ class FloatingDrive:
         return free
 
 
+    @property
+    def mount(self) -> Placement | None:
+        return None
+
+    def set_targets(self, scene: SimScene, q: np.ndarray) -> None:
+        from rik.errors import RikError
+
+        raise RikError(f"robot {self.robot_id} takes a target pose, not joint targets")
+
+    def joint_positions(self, scene: SimScene) -> np.ndarray:
+        return scene.data.qpos[self.base_qpos].copy()
+
+    def closure(self, scene: SimScene) -> float:
+        return 1.0 - self.finger_opening(scene) / scene.gripper.stroke
+
+    def geoms(self, scene: SimScene) -> frozenset[int]:
+        return scene.gripper_geoms
+
+    def reach(self, scene: SimScene, openings: tuple[float, ...], force: float) -> list[ReachPoint]:
+        """The base's servos reach every pose in the scene: every grasp is met exactly."""
+        return [ReachPoint(o, 0.0, 0.0, (), 0.0, "") for o in openings]
+
+    def reach_checks(self, scene: SimScene, force: float) -> list[CheckResult]:
+        g = scene.gripper
+        share = force / g.arm_force
+        return [CheckResult("reach", True, "the floating base reaches every opening", {"reachable_opening": 1}),
+                CheckResult("torque_headroom", share <= 1.0, f"holding {force:.1f} N needs {share:.0%} of the "
+                            f"base's {g.arm_force:.0f} N", {"resistance_N": round(force, 2),
+                                                             "largest_share": round(share, 3)})]
+
+
 @dataclass
 class ArmDrive:
     """An arm driven through its IK (see the module docstring)."""
@@ -170,8 +169,6 @@ class ArmDrive:
 
     # ---- the gripper frame ------------------------------------------------------------------------------------
     def _frame_target(self, scene: SimScene, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        from rik.sim.scene import gripper_rotation
-
         rot = gripper_rotation(np.asarray(pose[3:6], float))
         if self.placement.mirrored:
             rot = rot @ HALF_TURN
@@ -268,6 +265,99 @@ class ArmDrive:
         return free
 
 
+    @property
+    def mount(self) -> Placement | None:
+        return self.placement
+
+    def joint_positions(self, scene: SimScene) -> np.ndarray:
+        return scene.data.qpos[self.qpos].copy()
+
+    def geoms(self, scene: SimScene) -> frozenset[int]:
+        return self.robot_geoms
+
+    def reach(self, scene: SimScene, openings: tuple[float, ...], force: float) -> list[ReachPoint]:
+        return _arm_reach_profile(scene, self, openings, force)
+
+    def reach_checks(self, scene: SimScene, force: float) -> list[CheckResult]:
+        return _arm_reach_checks(scene, self, force)
+
+
+def _torque_use(scene: SimScene, drive: ArmDrive, q: np.ndarray, force: float) -> tuple[float, str]:
+    """Largest share of a joint's torque an arm at ``q`` needs to pull with ``force`` N along the pull at its
+    gripper frame and hold itself up; and that joint's name."""
+    import mujoco
+
+    assert drive.robot.joints is not None
+    m, d = scene.model, scene.data
+    saved = (d.qpos.copy(), d.qvel.copy())
+    d.qpos[drive.qpos] = q
+    d.qvel[:] = 0.0
+    mujoco.mj_forward(m, d)
+    jacp = np.zeros((3, m.nv))
+    mujoco.mj_jacSite(m, d, jacp, None, scene.tcp_site)
+    dofs = drive.dofs
+    pull = scene.pull_direction()
+    # at rest qfrc_bias is gravity: the motors carry it, compensated or not
+    tau = jacp[:, dofs].T @ (force * pull) + d.qfrc_bias[dofs]
+    limits = np.array([j.torque for j in drive.robot.joints.joints])
+    share = np.abs(tau) / limits
+    worst = int(np.argmax(share))
+    d.qpos[:], d.qvel[:] = saved
+    mujoco.mj_forward(m, d)
+    return float(share[worst]), drive.robot.joints.joints[worst].name
+
+
+def _arm_reach_profile(scene: SimScene, drive: ArmDrive, openings: tuple[float, ...], force: float
+                      ) -> list[ReachPoint]:
+    """:func:`reach_profile` of an arm: each opening's pinch solved by its IK from the previous opening's posture,
+    and the torque share that holding ``force`` N there needs."""
+    saved = scene.state()
+    points = []
+    q = drive.ik.home
+    try:
+        for opening in openings:
+            set_opening(scene, opening)
+            tcp, angles = natural_grasp(scene)
+            position, rotation = drive._frame_target(scene, base_for_tcp(scene.gripper, tcp, angles))
+            q, dp, da = drive.ik.solve(position, rotation, q)
+            use, joint = _torque_use(scene, drive, q, force)
+            points.append(ReachPoint(float(opening), dp, da, tuple(float(v) for v in q), use, joint))
+    finally:
+        scene.restore(saved)  # positions, velocities and everything derived from them (mj_forward)
+    return points
+
+
+def _arm_reach_checks(scene: SimScene, drive: ArmDrive, force: float) -> list[CheckResult]:
+    """An arm's ``reach`` (the largest opening every grasp up to is met) and ``torque_headroom`` (the largest share
+    of a joint's torque that holding ``force`` N needs at a reached opening)."""
+    results: list[CheckResult] = []
+    points = _arm_reach_profile(scene, drive, OPENINGS, force)
+    best = reachable_opening(points)
+    words = handle_words(scene)
+    if best < 0:
+        p = points[0]
+        results.append(CheckResult("reach", False, f"cannot reach {words}: {p.position_error * 1000:.0f} mm short "
+                                   "with the front closed", {"reachable_opening": best}))
+    else:
+        first_miss = next((p for p in points if not reached(p)), None)
+        reason = (f"reaches {words} over the whole opening" if first_miss is None else
+                  f"reaches {words} up to {best:.0%} open; at {first_miss.opening:.0%} it is "
+                  f"{first_miss.position_error * 1000:.0f} mm short")
+        results.append(CheckResult("reach", first_miss is None, reason,
+                                   {"reachable_opening": best,
+                                    "errors_mm": [round(p.position_error * 1000, 1) for p in points]}))
+    held = [p for p in points if reached(p)]
+    if held:
+        worst = max(held, key=lambda p: p.torque_use)
+        results.append(CheckResult(
+            "torque_headroom", worst.torque_use <= 1.0,
+            f"holding {force:.1f} N at the handle needs at most {worst.torque_use:.0%} of joint "
+            f"{worst.limiting_joint}'s torque (at {worst.opening:.0%} open)",
+            {"resistance_N": round(force, 2), "largest_share": round(worst.torque_use, 3),
+             "joint": worst.limiting_joint, "opening": worst.opening}))
+    return results
+
+
 def _fraction(rotation: np.ndarray, gain: float) -> np.ndarray:
     """``gain`` of a rotation matrix: the same axis, ``gain`` times the angle."""
     import mujoco
@@ -293,23 +383,9 @@ def arm_lead(robot: Robot, control_fps: int) -> np.ndarray:
     return np.array([max(j.torque / j.stiffness, j.speed / control_fps) for j in robot.joints.joints])
 
 
-def gripper_spec(robot: Robot) -> GripperSpec:
-    """The :class:`GripperSpec` of a catalog robot (what the strategies plan with and episodes record)."""
-    from rik.sim.gripper import HAND_E
-
-    g = robot.gripper
-    spec = HAND_E.with_(name=g.name, stroke=g.stroke, grip_force=g.grip_force.value,
-                        pad_friction=g.pad_friction.value, finger_speed=g.finger_speed.value,
-                        finger_length=g.finger_length, finger_width=g.finger_width,
-                        finger_thickness=g.finger_thickness, pad_length=g.pad_length)
-    if robot.as_arm is not None:
-        spec = spec.with_(tcp_distance=g.tcp_offset, fixed_jaw=g.fixed_jaw)
-    return spec
-
-
 def arm_drive(model: mujoco.MjModel, robot: Robot, ik: ArmIK, where: Placement, control_fps: int) -> ArmDrive:
-    """The drive of an arm attached to a compiled scene (:func:`rik.sim.arm.attach_arm`)."""
-    from rik.sim.arm import ROBOT_PREFIX
+    """The drive of an arm attached to a compiled scene (:func:`rik.sim.robots.arm.attach_arm`)."""
+    from rik.sim.robots.arm import ROBOT_PREFIX
 
     act = robot.gripper.actuation
     assert act is not None

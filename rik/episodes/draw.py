@@ -47,7 +47,7 @@ def choose_variant(catalog: Catalog, handle_type: str, preset: str, rng: np.rand
                    compatible: set[str], handles: Sequence[str] | None = None) -> tuple[str, str]:
     """A (variant id, front id) of ``handle_type`` on a base unit of ``kinds`` with ``preset``, among the
     ``compatible`` variant ids (and the ``handles`` given, default every handle of the type)."""
-    from rik.combinator.ids import variant_id
+    from rik.registry.ids import variant_id
 
     bases = sorted(b for b, u in catalog.base_units.items() if u.fronts[0].kind in kinds)
     pool = sorted(h for h, v in catalog.handles.items() if catalog.handle_type(v).value == handle_type
@@ -127,7 +127,7 @@ _POOLS: dict[tuple[int, Draw], tuple[Catalog, set[str], tuple[str, ...] | None]]
 
 def _pool(catalog: Catalog, draw: Draw) -> tuple[set[str], tuple[str, ...] | None]:
     """(variant ids of the draw, handles of its split or None), computed once per catalog and draw."""
-    from rik.combinator.ids import select_variants
+    from rik.registry.ids import select_variants
 
     hit = _POOLS.get((id(catalog), draw))
     if hit is None or hit[0] is not catalog:

@@ -37,8 +37,8 @@ from rik.sim.scene import SimScene
 if TYPE_CHECKING:
     import pyarrow as pa
 
+    from rik.episodes.operators import Operator
     from rik.schemas.episodes import EpisodeMeta
-    from rik.sim.operators import Operator
 
 DEFAULT_EPISODES = Path("episodes")
 META = "meta.json"
@@ -114,7 +114,7 @@ class EpisodeRecorder:
     def step(self, action: np.ndarray) -> None:
         self._store(action)
         self.scene.step(action)
-        self.rows["robot_targets"][-1] = self.scene._drive.targets(self.scene, np.asarray(action, np.float64))
+        self.rows["robot_targets"][-1] = self.scene.robot_drive.targets(self.scene, np.asarray(action, np.float64))
 
     @property
     def steps(self) -> int:
@@ -126,7 +126,7 @@ class EpisodeRecorder:
 
         r = self.rows
         last = r["action"][-1] if r["action"] else np.zeros(7)
-        held = r["robot_targets"][-1] if r["robot_targets"] else self.scene._drive.targets(self.scene, last)
+        held = r["robot_targets"][-1] if r["robot_targets"] else self.scene.robot_drive.targets(self.scene, last)
         self._store(last, held)
         try:
             def vectors(name: str) -> pa.Array:
@@ -158,12 +158,10 @@ def episode_id(variant: str, front: str, operator: str, seed: int, robot: str = 
 def _robot_base(scene: SimScene) -> Any:
     """An arm's base placement for meta.json (None for the Hand-E)."""
     from rik.schemas.episodes import RobotBase
-    from rik.sim.drive import ArmDrive
 
-    drive = scene.drive
-    if not isinstance(drive, ArmDrive):
+    p = scene.robot_drive.mount
+    if p is None:
         return None
-    p = drive.placement
     return RobotBase(pos=(float(p.pos[0]), float(p.pos[1]), float(p.pos[2])), yaw=float(p.yaw))
 
 
@@ -196,7 +194,7 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
             final_opening=round(s.opening(), 6), max_opening=round(recorder.max_opening, 6),
             gripper=GripperInfo(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
                                 arm_force=g.arm_force),
-            robot=s.robot_id, robot_base=_robot_base(s), robot_joints=s._drive.joint_names,
+            robot=s.robot_id, robot_base=_robot_base(s), robot_joints=s.robot_drive.joint_names,
             versions=_versions(), log=tuple(log), states_sha256=digest)
         meta = write_meta(staging, meta.model_dump(mode="json"))
         if final.exists():

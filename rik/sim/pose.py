@@ -1,0 +1,43 @@
+"""The gripper frame's maths: its rotation from pitch, yaw and roll (the Hand-E's base chain, which every robot's
+target pose uses), the inverse, and the base pose that puts the pads' centre at a point. Angles in rad, lengths
+in m."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from rik.sim.robots.gripper import GripperSpec
+
+GRIPPER_BASE_QUAT = [0.7071067811865476, 0.0, 0.0, 0.7071067811865476]
+"""The gripper frame's rotation at zero pitch, yaw and roll (x, y, z, w: a quarter turn about world x), which
+:func:`gripper_rotation` composes with the angles and :func:`angles_of` takes back out."""
+
+
+
+def base_for_tcp(gripper: GripperSpec, tcp: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """The base pose (x, y, z, pitch, yaw, roll) that puts the pads' centre at ``tcp`` with ``angles``."""
+    rot = gripper_rotation(angles)
+    return np.concatenate([np.asarray(tcp) - rot[:, 2] * gripper.tcp_offset, angles])
+
+
+def gripper_rotation(angles: np.ndarray) -> np.ndarray:
+    """World rotation of the gripper frame for pitch, yaw, roll (the base chain's composition)."""
+    from scipy.spatial.transform import Rotation
+
+    base = Rotation.from_quat(GRIPPER_BASE_QUAT, scalar_first=False)
+    pitch, yaw, roll = angles
+    # joints are applied in the base frame, in chain order: about x, then the (pitched) y, then the approach z
+    chain = Rotation.from_euler("XYZ", [pitch, yaw, roll])
+    return (base * chain).as_matrix()
+
+
+def angles_of(rotation: np.ndarray) -> np.ndarray:
+    """Pitch, yaw, roll (rad) of a gripper frame's world rotation: the inverse of
+    :func:`gripper_rotation` (yaw in [-pi/2, pi/2], the others in (-pi, pi])."""
+    from scipy.spatial.transform import Rotation
+
+    base = Rotation.from_quat(GRIPPER_BASE_QUAT, scalar_first=False)
+    return (base.inv() * Rotation.from_matrix(rotation)).as_euler("XYZ")
