@@ -65,6 +65,19 @@ SHORT_KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 
 
 @pytest.fixture(scope="session")
+def bow_variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A variants folder holding the demo's variant :data:`shared.BOW`, built once per test process (shared: use it
+    read-only; a test that changes variants builds its own)."""
+    from shared import BOW, builtin_catalog
+
+    from rik.episodes.record import variant_dir
+
+    out = tmp_path_factory.mktemp("bow-variants")
+    variant_dir(builtin_catalog(), BOW, out)
+    return out
+
+
+@pytest.fixture(scope="session")
 def knob_recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A folder with ``episodes/`` holding one short episode of :data:`SHORT_KNOB` (grasp_vertical, seed 3, 0.3 s) and
     the ``variants/`` it was recorded in, made once per session (per worker): the input that tests of damaged or

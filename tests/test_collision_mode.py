@@ -8,16 +8,16 @@ import shutil
 from pathlib import Path
 
 import pytest
+from shared import builtin_catalog
 
 from rik.combinator.build import build_variants, spec_hash
 from rik.episodes.record import variant_dir
 from rik.errors import RikError
-from rik.registry import load_catalog
 from rik.registry.ids import parse_variant_id
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 
-CAT = load_catalog()
+CAT = builtin_catalog()
 BOW = "drawer-bedside-45__two_point-bow-128__normal"
 """One front with a bow handle: concave, so CoACD splits it into several hulls."""
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import mujoco
 import pytest
+from shared import BOW, builtin_catalog
 
 from rik.combinator.build import build_variant, check_variant, is_current
 from rik.combinator.placement import EDGE_INSET, place_handle
@@ -16,8 +17,7 @@ from rik.errors import RikError, UnknownIdError
 from rik.registry import load_catalog
 from rik.registry.ids import VariantKey, parse_variant_id, select_variants, variant_id
 
-CAT = load_catalog()
-BOW = "drawer-chest-80__two_point-bow-128__normal"
+CAT = builtin_catalog()
 
 
 def test_ids_are_readable_and_round_trip() -> None:

@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
+from shared import BOW
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 
@@ -90,7 +91,7 @@ def test_build_loads_and_rebuild_does_nothing(rik, built, spec_file, variants) -
     for col in ("rik/episode_id", "rik/variant", "rik/operator", "rik/outcome", "rik/seed"):
         assert col in episodes.column_names, episodes.column_names
     assert sorted(set(episodes["rik/variant"])) == ["drawer-chest-80__knob-mushroom-30__normal",
-                                                    "drawer-chest-80__two_point-bow-128__normal"]
+                                                    BOW]
     assert sorted(episodes["rik/seed"]) == [0, 0, 1, 1]
     images = [n for n in names if n.startswith("observation.images.")]
     assert images, sorted(names)

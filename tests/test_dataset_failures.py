@@ -7,9 +7,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from rik.registry.load import load_catalog
+from shared import builtin_catalog
 
-CAT = load_catalog()
+CAT = builtin_catalog()
 SPEC = """repo_id: local/rik-fail
 variants:
   ids: [drawer-chest-80__two_point-bow-128__normal]

@@ -10,12 +10,11 @@ import time
 from pathlib import Path
 
 import pytest
-
-from rik.registry.load import load_catalog
+from shared import builtin_catalog
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 
-CAT = load_catalog()
+CAT = builtin_catalog()
 SPEC = """repo_id: local/rik-ray
 variants:
   ids: [drawer-chest-80__two_point-bow-128__normal, drawer-chest-80__knob-mushroom-30__normal]

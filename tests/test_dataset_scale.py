@@ -12,8 +12,9 @@ import sys
 from pathlib import Path
 
 import pytest
+from shared import BOW
 
-VARIANT = "drawer-chest-80__two_point-bow-128__normal"
+VARIANT = BOW
 TINY = f"""repo_id: local/rik-scale
 variants:
   ids: [{VARIANT}]

@@ -7,14 +7,14 @@ suite; the assets are cached for the rest of the session."""
 from __future__ import annotations
 
 import pytest
+from shared import builtin_catalog
 
 from rik.assets.build import build_asset
 from rik.assets.finger import FINGER_RADIUS, finger_test
-from rik.registry.load import load_catalog
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 
-CATALOG = load_catalog()
+CATALOG = builtin_catalog()
 TWO_POINT = [h.id for h in CATALOG.handles.values() if CATALOG.handle_type(h).value == "two_point"]
 
 

@@ -17,13 +17,13 @@ from pathlib import Path
 import pytest
 import yaml
 from conftest import read_line
+from shared import builtin_catalog
 
 from rik.episodes.episode import EpisodeError, meta_digest, read_episode, read_meta
 from rik.errors import RikError
 from rik.paths import inside
-from rik.registry import load_catalog
 
-CAT = load_catalog()
+CAT = builtin_catalog()
 KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 EXPORT = ["--repo-id", "local/hostile", "--res", "16", "--streams", "sim", "--codec", "h264"]
 

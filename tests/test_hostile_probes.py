@@ -11,12 +11,12 @@ import zlib
 from pathlib import Path
 
 import pytest
+from shared import builtin_catalog
 from test_hostile_input import one_line, tree
 
 from rik.errors import RikError
-from rik.registry import load_catalog
 
-CAT = load_catalog()
+CAT = builtin_catalog()
 KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 EXPORT = ["--repo-id", "local/probes", "--res", "16", "--streams", "sim", "--codec", "h264"]
 

@@ -13,12 +13,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from rik.registry import load_catalog
+from shared import builtin_catalog
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 
-CAT = load_catalog()
+CAT = builtin_catalog()
 BIN = Path(sys.executable).parent
 DRAW = ("--types", "knob", "--presets", "smooth")
 EPISODE_LENGTH = "30"

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rik.registry import load_catalog
+from shared import BOW, builtin_catalog
 
-CAT = load_catalog()
+CAT = builtin_catalog()
 DRAW_ARGS = ("--types", "knob", "--presets", "smooth")
 
 
@@ -39,7 +39,7 @@ def test_record_split_draws_each_episode_and_writes_it_as_plain_record(rik, tmp_
 
 
 def test_record_split_bad_combinations(rik, tmp_path: Path) -> None:
-    bow = "drawer-chest-80__two_point-bow-128__normal"
+    bow = BOW
 
     def err(*args: str) -> str:
         res = rik("record", *args, "-s", "grasp_vertical", "--out", str(tmp_path / "e"), "--variants",

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import BOW, builtin_catalog
 
 from rik.episodes.episode import read_episode, states, write_meta
 from rik.episodes.record import record
 from rik.episodes.replay import episode_scene
 from rik.errors import RikError
-from rik.registry import load_catalog
 from rik.render.align import iou, mitsuba_silhouette, mujoco_silhouette
 from rik.render.backend import available_variants, use_variant
 from rik.render.episodes import render_episode
@@ -22,14 +22,13 @@ from rik.render.streams import StreamSpec, parse_resolution, read_frame
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 
-CAT = load_catalog()
-BOW = "drawer-chest-80__two_point-bow-128__normal"
+CAT = builtin_catalog()
 CAMERAS = ("front", "wrist")
 
 
 @pytest.fixture(scope="module")
-def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return tmp_path_factory.mktemp("variants")
+def variants(bow_variants: Path) -> Path:
+    return bow_variants  # the demo variant, built once per test process (conftest)
 
 
 @pytest.fixture(scope="module")

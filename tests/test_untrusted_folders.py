@@ -22,6 +22,7 @@ from typing import Any
 
 import pytest
 import yaml
+from shared import BOW
 
 PRE, POST = "policy_preprocessor.json", "policy_postprocessor.json"
 NORMALISER_STATE = "policy_preprocessor_step_3_normalizer_processor.safetensors"
@@ -383,7 +384,7 @@ def test_dotted_package_name_imports_nothing(rik, tmp_path: Path, fake_packages:
     package.mkdir()
     (package / "__init__.py").write_text(f"open({str(marker)!r}, 'w').close()\n")
     path = _overlay(tmp_path, lambda e: e["model"].update(package="rik_untrusted_probe.models"))
-    r = rik("robot-check", "drawer-chest-80__two_point-bow-128__normal", "--robot", "myarm", "--catalog", str(path),
+    r = rik("robot-check", BOW, "--robot", "myarm", "--catalog", str(path),
             "--variants", str(tmp_path / "variants"))
     assert r.code == 2 and len(r.err.strip().splitlines()) == 1 and "Traceback" not in r.err, r.err
     assert re.fullmatch(r"rik: error: .*mine\.yaml:\d+, entry robots\[0\] 'myarm', field 'model\.package': "

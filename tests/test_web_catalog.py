@@ -8,6 +8,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from shared import BOW
 from web_fixtures import app_client, browser, served, signed
 
 from rik.registry.doc import csv_rows
@@ -56,7 +57,7 @@ def test_api_lists_handles_bases_presets_with_numbers(client, catalog) -> None:
     assert [p["id"] for p in client.get("/api/catalog/presets").json()["presets"]] == list(catalog.presets)
     pairings = client.get(f"/api/catalog/handles/{DEMO_HANDLE}").json()["pairings"]
     chest = next(p for p in pairings if p["id"] == DEMO_BASE)
-    assert chest["variants"]["normal"] == "drawer-chest-80__two_point-bow-128__normal"
+    assert chest["variants"]["normal"] == BOW
     for pairing in pairings:  # every offered pairing is a valid variant id of this catalog
         for vid in pairing["variants"].values():
             assert parse_variant_id(catalog, vid).handle == DEMO_HANDLE

@@ -18,8 +18,7 @@ from pathlib import Path
 
 import pytest
 from conftest import read_line
-
-BOW = "drawer-chest-80__two_point-bow-128__normal"
+from shared import BOW
 
 
 def test_a_port_in_use_is_named(rik) -> None:

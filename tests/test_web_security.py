@@ -17,29 +17,24 @@ from typing import Any
 from urllib.parse import urlsplit
 
 import pytest
+from shared import BOW, builtin_catalog
 from web_fixtures import TOKEN, WAIT_MS, app_client, browser, served_app, signed, station_process
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import ClientConnection, connect
 
-from rik.registry import load_catalog
 from rik.web.app import WS_MAX_MESSAGE, AppConfig, create_app
 from rik.web.guard import cookie_name
 
-CAT = load_catalog()
-BOW = "drawer-chest-80__two_point-bow-128__normal"
+CAT = builtin_catalog()
 KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 WAIT = WAIT_MS / 1000
 needs_chromium = pytest.mark.skipif(shutil.which("chromium") is None, reason="Debian's chromium is not installed")
 
 
 @pytest.fixture(scope="module")
-def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def variants(bow_variants: Path) -> Path:
     """The demo variant, built once for the module (stations that open it start without building)."""
-    from rik.episodes.record import variant_dir
-
-    root = tmp_path_factory.mktemp("variants")
-    variant_dir(CAT, BOW, root)
-    return root
+    return bow_variants  # the demo variant, built once per test process (conftest)
 
 
 def make_app(variants: Path, episodes: Path, **settings: Any) -> Any:

@@ -10,12 +10,10 @@ import time
 from pathlib import Path
 
 import pytest
+from shared import BOW, builtin_catalog
 from web_fixtures import WAIT_MS, browser, served, signed, station_process
 
-from rik.registry import load_catalog
-
-CAT = load_catalog()
-BOW = "drawer-chest-80__two_point-bow-128__normal"
+CAT = builtin_catalog()
 STATION = "document.getElementById('station').dataset"
 
 pytestmark = [pytest.mark.browser,
