@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from rik.assets.meshkit import require_solid, union
 from rik.registry.geometry import vec3
 
 if TYPE_CHECKING:
@@ -126,6 +127,4 @@ def base_unit_plan(unit: BaseUnit) -> tuple[PartPlan, ...]:
 
 def part_mesh(plan: PartPlan) -> trimesh.Trimesh:
     """The visual mesh of a part: the union of its panels (watertight)."""
-    from rik.assets.meshkit import require_solid, union
-
     return require_solid(union([p.mesh() for p in plan.panels]), f"part {plan.name}")

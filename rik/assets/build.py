@@ -14,8 +14,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rik.assets.base_units import base_unit_plan, part_mesh
 from rik.assets.cache import AssetCache, CorruptEntry, content_key, library_versions, source_digest
-from rik.assets.decompose import Hulls, coacd_params
+from rik.assets.decompose import Hulls, coacd_params, convex_hull_baseline, decompose
+from rik.assets.handles import generate_handle
 from rik.assets.workers import map_ids
 from rik.errors import RikError, UnknownIdError
 
@@ -125,11 +127,7 @@ def asset_key(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) -> str:
 # ---- generation -----------------------------------------------------------------------------------------------
 def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) -> tuple[str, list[RigidPart]]:
     """Generate and decompose every rigid part (no cache). Returns (category, parts)."""
-    from rik.assets.decompose import convex_hull_baseline, decompose
-
     if asset_kind(catalog, asset_id) == "handle":
-        from rik.assets.handles import generate_handle
-
         handle = catalog.handles[asset_id]
         design = catalog.designs[handle.design]
         category = design.type.value
@@ -143,8 +141,6 @@ def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
         hulls = decompose(mesh, coacd_params(category, seed))  # imports are cleaned to closed solids too
         return category, [RigidPart("handle", "handle", handle.finish, "coacd", mesh, hulls,
                                     convex_hull_baseline(mesh))]
-    from rik.assets.base_units import base_unit_plan, part_mesh
-
     unit = catalog.base_units[asset_id]
     if unit.meshes is not None:
         return "base_unit", _imported_base_parts(catalog, asset_id, seed)
@@ -159,7 +155,6 @@ def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
 
 def _imported_base_parts(catalog: Catalog, asset_id: str, seed: int) -> list[RigidPart]:
     """The parts of an imported base unit: its mesh files, each decomposed with CoACD on its own."""
-    from rik.assets.decompose import convex_hull_baseline, decompose
     from rik.assets.importer import read_user_mesh
 
     unit = catalog.base_units[asset_id]

@@ -14,9 +14,11 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rik.assets import figures
 from rik.assets.build import DEFAULT_SEED, build_asset
 from rik.assets.cache import AssetCache, source_digest
-from rik.assets.fidelity import DEFAULT_POINTS, Deviation, Fidelity
+from rik.assets.fidelity import DEFAULT_POINTS, Deviation, Fidelity, check_points, measure
+from rik.assets.stats import MeshStats
 from rik.assets.workers import map_ids
 from rik.errors import RikError
 from rik.paths import write_atomic
@@ -65,9 +67,6 @@ def fidelity_row(catalog: Catalog, handle_id: str, *, out: Path | None = None, p
                  seed: int = DEFAULT_SEED, cache: AssetCache | None = None) -> Row:
     """Fidelity of one handle's collision (CoACD and convex-hull baseline); with ``out``, also write its
     ``thumbnail.png`` and ``fidelity.png`` there."""
-    from rik.assets import figures
-    from rik.assets.fidelity import check_points, measure
-
     check_points(points)
     cache = cache or AssetCache()
     asset, _ = build_asset(catalog, handle_id, seed, cache)
@@ -107,8 +106,6 @@ def _deviation_cells(prefix: str, d: Deviation) -> Row:
 
 def stats_row(catalog: Catalog, handle_id: str, *, seed: int = DEFAULT_SEED, cache: AssetCache | None = None) -> Row:
     """Mesh statistics of one handle's visual mesh and the size of its collision."""
-    from rik.assets.stats import MeshStats
-
     asset, _ = build_asset(catalog, handle_id, seed, cache)
     part = asset.part("handle")
     s = MeshStats.of(part.visual)
