@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 from rik.errors import UnknownIdError
 from rik.registry.geometry import cross, dot, site_axes, sub
-from rik.registry.ids import SEPARATOR
+from rik.registry.ids import SEPARATOR, slug
 from rik.registry.sources import RawEntry, display_path
 from rik.schemas import BaseUnit, Front, Handle, HandleDesign, HandleType, JointType
 
@@ -46,8 +46,6 @@ def check_variant_id_parts(parsed: Parsed, section: str, noun: str) -> None:
     """Ids that go into variant ids must keep them unambiguous: no ``__`` (the separator), no ``/`` in a preset
     id, and no two ids of a section written the same once ``/`` becomes ``-`` (``drawer-chest-80`` and
     ``drawer/chest-80`` would share every variant folder)."""
-    from rik.registry.ids import slug
-
     first: dict[str, RawEntry] = {}
     for entry, model in parsed:
         ident = model.id

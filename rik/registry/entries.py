@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel, ValidationError
 
-from rik.registry.sources import RawEntry
+from rik.registry.sources import MAX_CATALOG_BYTES, RawEntry, _safe_loader, check_yaml_shape, display_path, line_of
 from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
 from rik.schemas.robots import Robot
 
@@ -98,7 +98,6 @@ def read_yaml_model[M: BaseModel](path: Path, model: type[M], what: str) -> M:
     import yaml
 
     from rik.errors import CatalogError, RikError
-    from rik.registry.sources import MAX_CATALOG_BYTES, _safe_loader, check_yaml_shape, display_path, line_of
 
     shown = display_path(path)
     try:

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
-from rik.schemas import BaseUnit, Front, Handle
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # annotations only: rik.registry.index imports this module on its fast path, without pydantic
+    from rik.schemas import BaseUnit, Front, Handle
 
 #: Rotations (degrees about the site's z axis) a handle may be mounted at: along the site's x, or across it.
 ROTATIONS = (0, 90)

@@ -21,7 +21,9 @@ from typing import TYPE_CHECKING, Any
 import rik
 from rik.errors import UnknownIdError
 from rik.paths import cache_dir, write_atomic
-from rik.registry.sources import NOUNS, SECTIONS, catalog_sources
+from rik.registry.fit import fits_base_unit
+from rik.registry.sources import NOUNS, SECTIONS, catalog_sources, read_file
+from rik.registry.splits import check_split
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -73,8 +75,6 @@ class CatalogIndex:
         if design is not None:
             self.get("designs", design)  # an unknown design is an error with suggestions, not an empty list
         if split is not None:
-            from rik.registry.splits import check_split
-
             check_split(split)
         rows = self.sections[section]
         if type is not None:
@@ -105,7 +105,6 @@ def catalog_index(overlays: Iterable[Path] | None = None, use_cache: bool = True
         if cached is not None:
             return cached
     from rik.registry.load import build_catalog  # creates the schema classes: only on a cache miss
-    from rik.registry.sources import read_file
 
     catalog = build_catalog([e for p, builtin in files for e in read_file(p, builtin)])
     index = build_index(catalog, key)
@@ -116,8 +115,6 @@ def catalog_index(overlays: Iterable[Path] | None = None, use_cache: bool = True
 
 def build_index(catalog: Catalog, key: str = "") -> CatalogIndex:
     """The plain-data index of a validated catalog."""
-    from rik.registry.fit import fits_base_unit
-
     sections: dict[str, list[dict[str, Any]]] = {}
     for section in SECTIONS:
         rows = []

@@ -6,6 +6,7 @@ from collections import Counter
 from typing import Any
 
 from rik.registry.index import CatalogIndex
+from rik.registry.splits import SPLITS
 
 HANDLE_TYPES = ("knob", "two_point", "finger_pull")
 
@@ -35,8 +36,6 @@ def catalog_stats(index: CatalogIndex) -> dict[str, Any]:
 
 def split_stats(index: CatalogIndex) -> dict[str, Any]:
     """The split version and, per split (train, val, test), its designs and handles per handle type and in all."""
-    from rik.registry.splits import SPLITS
-
     handles, designs = index.entries("handles"), index.entries("designs")
     per_split: dict[str, Any] = {}
     for split in SPLITS:
