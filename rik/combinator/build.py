@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.combinator.checks import GEOMETRY_CHECKS, CheckResult, ModelContext, run_model_checks
+from rik.combinator.scene import scene_xml
 from rik.errors import RikError
 from rik.paths import MadeFolder, atomic_path, check_replaceable, holds_only, inside, json_object
 from rik.registry.ids import VariantKey
@@ -274,8 +275,6 @@ def _link(src: Path, dst: Path) -> None:
 def materialise(checked: CheckedVariant, directory: Path, report: dict[str, Any], out: Path | None = None) -> None:
     """Write ``model.xml``, ``scene.xml``, ``meshes/`` and ``report.json`` into ``directory`` (replaced
     whole, through a staging directory beside it under ``out``)."""
-    from rik.combinator.scene import scene_xml
-
     variant = checked.variant
     out = out or directory.parent
     stage = out / STAGING / f"{directory.name}.{os.getpid()}"

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 
 from rik.episodes.episode import EpisodeError, read_episode, states
+from rik.episodes.record import variant_dir
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -42,7 +43,6 @@ def episode_robot(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> Robot
 
 def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: EpisodeMeta) -> SimScene:
     """The scene an episode was recorded in (its variant is built first if missing), with its gripper."""
-    from rik.episodes.record import variant_dir
     from rik.sim.build import build_scene
     from rik.sim.robots.gripper import HAND_E
 

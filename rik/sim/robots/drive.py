@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rik.sim.pose import angles_of, base_for_tcp, gripper_rotation
+from rik.sim.robots.arm import ROBOT_PREFIX, Placement
 from rik.sim.robots.gripper import jaw_target
 from rik.sim.robots.reach import OPENINGS, handle_words, natural_grasp, reachable_opening, reached, set_opening
 from rik.sim.robots.results import CheckResult, ReachPoint
@@ -36,7 +37,6 @@ if TYPE_CHECKING:
     import mujoco
 
     from rik.schemas.robots import Robot
-    from rik.sim.robots.arm import Placement
     from rik.sim.robots.ik import ArmIK
     from rik.sim.scene import SimScene
 
@@ -385,8 +385,6 @@ def arm_lead(robot: Robot, control_fps: int) -> np.ndarray:
 
 def arm_drive(model: mujoco.MjModel, robot: Robot, ik: ArmIK, where: Placement, control_fps: int) -> ArmDrive:
     """The drive of an arm attached to a compiled scene (:func:`rik.sim.robots.arm.attach_arm`)."""
-    from rik.sim.robots.arm import ROBOT_PREFIX
-
     act = robot.gripper.actuation
     assert act is not None
     p = ROBOT_PREFIX

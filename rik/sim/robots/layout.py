@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rik.sim.observation import ROBOT_STATE_NAMES, robot_state
+
 if TYPE_CHECKING:
     from rik.schemas.robots import Robot
     from rik.sim.scene import SimScene
@@ -49,8 +51,6 @@ class RobotLayout:
     def state(self, scene: SimScene) -> np.ndarray:
         """``observation.state`` of a scene, float64."""
         if self.robot is None:
-            from rik.sim.observation import robot_state
-
             return robot_state(scene)
         drive = scene.robot_drive
         names = list(self.robot.joint_names)
@@ -115,8 +115,6 @@ def _grip_from_unit(value: float, unit: str) -> float:
 
 def robot_layout(robot: Robot | None) -> RobotLayout:
     """The layout of a catalog robot (None, or a floating one: the Hand-E's pose layout)."""
-    from rik.sim.observation import ROBOT_STATE_NAMES
-
     if robot is None or robot.lerobot.layout == "pose":
         robot_type = HAND_E_ROBOT_TYPE if robot is None else robot.lerobot.robot_type
         return RobotLayout("hand-e" if robot is None else robot.id, robot_type, ROBOT_STATE_NAMES, POSE_ACTION_NAMES,
