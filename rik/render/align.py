@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rik.render.backend import use_variant
 from rik.schemas.finishes import Finish
 
 if TYPE_CHECKING:
@@ -38,7 +39,6 @@ def mitsuba_silhouette(model: mujoco.MjModel, data: mujoco.MjData, camera: str, 
     AOV of one unjittered sample per pixel is positive."""
     import mitsuba as mi
 
-    from rik.render.backend import use_variant
     from rik.render.mitsuba_scene import build_posed_scene
 
     use_variant(variant)

@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from rik.render.backend import use_variant
+from rik.render.materials import linear_to_srgb8
 from rik.render.streams import StreamSpec
 from rik.schemas.finishes import Finish
 
@@ -97,7 +99,6 @@ class MitsubaFrames:
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, cameras: list[str], spec: StreamSpec,
                  finishes: Mapping[str, Finish]):
-        from rik.render.backend import use_variant
         from rik.render.mitsuba_scene import DENOISER_GUIDES, PATH_TRACER, build_posed_scene
 
         self.variant = use_variant(spec.variant)
@@ -152,8 +153,6 @@ class MitsubaFrames:
                                                normal=normal, hdr=True))
 
     def render(self, data: mujoco.MjData, index: int) -> dict[str, np.ndarray]:
-        from rik.render.materials import linear_to_srgb8
-
         return {cam: linear_to_srgb8(img) for cam, img in self.render_linear(data, index).items()}
 
     def info(self) -> dict[str, object]:

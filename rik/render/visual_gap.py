@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from rik.errors import RikError
-from rik.render.encoders import Encoder
-from rik.render.metrics import FLOOR, Interval, PairMetrics, RowTable
+from rik.render.encoders import Encoder, load_encoder, parse_spec
+from rik.render.metrics import FLOOR, Interval, PairMetrics, RowTable, split_half
 
 RANDOM_NOTE = ("random weights: the encoder is randomly initialised (fixed seed), so these numbers are only a "
                "random-feature baseline; pass --encoder NAME:WEIGHTS for meaningful features")
@@ -63,9 +63,7 @@ def visual_gap(real: Path, sim: Path | None = None, rerendered: Path | None = No
     side (ResNets only; see :func:`rik.render.encoders.load_encoder`). A RikError for any bad input, before any
     encoding where it can be checked up front (encoder name, folders, counts, weights file).
     """
-    from rik.render.encoders import load_encoder, parse_spec
     from rik.render.images import common_subsets, list_images
-    from rik.render.metrics import split_half
 
     if not 1 <= bootstrap <= MAX_BOOTSTRAP:
         raise RikError(f"--bootstrap {bootstrap}: give 1 to {MAX_BOOTSTRAP:,} resamples")
