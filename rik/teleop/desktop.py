@@ -39,13 +39,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.errors import RikError
+from rik.teleop.keys import COMMAND_KEYS, MOTION_KEYS, keymap_rows, velocity
+from rik.teleop.session import TeleopSession, check_time_limit, handle_text, time_text
+from rik.teleop.window import CAMERAS, TeleopWindow, open_display
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
     from rik.schemas.robots import Robot
-    from rik.teleop.session import TeleopSession
-    from rik.teleop.window import TeleopWindow
 
 CATCH_UP = 2
 """Control steps at most per frame when the loop has fallen behind real time; older missed steps are dropped."""
@@ -160,14 +161,10 @@ class Controls:
         elif key == glfw.KEY_F1:
             self.show_keys = not self.keys_shown
         elif key in (glfw.KEY_1, glfw.KEY_2, glfw.KEY_3) and self.window is not None:
-            from rik.teleop.window import CAMERAS
-
             self.window.camera = CAMERAS[key - glfw.KEY_1]
 
     def held(self) -> frozenset[str]:
         """Browser codes of the motion keys held now (Shift as ``fine``)."""
-        from rik.teleop.keys import COMMAND_KEYS, MOTION_KEYS
-
         assert self.window is not None
         codes = {k.code for k in MOTION_KEYS if self.window.held(_glfw_key(k.glfw))}
         if self.window.held(_glfw_key(COMMAND_KEYS["fine"][1])) or self.window.held(_glfw_key("RIGHT_SHIFT")):
@@ -176,8 +173,6 @@ class Controls:
 
     def apply(self, held: frozenset[str]) -> None:
         """Set the session's velocity command from the held keys (and the SpaceMouse)."""
-        from rik.teleop.keys import velocity
-
         command = velocity(held, fine="fine" in held)
         grip = None
         if isinstance(self.device, SpaceMouseDevice):
@@ -196,9 +191,6 @@ def overlays(session: TeleopSession, camera: str, fps: float, show_keys: bool = 
     """The status (top left), the camera and frame rate (top right) and the keymap (bottom left; only a hint of F1
     when hidden) for the window."""
     import mujoco
-
-    from rik.teleop.keys import keymap_rows
-    from rik.teleop.session import handle_text, time_text
 
     st = session.status()
     state = st["state"] + (": Enter saves, Backspace discards" if st["state"] == "time up" else "")
@@ -227,7 +219,6 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
     Backspace discards it, Esc or closing the window quits and discards the unsaved one. Returns the saved
     episodes' metas."""
     from rik.episodes.record import check_seeds
-    from rik.teleop.session import check_time_limit
 
     say = on_message or _print
     check_seeds(seed, 1)
@@ -241,8 +232,6 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
     from rik.episodes.record import variant_dir
     from rik.sim.build import build_scene
     from rik.sim.robots.checks import require_reach
-    from rik.teleop.session import TeleopSession
-    from rik.teleop.window import TeleopWindow, open_display
 
     open_display()  # before the (slow) scene: a display that cannot take a window fails at once
     try:

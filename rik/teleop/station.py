@@ -24,11 +24,11 @@ import numpy as np
 
 from rik.errors import RikError, os_error_text
 from rik.teleop.keys import FINE_FACTOR
+from rik.teleop.session import TeleopSession, check_time_limit
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.sim.scene import SimScene
-    from rik.teleop.session import TeleopSession
 
 OPERATOR = "browser"
 """Operator name of episodes recorded in the browser."""
@@ -75,7 +75,6 @@ class StationConfig:
     def check(self) -> None:
         """Settings a user gave that cannot work fail here, before a station starts."""
         from rik.episodes.record import check_seeds
-        from rik.teleop.session import check_time_limit
 
         check_seeds(self.seed, 1)
         check_time_limit(self.max_seconds)
@@ -285,8 +284,6 @@ class Station:
 
     # ---- the station thread -----------------------------------------------------------------------------------
     def _build(self) -> None:
-        from rik.teleop.session import TeleopSession
-
         c = self.config
         try:
             scene = self._scene if self._scene is not None else build_station_scene(c, self.variant, self.robot)

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
 from rik.teleop.station import StationConfig
-from rik.web.guard import new_token, with_token
+from rik.web.guard import Guard, new_token, with_token
 from rik.web.pages import STATIC
 
 if TYPE_CHECKING:
@@ -86,7 +86,6 @@ def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = No
     from rik import __version__
     from rik.web import catalog as catalog_routes
     from rik.web import teleop as teleop_routes
-    from rik.web.guard import Guard
 
     app = FastAPI(title="rik", version=__version__, docs_url="/api/docs", redoc_url=None)
     app.add_middleware(Guard, token=config.token, host=host, allowed_hosts=config.allowed_hosts)

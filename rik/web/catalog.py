@@ -17,6 +17,7 @@ from fastapi.responses import FileResponse, Response
 
 from rik.errors import UnknownIdError
 from rik.web.catalog_view import PICTURES, CatalogView, base_unit_svg, build_view, placeholder_svg
+from rik.web.pages import STATIC
 
 router = APIRouter()
 
@@ -33,8 +34,6 @@ def catalog_view(request: Request) -> CatalogView:
 
 
 def _page() -> FileResponse:
-    from rik.web.pages import STATIC
-
     return FileResponse(STATIC / "catalog.html", media_type="text/html")
 
 
