@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rik.dataset.plan import EpisodeUnit, Plan, RenderUnit, ShardUnit
+from rik.dataset.registry import folder_size
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -85,7 +86,6 @@ def _time_stages(catalog: Catalog, plan: Plan, picked: list[EpisodeUnit], tmp: P
                  ) -> list[StageCost]:
     """Record, render and export ``picked`` in ``tmp``: each stage's cost per episode, scaled to the plan."""
     from rik.dataset.build import Folders, export_spec, run_record, run_render, run_shard
-    from rik.dataset.registry import folder_size
 
     n = len(plan.episodes)
     folders = Folders(tmp, Path(variants).absolute())

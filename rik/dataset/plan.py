@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rik.dataset.spec import library_versions
+from rik.dataset.spec import spec_hash as hash_of_spec
 from rik.errors import RikError
 from rik.paths import json_sha256
 from rik.schemas.dataset import DatasetSpec, OperatorSpec
@@ -222,7 +224,6 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
     """Expand ``spec``: select its variants, build the ones missing into ``variants_dir`` (their checks decide
     which can be simulated), and lay out its units. Bad input raises one line naming ``source`` and the field."""
     from rik.combinator.build import rejected_variants, resolve_collision, spec_hash
-    from rik.dataset.spec import spec_hash as hash_of_spec
     from rik.registry.ids import parse_variant_id
 
     check_robot(catalog, spec, source)
@@ -251,8 +252,6 @@ def lay_out_units(plan: Plan, fronts: dict[str, str]) -> None:
     """Fill ``plan``'s episodes, renders and shards, with their keys, for its variants (``fronts``: variant id ->
     the front its episodes operate, in plan order). Linear in the episodes: each shard takes its renders by index
     (:meth:`Plan.episode_renders`), never by a search."""
-    from rik.dataset.spec import library_versions
-
     spec = plan.spec
     record_versions = library_versions("mujoco")
     for v, front in fronts.items():

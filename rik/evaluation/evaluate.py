@@ -25,6 +25,8 @@ from typing import Any
 
 from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 from rik.errors import RikError
+from rik.evaluation.load import policy_needs
+from rik.evaluation.policy_files import check_policy_folder
 
 STRATEGY_PREFIX = "strategy:"
 DEFAULT_SEED = 1000
@@ -79,8 +81,6 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     if spec.strategy is not None:
         make_operator(spec.strategy)
         return EvalSpec(**{**asdict(spec), "label": spec.label or spec.strategy})
-    from rik.evaluation.load import policy_needs
-    from rik.evaluation.policy_files import check_policy_folder
     from rik.sim.robots.layout import robot_layout
 
     layout = robot_layout(robot.as_arm)
@@ -128,8 +128,6 @@ def _context(spec: EvalSpec) -> dict[str, Any]:
         from lerobot.configs.policies import PreTrainedConfig
         from lerobot.envs.factory import make_env_pre_post_processors
         from lerobot.policies.factory import make_policy, make_pre_post_processors
-
-        from rik.evaluation.policy_files import check_policy_folder
 
         check_policy_folder(Path(spec.operator))  # LeRobot imports and calls what the folder names: check it first
         policy_cfg = PreTrainedConfig.from_pretrained(spec.operator)

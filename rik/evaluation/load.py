@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
-from rik.evaluation.policy_files import CONFIG
+from rik.evaluation.policy_files import CONFIG, parsed_config, read_json
 from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, STREAM_SUFFIX
 
 if TYPE_CHECKING:
@@ -42,8 +42,6 @@ def policy_config(policy_dir: Path) -> dict[str, Any]:
     """The ``config.json`` of a saved policy, checked to be one: read only when small (a JSON file of a policy
     folder is at most :data:`rik.evaluation.policy_files.MAX_JSON_BYTES`), of a policy type rik runs, its fields of
     the types LeRobot declares (:func:`rik.evaluation.policy_files.parsed_config`)."""
-    from rik.evaluation.policy_files import parsed_config, read_json
-
     file = Path(policy_dir) / CONFIG
     if not Path(policy_dir).is_dir():
         raise RikError(f"{policy_dir}: no such folder (give a saved policy, e.g. "
