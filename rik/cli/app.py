@@ -62,25 +62,16 @@ def demo(catalog_paths: CatalogOption = None) -> None:
     them to a LeRobot v3.0 dataset in datasets/rik-demo and load it back with LeRobotDataset; finally find the
     hidden effect in simulated measurements of a drawer (sysid-data/, report in sysid-report/) and make the fitted
     joint a preset (sysid-catalog/)."""
-    from rik.cli.assets import print_demo_assets
-    from rik.cli.catalog import print_summary
     from rik.registry.index import catalog_index
     from rik.registry.stats import catalog_stats
 
-    print_summary(catalog_stats(catalog_index(overlays(catalog_paths))))
-    print_demo_assets(overlays(catalog_paths))
-    from rik.cli.variants import print_demo_episode, print_demo_variants
-
-    print_demo_variants(overlays(catalog_paths))
-    episodes = print_demo_episode(overlays(catalog_paths))
-    from rik.cli.export import print_demo_export
-    from rik.cli.rerender import print_demo_renders
-
-    print_demo_renders(overlays(catalog_paths), episodes)
-    print_demo_export(overlays(catalog_paths), episodes)
-    from rik.cli.sysid import print_demo_sysid
-
-    print_demo_sysid(overlays(catalog_paths))
+    catalog.print_summary(catalog_stats(catalog_index(overlays(catalog_paths))))
+    assets.print_demo_assets(overlays(catalog_paths))
+    variants.print_demo_variants(overlays(catalog_paths))
+    episodes = variants.print_demo_episode(overlays(catalog_paths))
+    rerender.print_demo_renders(overlays(catalog_paths), episodes)
+    export.print_demo_export(overlays(catalog_paths), episodes)
+    sysid.print_demo_sysid(overlays(catalog_paths))
 
 
 def _app_for(args: list[str]) -> typer.Typer:

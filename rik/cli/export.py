@@ -17,7 +17,7 @@ from rik.cli.common import (
     quiet_writers,
     stage_progress,
 )
-from rik.cli.rerender import CamerasOpt, EpisodesArg, ResOpt
+from rik.cli.rerender import DEMO_RES, CamerasOpt, EpisodesArg, ResOpt
 from rik.cli.sim import VariantsOpt
 
 if TYPE_CHECKING:
@@ -110,7 +110,6 @@ def print_demo_export(overlay_paths: list[Path], episodes: list[Path], out: Path
     """Export the demo episodes (both streams, at the demo's render size) to a LeRobot dataset, load it back
     with ``LeRobotDataset`` and print what it holds. The demo's earlier dataset (and an interrupted export of it) is
     removed first, and only if rik made it (:func:`demo_folders`)."""
-    from rik.cli.rerender import DEMO_RES
     from rik.exporters.lerobot_export import ExportSpec
     from rik.exporters.lerobot_export import export_lerobot as run
     from rik.paths import remove_directory
