@@ -11,6 +11,8 @@ import sys
 from collections import defaultdict
 from pathlib import Path
 
+import pytest
+
 import rik
 
 PACKAGE = Path(rik.__file__).parent
@@ -207,11 +209,12 @@ def _heavy_at_import(module: str, seen: dict[str, set[str]]) -> set[str]:
     seen[module] = set()
     path = MODULE_FILES[module]
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    skip = _type_only(tree)
+    skip = _type_only(tree) | {id(n) for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
+                               for n in ast.walk(f)}
     heavy: set[str] = set()
     for node in tree.body:
         for sub in ast.walk(node):
-            if id(sub) in skip or isinstance(sub, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            if id(sub) in skip:
                 continue
             names = ([a.name for a in sub.names] if isinstance(sub, ast.Import) else
                      [sub.module or ""] if isinstance(sub, ast.ImportFrom) and sub.level == 0 else [])
@@ -305,6 +308,18 @@ def test_the_rules_see_imports_in_functions_and_type_checking_blocks(tmp_path: P
     assert _breaches({"rik.joints": ("rik.sim",)}, [(source, "rik.joints.probe")]) == [
         "rik.joints.probe imports rik.sim.scene", "rik.joints.probe imports rik.sim.scene.SimScene"]
     assert "rik.sim.scene" not in _imports(source, module="rik.joints.probe", types=False)
+
+
+def test_a_function_level_import_is_not_an_import_at_load(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The heavy-library check reads only what runs when a module loads: an import inside a function is not."""
+    lazy = tmp_path / "lazy.py"
+    lazy.write_text("import json\ndef f():\n    import numpy\n", encoding="utf-8")
+    eager = tmp_path / "eager.py"
+    eager.write_text("import numpy\n", encoding="utf-8")
+    monkeypatch.setitem(MODULE_FILES, "rik.probe_lazy", lazy)
+    monkeypatch.setitem(MODULE_FILES, "rik.probe_eager", eager)
+    assert _heavy_at_import("rik.probe_lazy", {}) == set()
+    assert _heavy_at_import("rik.probe_eager", {}) == {"numpy"}
 
 
 def test_circles_are_found_through_several_modules() -> None:

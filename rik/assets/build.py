@@ -18,6 +18,7 @@ from rik.assets.base_units import base_unit_plan, part_mesh
 from rik.assets.cache import AssetCache, CorruptEntry, content_key, library_versions, source_digest
 from rik.assets.decompose import Hulls, coacd_params, convex_hull_baseline, decompose
 from rik.assets.handles import generate_handle
+from rik.assets.importer import read_user_mesh
 from rik.assets.workers import map_ids
 from rik.errors import RikError, UnknownIdError
 
@@ -132,8 +133,6 @@ def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
         design = catalog.designs[handle.design]
         category = design.type.value
         if design.generator.name == "user_mesh":
-            from rik.assets.importer import read_user_mesh
-
             mesh = read_user_mesh(_beside_definition(catalog, "designs", design.id, design.generator.file),
                                   design.generator.sha256)
         else:
@@ -155,8 +154,6 @@ def generate_parts(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED) ->
 
 def _imported_base_parts(catalog: Catalog, asset_id: str, seed: int) -> list[RigidPart]:
     """The parts of an imported base unit: its mesh files, each decomposed with CoACD on its own."""
-    from rik.assets.importer import read_user_mesh
-
     unit = catalog.base_units[asset_id]
     assert unit.meshes is not None
     roles = [("carcass", "carcass", unit.carcass.finish), *((f.id, f.kind, f.finish) for f in unit.fronts)]

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from rik.dataset.build import Folders, export_spec, run_record, run_render, run_shard
 from rik.dataset.plan import EpisodeUnit, Plan, RenderUnit, ShardUnit
 from rik.dataset.registry import folder_size
 
@@ -85,8 +86,6 @@ def estimate(catalog: Catalog, plan: Plan, *, sample: int = 2, variants: Path = 
 def _time_stages(catalog: Catalog, plan: Plan, picked: list[EpisodeUnit], tmp: Path, variants: Path
                  ) -> list[StageCost]:
     """Record, render and export ``picked`` in ``tmp``: each stage's cost per episode, scaled to the plan."""
-    from rik.dataset.build import Folders, export_spec, run_record, run_render, run_shard
-
     n = len(plan.episodes)
     folders = Folders(tmp, Path(variants).absolute())
     t0 = time.perf_counter()

@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from rik.dataset.meta import BUILD_META, read_dataset_meta, read_meta_file
 from rik.paths import cache_dir, write_atomic
 
 REGISTRY = "datasets.json"
@@ -53,7 +54,6 @@ def describe_dataset(root: Path) -> dict[str, Any]:
     """What ``rik dataset list/show`` says of the dataset at ``root`` (read from its metadata; ``present`` is
     False when it is gone or no longer a built dataset). Damaged metadata raises one line naming the file and the
     field (:func:`rik.dataset.build.read_meta_file`)."""
-    from rik.dataset.meta import BUILD_META, read_dataset_meta, read_meta_file
     from rik.schemas.dataset import BuildRecord
 
     root = Path(root).absolute()

@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rik.dataset.engines import error_line
+from rik.dataset.meta import DATASET_META, read_dataset_meta
 from rik.errors import RikError
 
 
@@ -26,7 +28,6 @@ class VerifyResult:
 def verify_dataset(root: Path) -> VerifyResult:
     """Check the dataset at ``root``; problems are listed, not raised (a folder that is no built dataset is)."""
     from rik.dataset.build import file_checksums
-    from rik.dataset.meta import DATASET_META, read_dataset_meta
 
     root = Path(root)
     meta = read_dataset_meta(root)
@@ -45,7 +46,6 @@ def verify_dataset(root: Path) -> VerifyResult:
         try:
             episodes, frames = _load(root, meta, counts)
         except Exception as exc:  # whatever lerobot or the decoder raise is a problem of this dataset
-            from rik.dataset.engines import error_line
 
             problems.append(f"does not load with LeRobotDataset: {error_line(exc)}")
     return VerifyResult(root, len(now), episodes, frames, problems)

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from rik.registry.index import CatalogIndex, catalog_index
+
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
-    from rik.registry.index import CatalogIndex
 
 __all__ = ["Catalog", "CatalogIndex", "catalog_index", "load_catalog"]
 
@@ -20,10 +21,6 @@ def __getattr__(name: str) -> Any:
         from rik.registry import load
 
         return getattr(load, name)
-    if name in ("catalog_index", "CatalogIndex"):
-        from rik.registry import index
-
-        return getattr(index, name)
     if name == "Catalog":
         from rik.registry.catalog import Catalog
 

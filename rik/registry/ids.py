@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from rik.errors import RikError, UnknownIdError
+from rik.registry.splits import split_handles
 
 if TYPE_CHECKING:
     from collections.abc import Iterable
@@ -75,8 +76,6 @@ def select_variants(catalog: Catalog, *, bases: Iterable[str] = (), handle_types
     if types:
         handle_ids = [h for h in handle_ids if catalog.handle_type(catalog.handles[h]).value in types]
     if split is not None:
-        from rik.registry.splits import split_handles
-
         in_split = set(split_handles(catalog, split))
         handle_ids = [h for h in handle_ids if h in in_split]
     preset_ids = [catalog.preset(p).id for p in presets] or list(catalog.presets)

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rik.errors import CatalogError
+from rik.registry.sources import BUILTIN_DIR, NOUNS, display_path, read_file
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -45,8 +46,6 @@ def outside_package(folder: Path, file: str) -> Path | None:
 def entry_error(catalog: Catalog, section: str, entry_id: str, field: str | None, problem: str) -> CatalogError:
     """A :class:`CatalogError` for an entry of a loaded catalog, naming its file, line, entry and field (the file
     is read again to find them: only done when reporting)."""
-    from rik.registry.sources import NOUNS, display_path, read_file
-
     origin = catalog.origins.get((section, entry_id))
     if origin is None:
         return CatalogError("(catalog)", f"{NOUNS[section]} '{entry_id}'", field, problem)
@@ -89,7 +88,6 @@ def builtin_robot(robot_id: str) -> Robot:
     """A robot of the built-in catalog, read from its own file (``rik/registry/data/robots.yaml``) and validated
     alone: what code that needs one robot's figures reads (the Hand-E's live only there)."""
     from rik.registry.entries import parse_entry
-    from rik.registry.sources import BUILTIN_DIR, read_file
     from rik.schemas.robots import Robot
 
     for entry in read_file(BUILTIN_DIR / "robots.yaml", builtin=True):

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rik.render.backend import use_variant
+from rik.render.mitsuba_scene import build_posed_scene
 from rik.schemas.finishes import Finish
 
 if TYPE_CHECKING:
@@ -39,7 +40,6 @@ def mitsuba_silhouette(model: mujoco.MjModel, data: mujoco.MjData, camera: str, 
     AOV of one unjittered sample per pixel is positive."""
     import mitsuba as mi
 
-    from rik.render.mitsuba_scene import build_posed_scene
 
     use_variant(variant)
     posed = build_posed_scene(model, data, finishes or {}, [camera], width, height, 1,

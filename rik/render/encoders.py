@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rik.errors import RikError
+from rik.render.images import load_batch
 
 if TYPE_CHECKING:
     import torch
@@ -93,7 +94,6 @@ class Encoder:
         """
         import torch
 
-        from rik.render.images import load_batch
 
         out = np.empty((len(paths), self.dim), dtype=np.float64)
         with torch.inference_mode():

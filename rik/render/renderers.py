@@ -12,6 +12,7 @@ import numpy as np
 
 from rik.render.backend import use_variant
 from rik.render.materials import linear_to_srgb8
+from rik.render.mitsuba_scene import DENOISER_GUIDES, PATH_TRACER, PosedScene, build_posed_scene, pose_scene
 from rik.render.streams import StreamSpec
 from rik.schemas.finishes import Finish
 
@@ -19,7 +20,6 @@ if TYPE_CHECKING:
     import mitsuba as mi
     import mujoco
 
-    from rik.render.mitsuba_scene import PosedScene
 
 GUIDE_SPP = {"cuda_ad_rgb": 4, "llvm_ad_rgb": 4, "scalar_rgb": 1}
 """Samples per pixel of the albedo and normal images that guide the denoiser (they are nearly noise-free), per
@@ -99,8 +99,6 @@ class MitsubaFrames:
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, cameras: list[str], spec: StreamSpec,
                  finishes: Mapping[str, Finish]):
-        from rik.render.mitsuba_scene import DENOISER_GUIDES, PATH_TRACER, build_posed_scene
-
         self.variant = use_variant(spec.variant)
         self.model, self.cameras, self.spec = model, cameras, spec
         w, h = spec.width, spec.height
@@ -117,7 +115,6 @@ class MitsubaFrames:
         """Every camera's linear radiance, (H, W, 3) float32, denoised when the spec says so."""
         import mitsuba as mi
 
-        from rik.render.mitsuba_scene import pose_scene
 
         if self.beauty is None:
             raise RuntimeError("this MitsubaFrames is closed")

@@ -16,6 +16,7 @@ import numpy as np
 
 from rik.errors import RikError
 from rik.render.encoders import Encoder, load_encoder, parse_spec
+from rik.render.images import common_subsets, list_images
 from rik.render.metrics import FLOOR, Interval, PairMetrics, RowTable, split_half
 
 RANDOM_NOTE = ("random weights: the encoder is randomly initialised (fixed seed), so these numbers are only a "
@@ -63,8 +64,6 @@ def visual_gap(real: Path, sim: Path | None = None, rerendered: Path | None = No
     side (ResNets only; see :func:`rik.render.encoders.load_encoder`). A RikError for any bad input, before any
     encoding where it can be checked up front (encoder name, folders, counts, weights file).
     """
-    from rik.render.images import common_subsets, list_images
-
     if not 1 <= bootstrap <= MAX_BOOTSTRAP:
         raise RikError(f"--bootstrap {bootstrap}: give 1 to {MAX_BOOTSTRAP:,} resamples")
     spec = parse_spec(encoder_spec)

@@ -25,6 +25,7 @@ from rik.schemas.joints import JointResistance, JointType, Spring
 from rik.sysid.effects import FAMILIES, Baseline, Effect
 from rik.sysid.fit import Fit, Rows, Split, all_rows, fit_all, fit_model, fit_velocity, split_rows
 from rik.sysid.preprocess import Prepared, preprocess
+from rik.sysid.resim import joint_spec_model, resimulate
 from rik.sysid.select import Selection, pair_allowed, select, select_pair
 from rik.sysid.trials import Trial
 
@@ -221,8 +222,6 @@ def discover(trials: Sequence[Trial], *, heldout: Sequence[int] | None = None, r
 def _resimulate(prepared: Sequence[Prepared], split: Split, limits: tuple[float, float], inertia: float,
                 base: JointResistance, extended: JointResistance | None, ext_inertia: float | None,
                 window_s: float) -> tuple[list[Resimulated], tuple[float, float | None]]:
-    from rik.sysid.resim import joint_spec_model, resimulate
-
     joint = prepared[0].trial.joint
     span = (min(limits[0], 0.0), max(limits[1], 0.0))
     base_model = joint_spec_model(joint, max(inertia, 1e-6), base, span)

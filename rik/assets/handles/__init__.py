@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from rik.assets.handles.generator import Generator
+from rik.assets.meshkit import require_solid
 
 if TYPE_CHECKING:
     import trimesh
@@ -27,8 +28,6 @@ def generators() -> dict[str, Generator]:
 
 def generate_handle(handle: Handle, design: HandleDesign) -> trimesh.Trimesh:
     """Build the visual mesh of ``handle`` (a closed solid, metres, mount frame)."""
-    from rik.assets.meshkit import require_solid
-
     build = generators()[design.generator.name]
     mesh = build(design.generator, handle.geometry, handle.mount)
     return require_solid(mesh, f"handle {handle.id}")
