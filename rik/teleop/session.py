@@ -225,7 +225,7 @@ def nearest_angles(angles: np.ndarray, near: np.ndarray) -> np.ndarray:
     +-pi, and past a yaw of +-pi/2 pitch and roll flip by pi), while a held key moves the target's angles on
     without a wrap: compared as they are, a roll past pi would read as a lead of -2 pi. Every triple
     ``(p, y, r) + 2 pi k`` and ``(p + pi, pi - y, r + pi) + 2 pi k`` is the same rotation
-    (:func:`rik.sim.scene.gripper_rotation`); this picks the one nearest ``near``. The Hand-E's pose is its
+    (:func:`rik.sim.pose.gripper_rotation`); this picks the one nearest ``near``. The Hand-E's pose is its
     joints' values, which lie within the lead of its target: they come back unchanged."""
     a = np.asarray(angles, np.float64)
     ref = np.asarray(near, np.float64)
