@@ -6,6 +6,7 @@ test keeps that page equal to it."""
 from __future__ import annotations
 
 import ast
+import functools
 import re
 import sys
 from collections import defaultdict
@@ -82,6 +83,12 @@ MODULE_FILES = {_module(p): p for p in sorted(PACKAGE.rglob("*.py"))}
 """Every module of rik -> its file."""
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The parsed source of ``path`` (parsed once per test run)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
 def _type_only(tree: ast.AST) -> set[int]:
     """ids of the nodes inside ``if TYPE_CHECKING:`` blocks."""
     return {id(x) for node in ast.walk(tree) if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
@@ -101,7 +108,7 @@ def _imports(path: Path, module: str | None = None, *, types: bool = True, where
     imports under ``TYPE_CHECKING``; ``where``: ``all``, ``top`` (module level) or ``function`` imports."""
     module = module or _module(path)
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     skip = set() if types else _type_only(tree)
     in_functions = {id(n) for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
                     for n in ast.walk(f)}
@@ -208,7 +215,7 @@ def _heavy_at_import(module: str, seen: dict[str, set[str]]) -> set[str]:
         return seen[module]
     seen[module] = set()
     path = MODULE_FILES[module]
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     skip = _type_only(tree) | {id(n) for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
                                for n in ast.walk(f)}
     heavy: set[str] = set()
