@@ -96,7 +96,7 @@ def dataset_digest(root: Path) -> str:
 def bare(catalog: Any, plan: Any, root: Path, variants: Path) -> dict[str, Any]:
     """The stages called directly, in plan order, then the merge; seconds per stage and wall seconds."""
     from rik.dataset.build import Folders, export_spec, run_record, run_render, run_shard
-    from rik.exporters.lerobot_export import _aggregate
+    from rik.exporters.lerobot_export import aggregate_shards as _aggregate
 
     folders = Folders(root / "work", variants.absolute())
     seconds = dict.fromkeys(STAGE_COLS, 0.0)

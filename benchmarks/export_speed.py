@@ -159,7 +159,7 @@ class Work:
         return next(p for p in (self.warmup if warmup else self.episode).iterdir() if (p / "meta.json").is_file())
 
     def spec(self, codec: str) -> Any:
-        from rik.exporters.lerobot_export import ExportSpec
+        from rik.exporters.spec import ExportSpec
 
         return ExportSpec(REPO, width=self.res, height=self.res, codec=codec, spp=SPP, denoise=False,
                           variant=self.variant)
@@ -219,11 +219,13 @@ def install_timers() -> None:
     episodes.render_episode = wrap("render check (finished)", episodes.render_episode)
     replay.episode_scene = wrap("scene build", replay.episode_scene)
     export.write_shard = wrap(READ, export.write_shard)  # what is left of it: the frame loop (PNGs, states)
-    export._aggregate = wrap("aggregate", export._aggregate)
-    check.check_frame_counts = wrap(lambda names: "frame check (merged)" if "load merged" in names
-                                    else "frame check (shard)", check.check_frame_counts)
-    check.check_dataset = wrap("load merged", check.check_dataset)
-    card.write_card = wrap("card", card.write_card)
+    export.aggregate_shards = wrap("aggregate", export.aggregate_shards)
+    # each wrapped where it is called from: lerobot_export imports them by name, check_dataset calls its own
+    check.check_frame_counts = export.check_frame_counts = wrap(
+        lambda names: "frame check (merged)" if "load merged" in names else "frame check (shard)",
+        check.check_frame_counts)
+    export.check_dataset = wrap("load merged", check.check_dataset)
+    export.write_card = wrap("card", card.write_card)
 
 
 # ---- the two sides ------------------------------------------------------------------------------------------------

@@ -180,7 +180,8 @@ def so100_policy(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> di
            robot=CAT.robot("so100"), max_seconds=3.0)
     # rik export-lerobot EPISODES --out dataset --repo-id local/so100 --streams none, in the library
     from rik.episodes.episode import find_episodes
-    from rik.exporters.lerobot_export import ExportSpec, export_lerobot
+    from rik.exporters.lerobot_export import export_lerobot
+    from rik.exporters.spec import ExportSpec
 
     export_lerobot(CAT, find_episodes([root / "episodes"]), root / "dataset", ExportSpec("local/so100", streams=()),
                    variants=variants)

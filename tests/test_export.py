@@ -19,8 +19,9 @@ import pytest
 from rik.episodes.episode import write_meta
 from rik.episodes.record import record
 from rik.errors import RikError
-from rik.exporters.lerobot_export import ExportSpec, export_lerobot
+from rik.exporters.lerobot_export import export_lerobot
 from rik.exporters.lerobot_frames import resample_indices
+from rik.exporters.spec import ExportSpec
 from rik.registry import load_catalog
 from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
 
@@ -147,7 +148,7 @@ def _frames(root: Path) -> dict[str, np.ndarray]:
 def test_killed_export_resumes_to_the_same_dataset(dataset: Path, work: Path, tmp_path: Path) -> None:
     killed = tmp_path / "killed"
     script = (f"from pathlib import Path; from rik.registry import load_catalog; "
-              f"from rik.exporters.lerobot_export import ExportSpec, export_lerobot; "
+              f"from rik.exporters.lerobot_export import export_lerobot; from rik.exporters.spec import ExportSpec; "
               f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(killed)!r}), "
               f"ExportSpec({REPO!r}, shard_episodes=1, **{SPEC!r}), renders=Path({str(work / 'renders')!r}), "
               f"variants=Path({str(work / 'variants')!r}))")
@@ -272,7 +273,7 @@ def test_identical_exports_are_byte_identical(dataset: Path, work: Path, tmp_pat
     for hash_seed, perturb in (("1", "85"), ("2", "255")):
         out = tmp_path / f"ds-{hash_seed}"
         script = (f"from pathlib import Path; from rik.registry import load_catalog; "
-                  f"from rik.exporters.lerobot_export import ExportSpec, export_lerobot; "
+                  f"from rik.exporters.lerobot_export import export_lerobot; from rik.exporters.spec import ExportSpec; "
                   f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(out)!r}), "
                   f"ExportSpec({REPO!r}, shard_episodes=2, **{SPEC!r}), renders=Path({str(work / 'renders')!r}), "
                   f"variants=Path({str(work / 'variants')!r}))")
@@ -365,7 +366,7 @@ def test_export_does_not_import_or_register_the_env(work: Path, tmp_path: Path) 
     rik/OpenFront-v0 with gymnasium as a side effect. (gymnasium itself is loaded all the same: lerobot's dataset
     module imports it.) A fresh interpreter, as a user has."""
     code = ("import sys; from pathlib import Path; from rik.registry import load_catalog; "
-            "from rik.exporters.lerobot_export import ExportSpec, export_lerobot; "
+            "from rik.exporters.lerobot_export import export_lerobot; from rik.exporters.spec import ExportSpec; "
             f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(tmp_path / 'ds')!r}), "
             f"ExportSpec({REPO!r}, streams=(), shard_episodes=2), renders=Path({str(tmp_path / 'r')!r}), "
             f"variants=Path({str(work / 'variants')!r})); "

@@ -277,7 +277,8 @@ def test_resume_takes_the_robot_as_part_of_the_plan(rik, panda: Path, variants: 
     """An interrupted export's plan names the robot; one of another robot (or a plan from before robots, which was
     the Hand-E's) is not continued with these episodes; the right one is."""
     from rik.episodes.episode import find_episodes, read_meta
-    from rik.exporters.lerobot_export import ExportSpec, _plan
+    from rik.exporters.lerobot_export import _plan
+    from rik.exporters.spec import ExportSpec
 
     out, partial = tmp_path / "ds", tmp_path / "ds.partial"
     metas = {d: read_meta(d) for d in find_episodes([panda / "episodes"])}
@@ -344,7 +345,8 @@ def test_a_format_2_hand_e_episode_exports_as_before(variants: Path, tmp_path: P
 
     from rik.episodes.episode import COLUMNS_2, meta_digest
     from rik.episodes.record import record
-    from rik.exporters.lerobot_export import ExportSpec, export_lerobot
+    from rik.exporters.lerobot_export import export_lerobot
+    from rik.exporters.spec import ExportSpec
     from rik.sim.observation import ROBOT_STATE_NAMES
 
     (meta,) = record(CAT, BOW, "contact_rich", max_seconds=0.3, out=tmp_path / "new", variants=variants)

@@ -48,7 +48,7 @@ def test_av1_frames_narrower_than_25_pixels_are_refused_first(rik, knob_recordin
                        "crash its encoder); give a width of 25 or more, or --codec h264")
     assert tree(tmp_path) == before
     from rik.errors import RikError
-    from rik.exporters.lerobot_export import ExportSpec, check_codec_size
+    from rik.exporters.spec import ExportSpec, check_codec_size
 
     check_codec_size(ExportSpec("local/x", width=25, height=8))
     check_codec_size(ExportSpec("local/x", width=64, height=8))

@@ -54,8 +54,8 @@ def export_lerobot(
     and action in the robot's layout (an arm's joints in LeRobot's names for it), observation.environment_state, one
     video per camera and stream (none with --streams none), a task string and rik's metadata per episode, a dataset
     card. Renders missing image streams first; crash-safe (sharded, --resume); checks every episode's frame count."""
-    from rik.exporters.lerobot_export import ExportSpec, parse_streams
     from rik.exporters.lerobot_export import export_lerobot as run
+    from rik.exporters.spec import ExportSpec, parse_streams
     from rik.registry.load import load_catalog
     from rik.render.streams import parse_resolution
 
@@ -110,8 +110,8 @@ def print_demo_export(overlay_paths: list[Path], episodes: list[Path], out: Path
     """Export the demo episodes (both streams, at the demo's render size) to a LeRobot dataset, load it back
     with ``LeRobotDataset`` and print what it holds. The demo's earlier dataset (and an interrupted export of it) is
     removed first, and only if rik made it (:func:`demo_folders`)."""
-    from rik.exporters.lerobot_export import ExportSpec
     from rik.exporters.lerobot_export import export_lerobot as run
+    from rik.exporters.spec import ExportSpec
     from rik.paths import remove_directory
     from rik.registry.load import load_catalog
 

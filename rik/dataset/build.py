@@ -24,12 +24,14 @@ from typing import TYPE_CHECKING, Any
 from rik.dataset.engines import Done, Engine, Job
 from rik.dataset.meta import BUILD_META, DATASET_META, read_dataset_meta
 from rik.dataset.plan import EpisodeUnit, Plan, RenderUnit, ShardUnit, export_settings
+from rik.dataset.registry import register_dataset
+from rik.dataset.spec import library_versions
 from rik.errors import RikError
 from rik.paths import write_atomic
 
 if TYPE_CHECKING:
 
-    from rik.exporters.lerobot_export import ExportSpec
+    from rik.exporters.spec import ExportSpec
     from rik.registry.catalog import Catalog
 
 STAGES = ("record", "render", "shard")
@@ -193,7 +195,7 @@ def run_shard(catalog: Catalog, arg: tuple[Folders, ShardUnit, ExportSpec, dict[
 
 
 def export_spec(plan: Plan) -> ExportSpec:
-    from rik.exporters.lerobot_export import ExportSpec
+    from rik.exporters.spec import ExportSpec
 
     s = plan.spec
     w, h = s.size
@@ -363,8 +365,6 @@ def build_dataset(catalog: Catalog, plan: Plan, out: Path, engine: Engine, *, wo
         if progress:
             progress("merge", 1, 1)
     if register:
-        from rik.dataset.registry import register_dataset
-
         register_dataset(out)
     return result
 
@@ -475,18 +475,17 @@ def file_checksums(root: Path) -> dict[str, str]:
 def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, out: Path,
            result: BuildResult) -> None:
     """Aggregate the shards (in plan order), check the result, write the card and rik's metadata, publish."""
-    from rik.dataset.spec import library_versions
     from rik.exporters.lerobot_card import write_card
     from rik.exporters.lerobot_check import check_dataset
-    from rik.exporters.lerobot_export import _aggregate, _order_stats, publish, quiet_encoders
+    from rik.exporters.lerobot_export import aggregate_shards, order_stats, publish, quiet_encoders
 
     merged = folders.work / f"merged-{plan.spec_hash[:16]}"
     if merged.exists():
         shutil.rmtree(merged)
     roots = [folders.work / schedule.done[s.key]["output"] / "ds" for s in plan.shards]
     quiet_encoders()
-    _aggregate(plan.spec.repo_id, roots, merged)
-    _order_stats(merged)
+    aggregate_shards(plan.spec.repo_id, roots, merged)
+    order_stats(merged)
     from rik.sim.robots.layout import robot_layout
 
     robot = catalog.robot(plan.spec.robot)

@@ -188,7 +188,7 @@ def check_robot(catalog: Catalog, spec: DatasetSpec, source: str) -> None:
 def check_codec(spec: DatasetSpec, source: str) -> None:
     """The spec's image size is one its codec encodes (libsvtav1 crashes on frames under 25 px wide), checked
     before any work instead of when the first shard is encoded."""
-    from rik.exporters.lerobot_export import least_width
+    from rik.exporters.spec import least_width
 
     width, height = spec.size
     least = least_width(spec.codec, width, bool(spec.streams))

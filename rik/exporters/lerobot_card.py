@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from rik.exporters.lerobot_export import ExportSpec
+    from rik.exporters.spec import ExportSpec
     from rik.registry.catalog import Catalog
     from rik.schemas.robots import Robot
     from rik.sim.robots.layout import RobotLayout

@@ -26,7 +26,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.exporters.lerobot_card import CARD_FIELDS, card_fields, write_card
+from rik.exporters.lerobot_check import check_dataset, check_frame_counts
 from rik.exporters.lerobot_frames import (
+    ACTION_NAMES,
     LAYOUT,
     LAYOUT_1_STATE_NAMES,
     EpisodeSource,
@@ -35,53 +38,16 @@ from rik.exporters.lerobot_frames import (
     episode_metadata,
     features,
 )
-from rik.paths import check_folder, write_atomic
-from rik.sim.observation import STREAM_SUFFIX
+from rik.exporters.spec import ENCODER_OPTIONS, ExportSpec, check_codec_size, check_spec
+from rik.paths import check_folder, json_object, write_atomic
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
     from rik.sim.robots.layout import RobotLayout
 
-STREAMS = tuple(STREAM_SUFFIX)
-"""The image streams an export can hold: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
-NO_STREAMS = "none"
-"""``--streams none``: a state-only export (no video features, nothing rendered)."""
-CODECS = ("libsvtav1", "h264", "hevc")
-"""Video codecs offered: the software encoders of lerobot's PyAV build (never ``auto``: it picks NVENC)."""
-ENCODER_OPTIONS: dict[str, dict[str, str]] = {"h264": {"x264-params": "mbtree=0"}}
-"""Extra encoder options per codec, so that identical inputs give identical bytes. x264's macroblock-tree rate
-control (on by default), in its AVX-512 code, reads memory it never wrote: the same frames encode to different bytes
-and pixels from one process to the next (with ``MALLOC_PERTURB_`` at will). Without it, or without AVX-512, x264 is
-repeatable; the cost is bigger files at the same CRF (measured +14..37% at 256x256, with +0.8..1.7 dB PSNR) and no
-loss of speed. libsvtav1 and hevc were repeatable as they are."""
-MIN_WIDTH: dict[str, int] = {"libsvtav1": 25}
-"""Narrowest frame, px, that a codec encodes. SVT-AV1 (lerobot's PyAV build) dies of a floating-point exception
-(SIGFPE, which takes the worker process with it) on frames less than 25 pixels wide, at any height (measured: 24x24,
-24x64, 24x4096, 16x16 and 8x64 crash; 25x8, 25x64, 26x2048, 32x4 and 64x8 encode); h264 and hevc take rik's
-smallest size (8 a side)."""
 DONE = "DONE"
 PLAN = "plan.json"
-
-
-@dataclass(frozen=True)
-class ExportSpec:
-    """What an export writes."""
-
-    repo_id: str
-    streams: tuple[str, ...] = STREAMS
-    """Image streams to export (empty: a state-only dataset, nothing rendered)."""
-    cameras: tuple[str, ...] = ()
-    """Cameras to export (empty: every camera of the scenes)."""
-    width: int = 256
-    height: int = 256
-    fps: int | None = None
-    """Dataset frame rate, Hz (None: the episodes' own rate, which must then agree)."""
-    codec: str = "libsvtav1"
-    spp: int = 16
-    denoise: bool = True
-    variant: str = "auto"
-    shard_episodes: int = 16
 
 
 @dataclass
@@ -99,62 +65,6 @@ class ExportResult:
     """The catalog robot whose episodes the dataset holds."""
     robot_type: str = "rik_hand_e"
     """``info.json``'s ``robot_type``."""
-
-
-def parse_streams(text: str) -> tuple[str, ...]:
-    """The streams of ``--streams`` (comma-separated); ``none`` alone gives () (a state-only export)."""
-    items = tuple(s.strip() for s in text.split(",") if s.strip())
-    if NO_STREAMS in items:
-        if len(items) > 1:
-            raise RikError(f"--streams {text}: '{NO_STREAMS}' (a state-only export) cannot be combined with image "
-                           "streams; give either none or some of " + ", ".join(STREAMS))
-        return ()
-    if not items:
-        raise RikError(f"--streams: give at least one of {', '.join(STREAMS)}, or {NO_STREAMS} for a state-only "
-                       "export")
-    return items
-
-
-MAX_FPS = 240
-"""Highest ``--fps`` of an export, Hz: SVT-AV1 (the default codec) encodes at most 240 frames per second (rik records
-at 20 Hz; resampling above it only repeats rows and frames)."""
-
-
-def _check_spec(spec: ExportSpec) -> None:
-    for s in spec.streams:
-        if s not in STREAMS:
-            raise RikError(f"--streams: unknown stream '{s}' (streams: {', '.join(STREAMS)}, or {NO_STREAMS})")
-    if not spec.streams and spec.cameras:
-        raise RikError(f"--cameras {','.join(spec.cameras)}: a state-only export (--streams {NO_STREAMS}) has no "
-                       "cameras; drop --cameras or give --streams")
-    if spec.codec not in CODECS:
-        raise RikError(f"--codec: '{spec.codec}' is not offered (codecs: {', '.join(CODECS)})")
-    if spec.repo_id.count("/") != 1 or not all(spec.repo_id.split("/")):
-        raise RikError(f"--repo-id '{spec.repo_id}': give it as OWNER/NAME, e.g. local/rik-drawers")
-    if spec.fps is not None and not 1 <= spec.fps <= MAX_FPS:
-        raise RikError(f"--fps {spec.fps}: give 1 to {MAX_FPS} Hz")
-    from rik.render.streams import MAX_SPP
-
-    if "rerendered" in spec.streams and not 1 <= spec.spp <= MAX_SPP:  # as StreamSpec says, before the codec's size
-        raise RikError(f"--spp {spec.spp}: give 1 to {MAX_SPP} samples per pixel")
-    check_codec_size(spec)
-
-
-def least_width(codec: str, width: int, images: bool) -> int | None:
-    """The narrowest frame ``codec`` encodes (:data:`MIN_WIDTH`, px) when ``width`` is narrower and images are
-    exported; None when the width is fine."""
-    least = MIN_WIDTH.get(codec)
-    return least if images and least is not None and width < least else None
-
-
-def check_codec_size(spec: ExportSpec) -> None:
-    """Refuse (one line) an image size that ``spec.codec`` cannot encode (:data:`MIN_WIDTH`), before any work: the
-    encoder would otherwise crash its process once the frames are rendered."""
-    least = least_width(spec.codec, spec.width, bool(spec.streams))
-    if least is not None:
-        raise RikError(f"--res {spec.width}x{spec.height}: --codec {spec.codec} encodes frames at least {least} "
-                       f"pixels wide (narrower ones crash its encoder); give a width of {least} or more, or "
-                       f"--codec h264")
 
 
 def _episode_fps(metas: dict[Path, EpisodeMeta], spec: ExportSpec) -> int:
@@ -183,7 +93,6 @@ def one_robot(metas: dict[Path, EpisodeMeta]) -> str:
 def _check_same_features(dirs: list[Path]) -> None:
     """Every episode loads whole (sha256 checked) and records the action rik exports, before any work starts."""
     from rik.episodes.episode import read_episode
-    from rik.exporters.lerobot_frames import ACTION_NAMES
 
     for d in dirs:
         table = read_episode(d)[1]
@@ -248,8 +157,6 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     from lerobot.configs import RGBEncoderConfig
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
-    from rik.exporters.lerobot_check import check_frame_counts
-
     check_codec_size(spec)  # rik dataset's shards come here without export_lerobot's checks
     quiet_encoders()
     layout = sources_layout(catalog, sources)
@@ -301,7 +208,7 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     from rik.assets.workers import check_workers
     from rik.locks import exclusive
 
-    _check_spec(spec)
+    check_spec(spec)
     check_workers(workers)
     check_folder(renders, "--renders")
     check_folder(variants, "--variants")
@@ -316,9 +223,6 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
 def is_rik_export(folder: Path) -> bool:
     """Whether ``folder`` holds a finished rik export: lerobot's ``meta/info.json`` and rik's card fields
     (``meta/rik_card.json``), each a JSON object."""
-    from rik.exporters.lerobot_card import CARD_FIELDS
-    from rik.paths import json_object
-
     return json_object(folder / "meta" / "info.json") is not None and \
         json_object(folder / "meta" / CARD_FIELDS) is not None
 
@@ -341,7 +245,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                    progress: Callable[[str, int, int], None] | None) -> ExportResult:
     """:func:`export_lerobot` once it holds the lock of ``out``."""
     from rik.episodes.episode import find_episodes, read_meta
-    from rik.render.episodes import render_episode
+    from rik.render.episodes import check_renders_outside, render_episode
     from rik.render.streams import StreamSpec
 
     _check_out_free(out, resume)  # again, now that it is ours: another export may have finished it meanwhile
@@ -369,8 +273,6 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                            "it, or run it again with the same ones")
 
     if spec.streams:
-        from rik.render.episodes import check_renders_outside
-
         check_renders_outside(renders, {d: m.id for d, m in metas.items()}, "--renders")
     # 1. The image streams, rendered where missing (resumable per frame), all at the export's size.
     cameras: list[str] | None = list(spec.cameras) or None
@@ -426,11 +328,8 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     if merged.exists():
         shutil.rmtree(merged)
     shard_dirs = sorted(p for p in shard_root.iterdir() if p.is_dir())
-    _aggregate(spec.repo_id, [p / "ds" for p in shard_dirs], merged)
-    _order_stats(merged)
-    from rik.exporters.lerobot_card import write_card
-    from rik.exporters.lerobot_check import check_dataset
-
+    aggregate_shards(spec.repo_id, [p / "ds" for p in shard_dirs], merged)
+    order_stats(merged)
     checks = check_dataset(merged, spec.repo_id, len(dirs), layout)
     write_card(catalog, merged, spec, fps, checks, robot=robot)
     publish(merged, out)
@@ -440,9 +339,10 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                         checks, robot, layout.robot_type)
 
 
-def _order_stats(root: Path) -> None:
-    """Write ``meta/stats.json`` with its features in info.json's order: lerobot's aggregation gathers them in a
-    set, whose order changes from one process to the next, and identical exports must be byte-identical."""
+def order_stats(root: Path) -> None:
+    """Rewrite ``meta/stats.json`` of the merged dataset at ``root`` with its features in info.json's order:
+    lerobot's aggregation gathers them in a set, whose order changes from one process to the next, and identical
+    exports must be byte-identical. Call it after :func:`aggregate_shards`."""
     stats_file, info_file = root / "meta" / "stats.json", root / "meta" / "info.json"
     if not stats_file.is_file():
         return
@@ -468,8 +368,9 @@ def _shard_by_name(jobs: dict[str, tuple], catalog: Catalog, name: str) -> int:
     return write_shard(catalog, *jobs[name])
 
 
-def _aggregate(repo_id: str, roots: list[Path], out: Path) -> None:
-    """Merge finished shard datasets with lerobot's ``aggregate_datasets``."""
+def aggregate_shards(repo_id: str, roots: list[Path], out: Path) -> None:
+    """Merge the finished shard datasets at ``roots`` (in that order) into one dataset ``repo_id`` at ``out``, with
+    lerobot's ``aggregate_datasets``; :func:`order_stats` then makes its ``stats.json`` repeatable."""
     from lerobot.datasets.aggregate import aggregate_datasets
 
     aggregate_datasets([f"{repo_id}-part-{i}" for i in range(len(roots))], repo_id, roots=roots, aggr_root=out)
@@ -479,8 +380,6 @@ def push(root: Path, repo_id: str, *, private: bool = False) -> str:
     """Upload a finished export through lerobot's ``push_to_hub`` (files, then lerobot's card with rik's
     description, then the ``v3.0`` tag); returns the dataset's URL. Offline or unauthorised: a RikError."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
-
-    from rik.exporters.lerobot_card import card_fields
 
     ds = LeRobotDataset(repo_id, root=root, video_backend="pyav")
     try:
