@@ -242,7 +242,7 @@ def bare_inputs(catalog: Any, work: Work, warmup: bool = False) -> dict[str, Any
     """What the bare loop is given, computed beforehand: the features, the task, the state and action of every
     frame (rik's own per-frame dicts without images) and the PNG paths of every frame and image key."""
     from rik.episodes.episode import read_meta
-    from rik.exporters.lerobot_frames import EpisodeSource, episode_frames, features, image_key
+    from rik.exporters.lerobot_frames import episode_frames, features, image_key, load_episode
     from rik.render.streams import frame_name, read_manifest, stream_dir
 
     directory = work.episode_dir(warmup)
@@ -250,7 +250,8 @@ def bare_inputs(catalog: Any, work: Work, warmup: bool = False) -> dict[str, Any
     folders = {kind: stream_dir(work.renders, meta.id, spec) for kind, spec in stream_specs(work.res,
                                                                                             work.variant).items()}
     cameras = list(read_manifest(folders["sim"])["cameras"])
-    _, task, frames, _ = episode_frames(catalog, EpisodeSource(directory, {}), cameras, meta.fps, VARIANTS)
+    task, frames, _ = episode_frames(catalog, load_episode(catalog, directory, meta), {}, cameras, meta.fps,
+                                     VARIANTS)
     rows = [(f["observation.state"], f["action"]) for f in frames]
     paths = [[(image_key(cam, kind), folders[kind] / cam / frame_name(k)) for kind in folders for cam in cameras]
              for k in range(len(rows))]

@@ -29,7 +29,6 @@ from rik.errors import RikError
 from rik.exporters.lerobot_card import CARD_FIELDS, card_fields, write_card
 from rik.exporters.lerobot_check import check_dataset, check_frame_counts
 from rik.exporters.lerobot_frames import (
-    ACTION_NAMES,
     LAYOUT,
     LAYOUT_1_STATE_NAMES,
     EpisodeSource,
@@ -37,6 +36,7 @@ from rik.exporters.lerobot_frames import (
     episode_layout,
     episode_metadata,
     features,
+    load_episode,
 )
 from rik.exporters.spec import ENCODER_OPTIONS, ExportSpec, check_codec_size, check_spec
 from rik.paths import check_folder, json_object, write_atomic
@@ -90,17 +90,11 @@ def one_robot(metas: dict[Path, EpisodeMeta]) -> str:
     return first.robot
 
 
-def _check_same_features(dirs: list[Path]) -> None:
-    """Every episode loads whole (sha256 checked) and records the action rik exports, before any work starts."""
-    from rik.episodes.episode import read_episode
-
-    for d in dirs:
-        table = read_episode(d)[1]
-        width = len(table.column("action")[0])
-        if width != len(ACTION_NAMES):
-            raise RikError(f"{d / 'states.parquet'}: column 'action' has {width} numbers per row where the other "
-                           f"episodes have {len(ACTION_NAMES)} ({', '.join(ACTION_NAMES)}); export it to a separate "
-                           "dataset")
+def _check_episodes(catalog: Catalog, metas: dict[Path, EpisodeMeta]) -> None:
+    """Every episode loads whole (sha256 checked) and records the action rik exports, before any work starts
+    (:func:`~rik.exporters.lerobot_frames.load_episode`; each is let go at once: the shards read it again)."""
+    for d, meta in metas.items():
+        load_episode(catalog, d, meta)
 
 
 def _plan(metas: dict[Path, EpisodeMeta], spec: ExportSpec, fps: int, robot: str = "hand-e") -> dict[str, Any]:
@@ -140,11 +134,9 @@ def quiet_encoders() -> None:
     av.logging.set_libav_level(av.logging.ERROR)
 
 
-def sources_layout(catalog: Catalog, sources: Sequence[EpisodeSource]) -> RobotLayout:
-    """The robot layout of episodes that share one robot (:func:`one_robot` checks that they do)."""
-    from rik.episodes.episode import read_meta
-
-    metas = {s.directory: read_meta(s.directory) for s in sources}
+def shard_layout(catalog: Catalog, metas: dict[Path, EpisodeMeta]) -> RobotLayout:
+    """The robot layout of a shard's episodes (their metas), which share one robot (:func:`one_robot` checks that
+    they do)."""
     one_robot(metas)
     directory, meta = next(iter(metas.items()))
     return episode_layout(catalog, directory, meta)
@@ -157,9 +149,12 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     from lerobot.configs import RGBEncoderConfig
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
+    from rik.episodes.episode import read_meta
+
     check_codec_size(spec)  # rik dataset's shards come here without export_lerobot's checks
     quiet_encoders()
-    layout = sources_layout(catalog, sources)
+    metas = {s.directory: read_meta(s.directory) for s in sources}
+    layout = shard_layout(catalog, metas)
     if root.exists():
         shutil.rmtree(root)  # an unfinished shard is redone from scratch
     root.parent.mkdir(parents=True, exist_ok=True)
@@ -181,11 +176,12 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     frames_total = 0
     try:
         for source in sources:
-            meta, task, frames, count = episode_frames(catalog, source, cameras, fps, variants)
+            episode = load_episode(catalog, source.directory, metas[source.directory])  # let go once it is saved
+            task, frames, count = episode_frames(catalog, episode, source.streams, cameras, fps, variants)
             for frame in frames:
                 ds.add_frame({**frame, "task": task})
             extra.clear()
-            extra.update(episode_metadata(meta))
+            extra.update(episode_metadata(episode.meta))
             # lerobot encodes each camera in a process of its own: cheap where processes fork (measured faster for
             # h264), but in a spawned worker (rik dataset build -j N) each would be a fresh interpreter importing
             # lerobot again, per episode; there the worker encodes itself (the workers already run side by side).
@@ -245,7 +241,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                    progress: Callable[[str, int, int], None] | None) -> ExportResult:
     """:func:`export_lerobot` once it holds the lock of ``out``."""
     from rik.episodes.episode import find_episodes, read_meta
-    from rik.render.episodes import check_renders_outside, render_episode
+    from rik.render.episodes import RecordedEpisode, check_renders_outside, render_episode
     from rik.render.streams import StreamSpec
 
     _check_out_free(out, resume)  # again, now that it is ours: another export may have finished it meanwhile
@@ -257,7 +253,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     metas = {d: read_meta(d) for d in dirs}
     robot = one_robot(metas)
     layout = [episode_layout(catalog, d, m) for d, m in metas.items()][0]  # in the catalog, with its joints
-    _check_same_features(dirs)
+    _check_episodes(catalog, metas)
     fps = _episode_fps(metas, spec)
     plan = _plan(metas, spec, fps, robot)
     if partial_dir.exists():
@@ -274,14 +270,16 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
 
     if spec.streams:
         check_renders_outside(renders, {d: m.id for d, m in metas.items()}, "--renders")
-    # 1. The image streams, rendered where missing (resumable per frame), all at the export's size.
+    # 1. The image streams, rendered where missing (resumable per frame), all at the export's size. An episode's
+    # states are read, and its scene built, only where its stream must be rendered (never for a finished one).
     cameras: list[str] | None = list(spec.cameras) or None
     stream_dirs: dict[Path, dict[str, Path]] = {d: {} for d in dirs}
     for kind in spec.streams:
         stream = StreamSpec(kind, spec.width, spec.height, spp=spec.spp, denoise=spec.denoise,  # type: ignore[arg-type]
                             variant=spec.variant)
         for n, d in enumerate(dirs):
-            r = render_episode(catalog, d, stream, renders=renders, variants=variants, cameras=cameras)
+            r = render_episode(catalog, RecordedEpisode(d, metas[d]), stream, renders=renders, variants=variants,
+                               cameras=cameras)
             if cameras is None:
                 cameras = list(r.cameras)
             stream_dirs[d][kind] = r.directory

@@ -15,7 +15,7 @@ columns ``rik/<field>`` of ``meta/episodes``, which survive loading, ``episode_f
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from rik.errors import RikError
+from rik.render.episodes import RecordedEpisode
 from rik.sim.observation import image_name
 
 if TYPE_CHECKING:
@@ -124,31 +125,67 @@ def resample_indices(rows: int, source_fps: int, fps: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class EpisodeSource:
-    """A recorded episode and the finished stream folders its images come from."""
+    """A recorded episode and the finished stream folders its images come from (what a shard is given: a worker
+    process takes it whole, and reads the episode itself)."""
 
     directory: Path
     streams: dict[str, Path]
     """Stream kind -> finished stream folder (see :mod:`rik.render.streams`)."""
 
 
-def episode_frames(catalog: Catalog, source: EpisodeSource, cameras: Sequence[str], fps: int,
-                   variants: Path) -> tuple[EpisodeMeta, str, Iterator[dict[str, np.ndarray]], int]:
-    """(meta, task, frame dicts for ``add_frame`` without the task, frame count) of one episode."""
-    from rik.episodes.episode import read_episode, states
-    from rik.episodes.replay import episode_scene
+@dataclass(frozen=True)
+class LoadedEpisode:
+    """One episode as the export takes it, read once by :func:`load_episode`: its recording (meta, states table and
+    array, the scene built on first use: :class:`~rik.render.episodes.RecordedEpisode`, which the render takes), its
+    robot's layout, and its recorded actions and servo targets as arrays (the actions checked to be the ones rik
+    exports). :func:`episode_frames` takes it whole."""
+
+    recorded: RecordedEpisode
+    layout: RobotLayout
+    actions: np.ndarray
+    """The recorded ``action`` rows, (rows, :data:`ACTION_NAMES`)."""
+    targets: np.ndarray
+    """An arm's recorded joint targets (``robot_targets``), (rows, joints); (rows, 0) for the Hand-E."""
+
+    @property
+    def directory(self) -> Path:
+        return self.recorded.directory
+
+    @property
+    def meta(self) -> EpisodeMeta:
+        return self.recorded.meta
+
+
+def load_episode(catalog: Catalog, directory: Path, meta: EpisodeMeta | None = None) -> LoadedEpisode:
+    """Read the episode in ``directory`` for the export: ``meta.json`` (unless given) and ``states.parquet``, checked
+    whole (:func:`rik.episodes.episode.read_episode`), its robot's layout (:func:`episode_layout`) and its action
+    rows, refused (one line) when they are not the :data:`ACTION_NAMES` rik exports: the export's one check of
+    their width."""
+    recorded = RecordedEpisode(directory, meta)
+    table = recorded.table
+    layout = episode_layout(catalog, recorded.directory, recorded.meta)
+    rows = len(recorded.states)
+    actions = _rows(table, "action", rows)
+    if actions.shape[1] != len(ACTION_NAMES):
+        raise RikError(f"{recorded.directory / 'states.parquet'}: column 'action' has {actions.shape[1]} numbers per "
+                       f"row where the other episodes have {len(ACTION_NAMES)} ({', '.join(ACTION_NAMES)}); export "
+                       "it to a separate dataset")
+    # an arm's action is what its servos were commanded: the recorded joint targets (format 3 episodes)
+    targets = np.zeros((rows, 0)) if layout.is_pose else _rows(table, "robot_targets", rows)
+    return LoadedEpisode(recorded, layout, actions, targets)
+
+
+def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[str, Path], cameras: Sequence[str],
+                   fps: int, variants: Path) -> tuple[str, Iterator[dict[str, np.ndarray]], int]:
+    """(task, frame dicts for ``add_frame`` without the task, frame count) of one episode read by
+    :func:`load_episode`, resampled to ``fps``, its images read from ``streams`` (stream kind -> finished stream
+    folder)."""
     from rik.render.streams import read_frame
     from rik.sim.observation import environment_state
 
-    meta, table = read_episode(source.directory)
-    layout = episode_layout(catalog, source.directory, meta)
-    scene = episode_scene(catalog, source.directory, variants, meta)
-    recorded = states(table)
-    actions = _rows(table, "action", len(recorded))
-    if actions.shape[1] != len(ACTION_NAMES):
-        raise RikError(f"{source.directory / 'states.parquet'}: column 'action' has {actions.shape[1]} numbers "
-                       f"per row; rik exports {len(ACTION_NAMES)} ({', '.join(ACTION_NAMES)})")
-    # an arm's action is what its servos were commanded: the recorded joint targets (format 3 episodes)
-    targets = np.zeros((len(recorded), 0)) if layout.is_pose else _rows(table, "robot_targets", len(recorded))
+    meta, layout, actions, targets = episode.meta, episode.layout, episode.actions, episode.targets
+    scene = episode.recorded.scene(catalog, variants)
+    recorded = episode.recorded.states
     picks = resample_indices(len(recorded), meta.fps, fps)
     task = task_text(catalog, meta, scene.front.kind)
 
@@ -160,12 +197,12 @@ def episode_frames(catalog: Catalog, source: EpisodeSource, cameras: Sequence[st
                 frame[EE_POSE] = layout.ee(scene).astype(np.float32)
             frame["observation.environment_state"] = environment_state(scene).astype(np.float32)
             frame["action"] = layout.action(actions[k], targets[k]).astype(np.float32)
-            for stream, folder in source.streams.items():
+            for stream, folder in streams.items():
                 for cam in cameras:
                     frame[image_key(cam, stream)] = read_frame(folder, cam, int(k))
             yield frame
 
-    return meta, task, frames(), len(picks)
+    return task, frames(), len(picks)
 
 
 def _rows(table: pa.Table, column: str, rows: int) -> np.ndarray:

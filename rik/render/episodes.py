@@ -1,11 +1,12 @@
 """Rendering recorded episodes: set each recorded state back into the episode's scene and render every camera,
-into a resumable stream folder (:mod:`rik.render.streams`). Episodes are only read, never changed."""
+into a resumable stream folder (:mod:`rik.render.streams`). Episodes are only read, never changed; an episode read
+once (:class:`RecordedEpisode`) gives every stream rendered from it, and the export's frames, its states and scene."""
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from functools import partial
+from functools import cached_property, partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -14,6 +15,7 @@ from rik.render.streams import StreamSpec, StreamWriter, is_done, read_manifest,
 
 if TYPE_CHECKING:
     import mujoco
+    import numpy as np
     import pyarrow as pa
 
     from rik.registry.catalog import Catalog
@@ -58,37 +60,70 @@ def scene_cameras(model: mujoco.MjModel, wanted: Sequence[str] | None, where: st
     return list(wanted)
 
 
-def _episode_scene(catalog: Catalog, directory: Path, variants: Path) -> tuple[EpisodeMeta, pa.Table, SimScene]:
-    from rik.episodes.episode import read_episode
-    from rik.episodes.replay import episode_scene
+class RecordedEpisode:
+    """An episode read once, for everything made from it: its ``meta.json`` (given, or read at once) and, on first
+    use, ``states.parquet`` checked whole (:func:`rik.episodes.episode.read_episode`), the recorded states as an
+    array and the scene it was recorded in (built once per catalog and variants folder). Every stream rendered from
+    it (:func:`render_episode`) and the export's frames of it share them; the states are read only if asked for."""
 
-    meta, table = read_episode(directory)
+    def __init__(self, directory: Path, meta: EpisodeMeta | None = None) -> None:
+        from rik.episodes.episode import read_meta
+
+        self.directory = Path(directory)
+        self.meta = meta if meta is not None else read_meta(self.directory)
+        self._scene: tuple[Catalog, Path, SimScene] | None = None
+
+    @cached_property
+    def table(self) -> pa.Table:
+        """``states.parquet``, checked against the meta's sha256 and layout (read on first use)."""
+        from rik.episodes.episode import read_episode
+
+        return read_episode(self.directory)[1]
+
+    @cached_property
+    def states(self) -> np.ndarray:
+        """The recorded integration states, one row per recorded step."""
+        from rik.episodes.episode import states
+
+        return states(self.table)
+
+    def scene(self, catalog: Catalog, variants: Path) -> SimScene:
+        """The scene the episode was recorded in (:func:`rik.episodes.replay.episode_scene`), built on the first call
+        and on a call with another catalog or variants folder."""
+        from rik.episodes.replay import episode_scene
+
+        if self._scene is None or self._scene[0] is not catalog or self._scene[1] != Path(variants):
+            self._scene = (catalog, Path(variants), episode_scene(catalog, self.directory, variants, self.meta))
+        return self._scene[2]
+
+
+def _episode_scene(catalog: Catalog, episode: RecordedEpisode, variants: Path) -> SimScene:
+    """The episode's scene for rendering; one that cannot be built names the episode's variant."""
     try:
-        scene = episode_scene(catalog, directory, variants, meta)
+        return episode.scene(catalog, variants)
     except RikError as exc:
-        raise RikError(f"{Path(directory) / 'meta.json'}: field 'variant': cannot load {meta.variant} from "
-                       f"{variants} or rebuild it from the catalog: {exc}") from None
-    return meta, table, scene
+        raise RikError(f"{episode.directory / 'meta.json'}: field 'variant': cannot load {episode.meta.variant} "
+                       f"from {variants} or rebuild it from the catalog: {exc}") from None
 
 
-def render_episode(catalog: Catalog, directory: Path, spec: StreamSpec, *, renders: Path,
+def render_episode(catalog: Catalog, episode: Path | RecordedEpisode, spec: StreamSpec, *, renders: Path,
                    variants: Path = Path("variants"), cameras: Sequence[str] | None = None,
                    progress: Callable[[int], None] | None = None) -> StreamResult:
-    """Render one stream of the episode in ``directory`` into ``renders``; resumes an interrupted render and
-    returns at once when the stream is already finished. ``progress(n)`` is called as frames are done."""
-    from rik.episodes.episode import read_meta
+    """Render one stream of ``episode`` (its folder, or the episode already read, whose states and scene the
+    caller's other streams share) into ``renders``; resumes an interrupted render and returns at once when the
+    stream is already finished (reading only the meta). ``progress(n)`` is called as frames are done."""
     from rik.locks import exclusive
 
-    meta = read_meta(directory)
-    final = stream_dir(renders, meta.id, spec)
-    done = _finished(final, meta, cameras, progress)
+    recorded = episode if isinstance(episode, RecordedEpisode) else RecordedEpisode(episode)
+    final = stream_dir(renders, recorded.meta.id, spec)
+    done = _finished(final, recorded.meta, cameras, progress)
     if done is not None:
         return done
     with exclusive(final, "rik render", wait=True):  # one process renders a stream; others wait, then reuse it
-        done = _finished(final, meta, cameras, progress)
+        done = _finished(final, recorded.meta, cameras, progress)
         if done is not None:
             return done
-        return _render_stream(catalog, directory, spec, final, variants, cameras, progress)
+        return _render_stream(catalog, recorded, spec, final, variants, cameras, progress)
 
 
 def _finished(final: Path, meta: EpisodeMeta, cameras: Sequence[str] | None,
@@ -105,14 +140,13 @@ def _finished(final: Path, meta: EpisodeMeta, cameras: Sequence[str] | None,
                         0, float(manifest.get("seconds_per_frame", 0.0)))
 
 
-def _render_stream(catalog: Catalog, directory: Path, spec: StreamSpec, final: Path, variants: Path,
+def _render_stream(catalog: Catalog, episode: RecordedEpisode, spec: StreamSpec, final: Path, variants: Path,
                    cameras: Sequence[str] | None, progress: Callable[[int], None] | None) -> StreamResult:
-    """Render (or resume) the stream of the episode in ``directory`` into ``final``, holding its lock."""
-    from rik.episodes.episode import states
-
-    meta, table, scene = _episode_scene(catalog, directory, variants)
-    cams = scene_cameras(scene.model, cameras, str(directory))
-    recorded = states(table)
+    """Render (or resume) the stream of ``episode`` into ``final``, holding its lock."""
+    recorded = episode.states
+    scene = _episode_scene(catalog, episode, variants)
+    meta = episode.meta
+    cams = scene_cameras(scene.model, cameras, str(episode.directory))
     writer = StreamWriter(final, spec, cams, len(recorded), meta.states_sha256)
     todo = list(writer.missing())
     if progress and len(recorded) > len(todo):
@@ -165,6 +199,6 @@ def render_episodes(catalog: Catalog, episodes: Sequence[Path], spec: StreamSpec
                 progress(result.frames)
             yield result
         return
-    for d in metas:
-        yield render_episode(catalog, Path(d), spec, renders=renders, variants=variants, cameras=cams,
-                             progress=progress)
+    for d, meta in metas.items():
+        yield render_episode(catalog, RecordedEpisode(Path(d), meta), spec, renders=renders, variants=variants,
+                             cameras=cams, progress=progress)
