@@ -25,7 +25,7 @@ from rik.exporters.spec import ExportSpec
 from rik.registry import load_catalog
 from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
 
-pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
+slow = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow"); all but the keys test
 
 CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"
@@ -53,6 +53,7 @@ def dataset(work: Path) -> Path:
     return out
 
 
+@slow
 def test_export_loads_with_both_streams_metadata_and_matching_counts(dataset: Path, work: Path) -> None:
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
@@ -85,6 +86,7 @@ def test_export_loads_with_both_streams_metadata_and_matching_counts(dataset: Pa
     assert "observation.images.front_rerendered" in card and "Real-IKEA" in card and "| normal |" in card
 
 
+@slow
 def test_behaviour_cloning_loss_goes_down(dataset: Path) -> None:
     import torch
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
@@ -145,6 +147,7 @@ def _frames(root: Path) -> dict[str, np.ndarray]:
     return out
 
 
+@slow
 def test_killed_export_resumes_to_the_same_dataset(dataset: Path, work: Path, tmp_path: Path) -> None:
     killed = tmp_path / "killed"
     script = (f"from pathlib import Path; from rik.registry import load_catalog; "
@@ -175,6 +178,7 @@ def test_killed_export_resumes_to_the_same_dataset(dataset: Path, work: Path, tm
     assert not (tmp_path / "killed.partial").exists()
 
 
+@slow
 def test_export_of_one_stream_and_camera_resampled(dataset: Path, work: Path, tmp_path: Path) -> None:
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
@@ -192,12 +196,14 @@ def test_export_of_one_stream_and_camera_resampled(dataset: Path, work: Path, tm
     assert result.frames == sum(rows.values()) and all(e["rik/source_fps"] == 20 for e in ds.meta.episodes)
 
 
+@slow
 def test_resampling_holds_the_latest_row() -> None:
     assert resample_indices(5, 20, 20).tolist() == [0, 1, 2, 3, 4]
     assert resample_indices(5, 20, 10).tolist() == [0, 2, 4]
     assert resample_indices(3, 10, 20).tolist() == [0, 0, 1, 1, 2]
 
 
+@slow
 def test_export_messages(rik, dataset: Path, work: Path, tmp_path: Path) -> None:
     base = ["export-lerobot", str(work / "episodes"), "--repo-id", REPO, "--res", "32x24", "--renders",
             str(work / "renders"), "--variants", str(work / "variants"), "--variant", "scalar_rgb", "--spp", "2",
@@ -255,6 +261,7 @@ def test_export_messages(rik, dataset: Path, work: Path, tmp_path: Path) -> None
     assert missing.code == 2 and "none: no such episode or directory" in missing.err
 
 
+@slow
 def test_push_to_hub_reaches_the_upload_and_says_why_it_failed(dataset: Path) -> None:
     from rik.exporters.lerobot_export import push
 
@@ -265,6 +272,7 @@ def test_push_to_hub_reaches_the_upload_and_says_why_it_failed(dataset: Path) ->
     assert "offline" in msg.lower()
 
 
+@slow
 def test_identical_exports_are_byte_identical(dataset: Path, work: Path, tmp_path: Path) -> None:
     """The same episodes and settings exported by two processes (different hash seeds, so different set orders;
     different leftovers in freshly allocated memory, which x264's macroblock tree once read) give the same bytes in
@@ -287,6 +295,7 @@ def test_identical_exports_are_byte_identical(dataset: Path, work: Path, tmp_pat
     assert differ == []
 
 
+@slow
 def test_state_only_export_has_the_two_state_vectors_and_action(rik, work: Path, tmp_path: Path) -> None:
     """``--streams none``: no video features and nothing rendered; loads with LeRobotDataset, and lerobot's policies
     see the front's state as ENV; the card names both vectors and the normalisation to pass for ENV."""
@@ -329,6 +338,7 @@ def test_state_only_export_has_the_two_state_vectors_and_action(rik, work: Path,
     assert not (tmp_path / "bad").exists()
 
 
+@slow
 def test_resume_of_an_older_layout_says_to_export_again(rik, work: Path, tmp_path: Path) -> None:
     """A partial export written before the state split (plan.json without a layout) is not continued."""
     from rik.episodes.episode import find_episodes, read_meta
@@ -350,6 +360,7 @@ def test_resume_of_an_older_layout_says_to_export_again(rik, work: Path, tmp_pat
     assert not out.exists() and (partial / "plan.json").is_file()
 
 
+@slow
 def test_check_names_the_state_layout(dataset: Path) -> None:
     from rik.exporters.lerobot_check import check_dataset, describe_layout, state_layout
     from rik.exporters.lerobot_frames import LAYOUT_1_STATE_NAMES
@@ -361,6 +372,7 @@ def test_check_names_the_state_layout(dataset: Path) -> None:
     assert state_layout({"observation.state": {"names": ["a"]}}) is None
 
 
+@slow
 def test_export_does_not_import_or_register_the_env(work: Path, tmp_path: Path) -> None:
     """Exporting reads observations through rik.sim.observation: it does not import rik.envs.open_front, which would register
     rik/OpenFront-v0 with gymnasium as a side effect. (gymnasium itself is loaded all the same: lerobot's dataset
@@ -375,3 +387,14 @@ def test_export_does_not_import_or_register_the_env(work: Path, tmp_path: Path) 
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip().splitlines()[-1] == "False False"
     assert (tmp_path / "ds" / "meta" / "info.json").is_file()
+
+
+def test_feature_keys_are_lerobots_constants() -> None:
+    """rik's names of LeRobot's feature keys (rik.exporters.keys, which imports no lerobot) are lerobot's own."""
+    from lerobot.utils import constants
+
+    from rik.exporters import keys
+
+    for name in ("OBS_STATE", "OBS_ENV_STATE", "OBS_IMAGES", "ACTION"):
+        assert getattr(keys, name) == getattr(constants, name), name
+    assert keys.EE_POSE == f"{constants.OBS_STR}.ee_pose"  # what lerobot makes of the env's ee_pose

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.exporters.keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_STATE
 
 if TYPE_CHECKING:
     from rik.sim.robots.layout import RobotLayout
@@ -76,9 +77,9 @@ def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> 
     def names(key: str) -> tuple[str, ...] | None:
         return tuple(features[key].get("names") or ()) if key in features else None
 
-    if names("observation.state") == robot.state_names and names("observation.environment_state") == ENV_STATE_NAMES:
+    if names(OBS_STATE) == robot.state_names and names(OBS_ENV_STATE) == ENV_STATE_NAMES:
         return 2
-    if names("observation.state") == LAYOUT_1_STATE_NAMES and "observation.environment_state" not in features:
+    if names(OBS_STATE) == LAYOUT_1_STATE_NAMES and OBS_ENV_STATE not in features:
         return 1
     return None
 
@@ -98,12 +99,11 @@ def describe_layout(layout: int | None, robot: RobotLayout | None = None) -> str
 def check_robot(root: Path, robot_type: str | None, feats: dict[str, Any], robot: RobotLayout) -> None:
     """The dataset's ``robot_type`` and its features ``action`` and ``observation.ee_pose`` are those of
     ``robot``'s layout."""
-    from rik.exporters.lerobot_frames import EE_POSE
     from rik.sim.robots.layout import EE_NAMES
 
     if robot_type != robot.robot_type:
         raise RikError(f"{root}: robot_type is {robot_type!r}, robot {robot.robot_id}'s is {robot.robot_type!r}")
-    action = tuple(feats.get("action", {}).get("names") or ())
+    action = tuple(feats.get(ACTION, {}).get("names") or ())
     if action != robot.action_names:
         raise RikError(f"{root}: action holds {', '.join(action)}; robot {robot.robot_id}'s layout is "
                        f"{', '.join(robot.action_names)}")

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.exporters.keys import TASK
 from rik.exporters.lerobot_card import CARD_FIELDS, card_fields, write_card
 from rik.exporters.lerobot_check import check_dataset, check_frame_counts
 from rik.exporters.lerobot_frames import (
@@ -179,7 +180,7 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
             episode = load_episode(catalog, source.directory, metas[source.directory])  # let go once it is saved
             task, frames, count = episode_frames(catalog, episode, source.streams, cameras, fps, variants)
             for frame in frames:
-                ds.add_frame({**frame, "task": task})
+                ds.add_frame({**frame, TASK: task})
             extra.clear()
             extra.update(episode_metadata(episode.meta))
             # lerobot encodes each camera in a process of its own: cheap where processes fork (measured faster for

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from rik.errors import RikError
+from rik.exporters.keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 from rik.render.episodes import RecordedEpisode
 from rik.sim.observation import image_name
 
@@ -36,9 +37,6 @@ if TYPE_CHECKING:
 ACTION_NAMES = ("target_x", "target_y", "target_z", "target_pitch", "target_yaw", "target_roll", "gripper")
 """The recorded action (``states.parquet``'s ``action``, every robot's): target pose of the gripper base (m, rad) and
 gripper command (0 open, 1 closed); the Hand-E's exported ``action`` too."""
-EE_POSE = "observation.ee_pose"
-"""The feature of an arm's end-effector pose in its base frame (:data:`rik.sim.robots.layout.EE_NAMES`), where its
-catalog entry asks for one."""
 META_PREFIX = "rik/"
 META_FIELDS = ("episode_id", "variant", "base_unit", "handle", "handle_type", "preset", "front", "operator",
                "operator_kind", "outcome", "seed", "final_opening", "source_fps")
@@ -55,7 +53,7 @@ LAYOUT_1_STATE_NAMES = ("x", "y", "z", "pitch", "yaw", "roll", "jaw_opening", "f
 
 def image_key(camera: str, stream: str) -> str:
     """The dataset feature of a camera's stream, e.g. ``observation.images.front_rerendered``."""
-    return f"observation.images.{image_name(camera, stream)}"
+    return f"{OBS_IMAGES}.{image_name(camera, stream)}"
 
 
 def _vector(names: Sequence[str]) -> dict[str, Any]:
@@ -69,11 +67,11 @@ def features(cameras: Sequence[str], streams: Sequence[str], width: int, height:
     from rik.sim.robots.layout import EE_NAMES, robot_layout
 
     layout = layout or robot_layout(None)
-    out: dict[str, dict[str, Any]] = {"observation.state": _vector(layout.state_names)}
+    out: dict[str, dict[str, Any]] = {OBS_STATE: _vector(layout.state_names)}
     if layout.ee_pose:
         out[EE_POSE] = _vector(EE_NAMES)
-    out["observation.environment_state"] = _vector(ENV_STATE_NAMES)
-    out["action"] = _vector(layout.action_names)
+    out[OBS_ENV_STATE] = _vector(ENV_STATE_NAMES)
+    out[ACTION] = _vector(layout.action_names)
     for cam in cameras:
         for stream in streams:
             out[image_key(cam, stream)] = {"dtype": "video", "shape": (height, width, 3),
@@ -192,11 +190,11 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
     def frames() -> Iterator[dict[str, np.ndarray]]:
         for k in picks:
             scene.restore(recorded[k])
-            frame: dict[str, np.ndarray] = {"observation.state": layout.state(scene).astype(np.float32)}
+            frame: dict[str, np.ndarray] = {OBS_STATE: layout.state(scene).astype(np.float32)}
             if layout.ee_pose:
                 frame[EE_POSE] = layout.ee(scene).astype(np.float32)
-            frame["observation.environment_state"] = environment_state(scene).astype(np.float32)
-            frame["action"] = layout.action(actions[k], targets[k]).astype(np.float32)
+            frame[OBS_ENV_STATE] = environment_state(scene).astype(np.float32)
+            frame[ACTION] = layout.action(actions[k], targets[k]).astype(np.float32)
             for stream, folder in streams.items():
                 for cam in cameras:
                     frame[image_key(cam, stream)] = read_frame(folder, cam, int(k))

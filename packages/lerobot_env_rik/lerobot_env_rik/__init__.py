@@ -36,9 +36,10 @@ from dataclasses import dataclass, field
 
 from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
-from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE, OBS_STR
+from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 
 import rik.envs.open_front  # noqa: F401  (registers rik/OpenFront-v0 with gymnasium)
+from rik.exporters.keys import EE_POSE
 from rik.sim.robots.layout import EE_NAMES, RobotLayout, robot_layout
 
 __all__ = ["RikEnvConfig", "env_kwargs", "robot_layout_of"]
@@ -98,7 +99,7 @@ class RikEnvConfig(EnvConfig):
         self.features_map = {ACTION: ACTION, "agent_pos": OBS_STATE, "environment_state": OBS_ENV_STATE}
         if layout.ee_pose:
             self.features["ee_pose"] = PolicyFeature(type=FeatureType.STATE, shape=(len(EE_NAMES),))
-            self.features_map["ee_pose"] = f"{OBS_STR}.ee_pose"
+            self.features_map["ee_pose"] = EE_POSE
         shape = (self.observation_height, self.observation_width, 3)
         for stream in _names(self.streams) if _names(self.cameras) else ():
             for cam in _names(self.cameras):
