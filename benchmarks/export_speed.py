@@ -16,7 +16,7 @@ timers installed), interleaved and best of ``--repeats``, for each codec of ``--
   every recorded state to compute ``observation.state``, reads the PNGs, writes the shard through lerobot, checks
   its frame counts by decoding, merges with ``aggregate_datasets``, loads and checks the merge, writes the card);
 - B, the bare loop: ``LeRobotDataset.create`` with the same features, codec and ``image_writer_threads=4``, per
-  frame the four PNGs read with PIL and ``add_frame`` with precomputed state and action, ``save_episode``,
+  frame the four PNGs read with PIL and ``add_frame`` with the precomputed state vectors and action, ``save_episode``,
   ``finalize``;
 
 frames per second (frames / wall seconds), the time of each stage (exclusive, from wrappers around the functions
@@ -239,8 +239,8 @@ def run_export(catalog: Any, work: Work, codec: str, out: Path, warmup: bool = F
 
 
 def bare_inputs(catalog: Any, work: Work, warmup: bool = False) -> dict[str, Any]:
-    """What the bare loop is given, computed beforehand: the features, the task, the state and action of every
-    frame (rik's own per-frame dicts without images) and the PNG paths of every frame and image key."""
+    """What the bare loop is given, computed beforehand: the features, the task, the state vectors and action of
+    every frame (rik's own per-frame dicts without images) and the PNG paths of every frame and image key."""
     from rik.episodes.episode import read_meta
     from rik.exporters.lerobot_frames import episode_frames, features, image_key, load_episode
     from rik.render.streams import frame_name, read_manifest, stream_dir
@@ -252,7 +252,7 @@ def bare_inputs(catalog: Any, work: Work, warmup: bool = False) -> dict[str, Any
     cameras = list(read_manifest(folders["sim"])["cameras"])
     task, frames, _ = episode_frames(catalog, load_episode(catalog, directory, meta), {}, cameras, meta.fps,
                                      VARIANTS)
-    rows = [(f["observation.state"], f["action"]) for f in frames]
+    rows = list(frames)  # every vector feature of the frame (state, environment state, action; an arm's ee pose)
     paths = [[(image_key(cam, kind), folders[kind] / cam / frame_name(k)) for kind in folders for cam in cameras]
              for k in range(len(rows))]
     return {"features": features(cameras, list(folders), work.res, work.res), "fps": meta.fps, "task": task,
@@ -273,8 +273,8 @@ def bare_loop(inputs: dict[str, Any], codec: str, out: Path, parallel_encoding: 
         ds = LeRobotDataset.create(repo_id=REPO, fps=inputs["fps"], features=inputs["features"], root=out,
                                    robot_type=ROBOT_TYPE, use_videos=True, video_backend="pyav",
                                    rgb_encoder=RGBEncoderConfig(vcodec=codec), image_writer_threads=4)
-        for (state, action), files in zip(inputs["rows"], inputs["paths"], strict=True):
-            frame = {"observation.state": state, "action": action, "task": inputs["task"]}
+        for row, files in zip(inputs["rows"], inputs["paths"], strict=True):
+            frame = {**row, "task": inputs["task"]}
             for key, path in files:
                 with Image.open(path) as img:
                     frame[key] = np.asarray(img.convert("RGB"))
