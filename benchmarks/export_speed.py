@@ -220,12 +220,10 @@ def install_timers() -> None:
     replay.episode_scene = wrap("scene build", replay.episode_scene)
     export.write_shard = wrap(READ, export.write_shard)  # what is left of it: the frame loop (PNGs, states)
     export.aggregate_shards = wrap("aggregate", export.aggregate_shards)
-    # each wrapped where it is called from: lerobot_export imports them by name, check_dataset calls its own
-    check.check_frame_counts = export.check_frame_counts = wrap(
-        lambda names: "frame check (merged)" if "load merged" in names else "frame check (shard)",
-        check.check_frame_counts)
-    export.check_dataset = wrap("load merged", check.check_dataset)
-    export.write_card = wrap("card", card.write_card)
+    check.check_frame_counts = wrap(lambda names: "frame check (merged)" if "load merged" in names
+                                    else "frame check (shard)", check.check_frame_counts)
+    check.check_dataset = wrap("load merged", check.check_dataset)
+    card.write_card = wrap("card", card.write_card)
 
 
 # ---- the two sides ------------------------------------------------------------------------------------------------

@@ -26,9 +26,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.exporters import lerobot_card, lerobot_check  # called through the modules, so that tests can replace them
 from rik.exporters.keys import TASK
-from rik.exporters.lerobot_card import CARD_FIELDS, card_fields, write_card
-from rik.exporters.lerobot_check import check_dataset, check_frame_counts
 from rik.exporters.lerobot_frames import (
     LAYOUT,
     LAYOUT_1_STATE_NAMES,
@@ -190,7 +189,7 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
             frames_total += count
     finally:
         ds.finalize()
-    check_frame_counts(root / "ds")
+    lerobot_check.check_frame_counts(root / "ds")
     write_atomic(root / DONE, json.dumps([s.directory.name for s in sources]) + "\n")
     return frames_total
 
@@ -221,7 +220,7 @@ def is_rik_export(folder: Path) -> bool:
     """Whether ``folder`` holds a finished rik export: lerobot's ``meta/info.json`` and rik's card fields
     (``meta/rik_card.json``), each a JSON object."""
     return json_object(folder / "meta" / "info.json") is not None and \
-        json_object(folder / "meta" / CARD_FIELDS) is not None
+        json_object(folder / "meta" / lerobot_card.CARD_FIELDS) is not None
 
 
 def _check_out_free(out: Path, resume: bool) -> None:
@@ -329,8 +328,8 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     shard_dirs = sorted(p for p in shard_root.iterdir() if p.is_dir())
     aggregate_shards(spec.repo_id, [p / "ds" for p in shard_dirs], merged)
     order_stats(merged)
-    checks = check_dataset(merged, spec.repo_id, len(dirs), layout)
-    write_card(catalog, merged, spec, fps, checks, robot=robot)
+    checks = lerobot_check.check_dataset(merged, spec.repo_id, len(dirs), layout)
+    lerobot_card.write_card(catalog, merged, spec, fps, checks, robot=robot)
     publish(merged, out)
     shutil.rmtree(partial_dir, ignore_errors=True)
     return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
@@ -383,7 +382,7 @@ def push(root: Path, repo_id: str, *, private: bool = False) -> str:
     ds = LeRobotDataset(repo_id, root=root, video_backend="pyav")
     try:
         ds.push_to_hub(private=private, tags=["rik", "mujoco", "articulated-furniture"], license="apache-2.0",
-                       **card_fields(root))
+                       **lerobot_card.card_fields(root))
     except Exception as exc:  # huggingface_hub raises its own errors for offline mode, auth and network
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise RikError(f"{root}: cannot push {repo_id} to the Hugging Face Hub: {type(exc).__name__}: {first}"

@@ -140,9 +140,11 @@ def _finished(final: Path, meta: EpisodeMeta, cameras: Sequence[str] | None,
                         0, float(manifest.get("seconds_per_frame", 0.0)))
 
 
-def _render_stream(catalog: Catalog, episode: RecordedEpisode, spec: StreamSpec, final: Path, variants: Path,
+def _render_stream(catalog: Catalog, episode: Path | RecordedEpisode, spec: StreamSpec, final: Path, variants: Path,
                    cameras: Sequence[str] | None, progress: Callable[[int], None] | None) -> StreamResult:
-    """Render (or resume) the stream of ``episode`` into ``final``, holding its lock."""
+    """Render (or resume) the stream of ``episode`` (its folder, or the episode read) into ``final``, holding its
+    lock."""
+    episode = episode if isinstance(episode, RecordedEpisode) else RecordedEpisode(episode)
     recorded = episode.states
     scene = _episode_scene(catalog, episode, variants)
     meta = episode.meta
