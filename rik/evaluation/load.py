@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
 from rik.evaluation.policy_files import CONFIG, parsed_config, read_json
+from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, STREAM_SUFFIX
 
 if TYPE_CHECKING:
@@ -72,24 +73,24 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
     hint = ("a policy trained on an arm's export runs with --robot and that arm" if layout.is_pose else
             "a policy trained on another robot's export runs with --robot and that robot; the Hand-E's with "
             "--robot hand-e")
-    action = (config.get("output_features") or {}).get("action")
+    action = (config.get("output_features") or {}).get(ACTION)
     if action is not None and tuple(action.get("shape", ())) != (len(layout.action_names),):
         raise RikError(f"{file}: output 'action' has shape {list(action.get('shape', ()))}; robot {robot} takes "
                        f"[{len(layout.action_names)}] ({hint})")
-    widths = {"observation.state": len(layout.state_names), "observation.environment_state": len(ENV_STATE_NAMES)}
+    widths = {OBS_STATE: len(layout.state_names), OBS_ENV_STATE: len(ENV_STATE_NAMES)}
     if layout.ee_pose:
-        widths["observation.ee_pose"] = len(EE_NAMES)
+        widths[EE_POSE] = len(EE_NAMES)
     for key, feature in inputs.items():
         shape = tuple(feature.get("shape", ()))
-        if key == "observation.ee_pose" and key not in widths:
+        if key == EE_POSE and key not in widths:
             raise RikError(f"{file}: input '{key}' is not something rik's environment supplies for robot {robot} "
                            f"(only arms whose layout has an end-effector pose, such as panda-2f85; {hint})")
         if key in widths:
-            if key == "observation.state" and shape == (OLD_STATE_WIDTH,) and layout.is_pose:
+            if key == OBS_STATE and shape == (OLD_STATE_WIDTH,) and layout.is_pose:
                 raise RikError(f"{file}: input 'observation.state' has {OLD_STATE_WIDTH} numbers: the policy was "
                                "trained on an export made before rik split the robot's and the front's state; "
                                "re-export the episodes (rik export-lerobot) and train again")
-            if key == "observation.state" and shape != (widths[key],):
+            if key == OBS_STATE and shape != (widths[key],):
                 raise RikError(f"{file}: input '{key}' has shape {list(shape)}; robot {robot} supplies "
                                f"[{widths[key]}] ({hint})")
             if shape != (widths[key],):
@@ -113,14 +114,14 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
         size = (int(shape[1]), int(shape[2]))
         cameras.append(camera)
         streams.append(stream)
-    if "observation.state" not in inputs:
+    if OBS_STATE not in inputs:
         raise RikError(f"{file}: the policy takes no 'observation.state'; rik's policies read the robot's state")
     return PolicyNeeds(config["type"], tuple(dict.fromkeys(cameras)), tuple(dict.fromkeys(streams)),
                        size or (96, 128))
 
 
 def _image_feature(key: str) -> tuple[str | None, str]:
-    prefix = "observation.images."
+    prefix = OBS_IMAGES + "."
     if not key.startswith(prefix):
         return None, ""
     name = key[len(prefix):]

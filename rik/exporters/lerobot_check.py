@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
-from rik.exporters.keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_STATE
+from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_STATE
 
 if TYPE_CHECKING:
     from rik.sim.robots.layout import RobotLayout

@@ -27,7 +27,6 @@ from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
 from rik.exporters import lerobot_card, lerobot_check  # called through the modules, so that tests can replace them
-from rik.exporters.keys import TASK
 from rik.exporters.lerobot_frames import (
     LAYOUT,
     LAYOUT_1_STATE_NAMES,
@@ -40,6 +39,7 @@ from rik.exporters.lerobot_frames import (
 )
 from rik.exporters.spec import ENCODER_OPTIONS, ExportSpec, check_codec_size, check_spec
 from rik.paths import check_folder, json_object, write_atomic
+from rik.sim.feature_keys import TASK
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog

@@ -39,7 +39,7 @@ from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 
 import rik.envs.open_front  # noqa: F401  (registers rik/OpenFront-v0 with gymnasium)
-from rik.exporters.keys import EE_POSE
+from rik.sim.feature_keys import EE_POSE
 from rik.sim.robots.layout import EE_NAMES, RobotLayout, robot_layout
 
 __all__ = ["RikEnvConfig", "env_kwargs", "robot_layout_of"]
