@@ -265,10 +265,11 @@ def read_episode(directory: Path) -> tuple[EpisodeMeta, pa.Table]:
     file = Path(directory) / STATES
     if not file.is_file():
         raise EpisodeError(f"{file}: no such file; the episode is incomplete")
-    if hashlib.sha256(file.read_bytes()).hexdigest() != meta.states_sha256:
+    data = file.read_bytes()  # read once: hashed, then parsed from memory
+    if hashlib.sha256(data).hexdigest() != meta.states_sha256:
         raise EpisodeError(f"{file}: truncated or corrupt (its sha256 differs from the one in meta.json)")
     try:
-        table = pq.read_table(file)
+        table = pq.read_table(pa.BufferReader(data))
     except (pa.ArrowException, OSError) as exc:
         raise EpisodeError(f"{file}: not a readable Parquet file ({type(exc).__name__}: "
                            f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
