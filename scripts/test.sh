@@ -6,4 +6,4 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 source "$root/scripts/setup.sh"
-cd "$root" && uv run --locked pytest -n "${RIK_TEST_WORKERS:-auto}" --maxprocesses 8 --dist loadfile --durations 15 "$@"
+cd "$root" && uv run --locked pytest -n "${RIK_TEST_WORKERS:-auto}" --maxprocesses 8 --dist loadfile --no-loadscope-reorder --durations 15 "$@"
