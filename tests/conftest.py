@@ -38,8 +38,9 @@ own (``keyboard.up`` waits for the page, which a starved machine may never sched
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """A test that drives a browser or opens a window is also ``slow`` (out of the everyday tier) and bounded by
-    :data:`BROWSER_TEST_S`. Files with slow tests run first: pytest-xdist hands out files in this order (``--no-loadscope-reorder``
-    in scripts/test.sh; by default it orders them by their number of tests), so the long ones start at once and the many short ones fill the workers' last minutes (longest first packs best)."""
+    :data:`BROWSER_TEST_S`. Files with slow tests run first: pytest-xdist hands out files in this order
+    (``--no-loadscope-reorder`` in scripts/test.sh; by default it orders them by their number of tests), so the long
+    ones start at once and the many short ones fill the workers' last minutes (longest first packs best)."""
     for item in items:
         if item.get_closest_marker("browser") or item.get_closest_marker("display"):
             item.add_marker(pytest.mark.slow)
