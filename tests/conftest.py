@@ -14,6 +14,9 @@ REPO = Path(__file__).resolve().parents[1]
 os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering; must be set before mujoco is first imported
 os.environ["HF_HUB_OFFLINE"] = "1"  # nothing may download at run time: tests make their own data
 os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1's banner
+# The CLI silences lerobot's tqdm bars (rik.cli.common.quiet_writers) before tqdm is first imported, which tqdm
+# requires; in a test process another test may import tqdm first, so the in-process CLI needs it set here too.
+os.environ.setdefault("TQDM_DISABLE", "1")
 
 
 SESSION_LIMIT = 3600
