@@ -89,6 +89,13 @@ def _tree(path: Path) -> ast.Module:
     return ast.parse(path.read_text(encoding="utf-8"))
 
 
+@functools.cache
+def _in_functions(tree: ast.Module) -> frozenset[int]:
+    """ids of the nodes inside function bodies (they run when the function is called, not when the module loads)."""
+    return frozenset(id(n) for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
+                     for n in ast.walk(f))
+
+
 def _type_only(tree: ast.AST) -> set[int]:
     """ids of the nodes inside ``if TYPE_CHECKING:`` blocks."""
     return {id(x) for node in ast.walk(tree) if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
@@ -110,8 +117,7 @@ def _imports(path: Path, module: str | None = None, *, types: bool = True, where
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     tree = _tree(path)
     skip = set() if types else _type_only(tree)
-    in_functions = {id(n) for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
-                    for n in ast.walk(f)}
+    in_functions = _in_functions(tree)
     nodes = [n for n in ast.walk(tree) if where == "all" or (id(n) in in_functions) == (where == "function")]
     found = set()
     for node in nodes:
@@ -216,8 +222,7 @@ def _heavy_at_import(module: str, seen: dict[str, set[str]]) -> set[str]:
     seen[module] = set()
     path = MODULE_FILES[module]
     tree = _tree(path)
-    skip = _type_only(tree) | {id(n) for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
-                               for n in ast.walk(f)}
+    skip = _type_only(tree) | _in_functions(tree)
     heavy: set[str] = set()
     for node in tree.body:
         for sub in ast.walk(node):
