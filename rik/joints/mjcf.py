@@ -8,6 +8,11 @@ this package only (:mod:`rik.joints`): effects MuJoCo has natively become attrib
 actuators on each front's joint; effects it lacks become entries of :attr:`JointModel.runtime_effects`, which
 rik's simulator applies each step (:mod:`rik.joints.runtime`).
 
+Joint friction holds: MuJoCo's ``frictionloss`` is a soft constraint, and with its default impedance a front
+pushed below its friction creeps (mm/s). Every joint class sets :data:`FRICTION_SOLIMP` and
+:data:`FRICTION_SOLREF`, so a front held below breakaway stays put in plain MuJoCo too, with no rik code in the
+loop (variants are assets people take elsewhere).
+
 MuJoCo 4 spells damping and stiffness as polynomials (three coefficients: linear, quadratic, cubic); rik's
 presets set the linear term, and the library's ``quadratic_damping`` the quadratic one.
 
@@ -54,6 +59,18 @@ DIRECTION_FRICTION_SPEED = {"slide": 1e-3, "hinge": 2.5e-3}
 velocity bias of gain ``extra / speed``) and at run time alike: the law is regularised below it. 2.5 mrad/s is
 1 mm/s at a handle 0.4 m from the hinge. (Here, with everything that shapes the MJCF, so that variants' spec
 hashes follow it.)"""
+FRICTION_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+"""``solimpfriction`` of every front joint: the highest impedance MuJoCo allows (its ceiling is 0.9999). MuJoCo's
+joint friction is a soft constraint that yields at a speed proportional to the load below breakaway
+(``(1 - d) / d``: MuJoCo's default 0.9 let a high-preset drawer pushed at 90 % of its 30 N creep at 3.0 mm/s);
+0.9999 cuts that 1000-fold, and motion above breakaway is unchanged (benchmarks/joint_fidelity.py). Chosen over
+MuJoCo's no-slip pass, which also holds joints still but is a global option that changes every contact (the
+grasps), and over LuGre (see the module docstring)."""
+FRICTION_SOLREF = (0.005, 1.0)
+"""``solreffriction`` of every front joint: a 5 ms time constant (MuJoCo's default is 20 ms; the positive form
+is clamped at two time steps, 4 ms at :data:`rik.combinator.mjcf.TIMESTEP`, so it stays well-posed): the creep
+left at d = 0.9999 is another 4 times smaller (a high-preset door at 90 % of 12 N·m: 0.0002 instead of
+0.0008 °/s)."""
 
 
 @dataclass(frozen=True)
@@ -112,6 +129,8 @@ def add_joint_classes(spec: mujoco.MjSpec, preset: ResistancePreset,
         joint.damping[0] = model.damping
         joint.damping[1] = model.damping_quadratic
         joint.frictionloss = model.frictionloss
+        joint.solimp_friction = list(FRICTION_SOLIMP)
+        joint.solref_friction = list(FRICTION_SOLREF)
         joint.armature = model.armature
         joint.stiffness[0] = model.stiffness
         joint.springref = model.springref
