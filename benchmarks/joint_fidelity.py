@@ -29,7 +29,8 @@ given as a fraction of the preset's ``frictionloss``, in the opening direction):
    median, over the motion after its first 0.2 s, of the servo's force minus the gravity load (``qfrc_bias``:
    zero on drawers and doors), against ``frictionloss + damping * v``. Target (after): within 5 %.
 4. **motion above breakaway**: distance moved from rest in 0.5 s under a constant net load of 110 % and 150 % of
-   the friction, after relative to before. Target: within 2 %.
+   the friction, after relative to before. Target: within 2 %. A flap started at mid-range can reach its open
+   stop within the 0.5 s (marked "at the stop": the distance is then the stop's).
 5. **gripper holding the handle** (the high preset of the drawer and of the door, where asked for): the scene of
    :func:`rik.sim.build.build_scene` (the floating Hand-E on its servoed base); a scripted strategy
    (``grasp_natural``, seed 0) approaches, closes and is stopped once it has closed (its phase turns to
@@ -216,16 +217,20 @@ def breakaway(front: Front) -> float | None:
     return None
 
 
-def motion(front: Front, load: float) -> float:
-    """Distance moved (SI) from rest in :data:`MOTION_SECONDS` under a constant net load (fraction of friction)."""
+def motion(front: Front, load: float) -> tuple[float, bool]:
+    """Distance moved (SI) from rest in :data:`MOTION_SECONDS` under a constant net load (fraction of friction), and
+    whether the joint reached its open stop (within :data:`STOP_MARGIN`) on the way: then the distance is the
+    stop's, not the load's."""
     import mujoco
 
     m, d = front.model, front.data
     bias = front.reset()
     d.qfrc_applied[front.dof] = load * front.frictionloss + bias
+    stop, reached = float(m.jnt_range[0][1]) - STOP_MARGIN[front.type], False
     for _ in range(steps(front, MOTION_SECONDS)):
         mujoco.mj_step(m, d)
-    return front.q() - front.q0
+        reached = reached or front.q() >= stop
+    return front.q() - front.q0, reached
 
 
 def with_servo(directory: Path, which: str, kind: Kind) -> tuple[Front, int]:
@@ -435,9 +440,11 @@ def measure_variant(report: Report, kind_name: str, preset: str, directory: Path
                                f"{medians['after']:.3f} ({ratio:.3f})", f"1 ± {PROFILE_TOLERANCE:g}",
                                verdict(abs(ratio - 1.0) <= PROFILE_TOLERANCE)])
     for load in MOTION_LOADS:
-        moved = {w: motion(fronts[w], load) * scale for w in MODELS}
+        runs = {w: motion(fronts[w], load) for w in MODELS}
+        moved = {w: runs[w][0] * scale for w in MODELS}
+        cells = {w: f"{moved[w]:.3f} {unit}" + (" (at the stop)" if runs[w][1] else "") for w in MODELS}
         ratio = moved["after"] / moved["before"]
-        report.motion.append([*label, f"{load:.0%}", f"{moved['before']:.3f} {unit}", f"{moved['after']:.3f} {unit}",
+        report.motion.append([*label, f"{load:.0%}", cells["before"], cells["after"],
                               f"{ratio:.4f}", f"1 ± {MOTION_TOLERANCE:g}",
                               verdict(abs(ratio - 1.0) <= MOTION_TOLERANCE)])
     rtf = real_time_factors(fronts, args.seconds, args.repeats)
