@@ -42,8 +42,9 @@ given as a fraction of the preset's ``frictionloss``, in the opening direction):
    scenes stepped in turn).
 6. **real-time factor**: simulated seconds per wall second of the 90 % creep run (``mj_step`` in a Python loop,
    one process): ``--repeats`` runs timed in chunks of 0.5 s of simulated time, before and after in turn, the
-   median chunk; the ratio also on the thread's CPU time, which a busy machine disturbs less. Target (on wall
-   time): after at most 10 % below before.
+   median chunk; the ratio also on the thread's CPU time. Target: after at most 10 % below before, judged on the
+   CPU-time ratio (on this busy 2-core machine the wall-time ratio of one variant moved between 0.8 and 2.7 from
+   run to run, the CPU-time ratio by 0.02).
 
 Every measure but the real-time factor is deterministic (MuJoCo on one thread, fixed seed).
 
@@ -454,10 +455,9 @@ def measure_variant(report: Report, kind_name: str, preset: str, directory: Path
                               f"{ratio:.4f}", f"1 ± {MOTION_TOLERANCE:g}",
                               verdict(abs(ratio - 1.0) <= MOTION_TOLERANCE)])
     rtf, rtf_cpu = real_time_factors(fronts, args.seconds, args.repeats)
-    ratio = rtf["after"] / rtf["before"]
-    report.rtf.append([*label, f"{rtf['before']:.0f}", f"{rtf['after']:.0f}", f"{ratio:.2f}",
-                       f"{rtf_cpu['after'] / rtf_cpu['before']:.2f}", f"≥ {1 - RTF_TOLERANCE:.2f}",
-                       verdict(ratio >= 1.0 - RTF_TOLERANCE)])
+    ratio = rtf_cpu["after"] / rtf_cpu["before"]
+    report.rtf.append([*label, f"{rtf['before']:.0f}", f"{rtf['after']:.0f}", f"{rtf['after'] / rtf['before']:.2f}",
+                       f"{ratio:.2f}", f"≥ {1 - RTF_TOLERANCE:.2f}", verdict(ratio >= 1.0 - RTF_TOLERANCE)])
     if preset == "high" and kind_name in GRIPPER_KINDS:
         grips = {"before": grasp_and_push(before_copy(directory, tmp / "before")), "after": grasp_and_push(directory)}
         held = hold(grips, args.seconds)
@@ -496,8 +496,8 @@ def render(report: Report, args: argparse.Namespace, wall: float) -> str:
                         "RTF before", "RTF after", "after/before"], report.gripper)
     lines += ["", f"### 6. Real-time factor of the 90 % creep run (median {RTF_CHUNK:g} s chunk, {args.repeats} "
               "runs interleaved)", ""]
-    lines += table(["kind", "preset", "before", "after", "after/before", "after/before, CPU time", "target",
-                    "after"], report.rtf)
+    lines += table(["kind", "preset", "before", "after", "after/before", "after/before, CPU time",
+                    "target (CPU time)", "after"], report.rtf)
     lines += ["", f"Benchmark wall time: {wall:.1f} s (variant builds included)."]
     return "\n".join(lines)
 
