@@ -33,8 +33,9 @@ FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
      ("rik.sysid", "Model discovery from measured trajectories: trials, fits, effects, reports, presets; "
                    "synthetic measurements.")),
     (("rik.combinator", "Variants: base unit x handle x preset placed, checked by name and written as MJCF."),),
-    (("rik.sim", "The simulated scene (scene, build, pose, grasp, probe, observation, outcome) and the robots "
-                 "(sim/robots: gripper, arm, ik, drive, reach, checks, layout)."),),
+    (("rik.sim", "The simulated scene (scene, build, pose, grasp, probe, observation, outcome), the quasi-static "
+                 "pull through a handle (pull) and the robots (sim/robots: gripper, arm, ik, drive, reach, checks, "
+                 "layout)."),),
     (("rik.episodes", "Episodes: scripted strategies, the recorder, the format on disk, exact replay, the seeded "
                       "draw."),),
     (("rik.render", "Images of episodes: MuJoCo and Mitsuba streams, alignment, visual-gap metrics."),
