@@ -270,7 +270,7 @@ def test_variant_with_effects_in_mjcf_and_info(measured: tuple[Path, Path]) -> N
     _, variants = measured
     text = (variants / VARIANT / "model.xml").read_text()
     # quadratic damping is damping[1]; joint friction holds (rik.joints.mjcf.FRICTION_SOLIMP / FRICTION_SOLREF)
-    assert ('<joint type="slide" solreffriction="0.005" solimpfriction="0.9999 0.9999" damping="4 3" '
+    assert ('<joint type="slide" solreffriction="0.004" solimpfriction="0.9999 0.9999" damping="4 3" '
             'frictionloss="5" limited="true"/>') in text
     assert '<general name="drawer/effect/self_close" joint="drawer"' in text
     assert '<general name="drawer/effect/direction_friction" joint="drawer"' in text

@@ -66,11 +66,12 @@ joint friction is a soft constraint that yields at a speed proportional to the l
 0.9999 cuts that 1000-fold, and motion above breakaway is unchanged (benchmarks/joint_fidelity.py). Chosen over
 MuJoCo's no-slip pass, which also holds joints still but is a global option that changes every contact (the
 grasps), and over LuGre (see the module docstring)."""
-FRICTION_SOLREF = (0.005, 1.0)
-"""``solreffriction`` of every front joint: a 5 ms time constant (MuJoCo's default is 20 ms; the positive form
-is clamped at two time steps, 4 ms at :data:`rik.combinator.mjcf.TIMESTEP`, so it stays well-posed): the creep
-left at d = 0.9999 is another 4 times smaller (a high-preset door at 90 % of 12 N·m: 0.0002 instead of
-0.0008 °/s)."""
+FRICTION_SOLREF = (0.004, 1.0)
+"""``solreffriction`` of every front joint: a 4 ms time constant, MuJoCo's floor at rik's 2 ms step (the positive
+form is clamped at two time steps, :data:`rik.combinator.mjcf.TIMESTEP`; MuJoCo's default is 20 ms). The creep left
+at d = 0.9999 is another 5 times smaller: what remains is proportional to the load over the joint's inertia, and
+the lightest fronts, the flaps (0.15 kg·m² about their hinge, a fifth of a door's), held at 90 % of the high
+preset's 12 N·m crept at 0.00104 °/s with 5 ms and 0.00083 °/s with 4 ms (benchmarks/joint_fidelity.py)."""
 
 
 @dataclass(frozen=True)
