@@ -42,7 +42,9 @@ FRONT_CAMERA_DISTANCE = 0.9
 """Distance from the operated handle to the front camera, m."""
 
 
-def _variant_info(spec: mujoco.MjSpec, file: Path) -> dict[str, Any]:
+def variant_info(spec: mujoco.MjSpec, file: Path) -> dict[str, Any]:
+    """The variant's own description (its ``rik.variant`` text element: id, preset, fronts); ``file`` names the
+    model in the error when there is none."""
     text = spec.text("rik.variant") if hasattr(spec, "text") else None
     data = getattr(text, "data", None)
     if not data:
@@ -60,7 +62,9 @@ def _look_at(eye: np.ndarray, target: np.ndarray) -> list[float]:
     return [*x.tolist(), *y.tolist()]
 
 
-def _add_environment(spec: mujoco.MjSpec) -> None:
+def add_environment(spec: mujoco.MjSpec) -> None:
+    """The physics rules and surroundings every rik scene adds to a variant: the solver settings above, offscreen
+    buffer, lights and floor."""
     import mujoco
 
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
@@ -111,9 +115,9 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
         spec = mujoco.MjSpec.from_file(str(file))
     except Exception as exc:  # MuJoCo's parse errors are ValueErrors with the file's problem
         raise RikError(f"{file}: MuJoCo cannot load it: {str(exc).splitlines()[0]}") from None
-    info = _variant_info(spec, file)
+    info = variant_info(spec, file)
     record = front_of(info, front, file)
-    _add_environment(spec)
+    add_environment(spec)
     if not arm:
         add_gripper(spec, gripper)
     # Aim the front camera at the operated handle (and place an arm by it): compile once to find it.

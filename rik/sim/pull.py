@@ -49,7 +49,7 @@ import numpy as np
 
 from rik.errors import RikError
 from rik.joints.runtime import front_effects
-from rik.sim.build import _add_environment, _variant_info, front_of
+from rik.sim.build import add_environment, front_of, variant_info
 
 if TYPE_CHECKING:
     import mujoco
@@ -154,9 +154,9 @@ def pull_profile(source: str | Path | mujoco.MjSpec, front: str | None = None, *
     import mujoco
 
     spec, file = _load(source)
-    info = _variant_info(spec, file)
+    info = variant_info(spec, file)
     record = front_of(info, front, file)
-    _add_environment(spec)  # the solver settings of rik's scenes (and their floor)
+    add_environment(spec)  # the solver settings of rik's scenes (and their floor)
     model = spec.compile()
     data = mujoco.MjData(model)
     joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, record["joint"])
