@@ -145,3 +145,55 @@ def test_unknown_section_and_missing_file(rik, tmp_path) -> None:
 def test_errors_are_not_cached(rik, tmp_path) -> None:
     run_bad(rik, tmp_path, "handles: 3\n")
     run_bad(rik, tmp_path, "handles: 3\n")  # still reported, not served from a cache
+
+
+
+def preset(hinge: str, slide: str = "{damping: 5.0, frictionloss: 15.0, provenance: assumed}", source: str = "") -> str:
+    """A user catalog with one preset, ``stuck``, with these sides (flow mappings) and source."""
+    return f"presets:\n  - id: stuck\n    name: Stuck\n    slide: {slide}\n    hinge: {hinge}\n" + (
+        f"    source: {source}\n" if source else "")
+
+
+def test_preset_with_negative_friction(rik, tmp_path) -> None:
+    msg = run_bad(rik, tmp_path, preset("{damping: 0.8, frictionloss: -1.0, provenance: assumed}"))
+    assert msg.endswith("mine.yaml:5, entry presets[0] 'stuck', field 'hinge.frictionloss': input should be greater "
+                        "than or equal to 0 (got -1.0)"), msg
+
+
+def test_preset_whose_catch_no_robot_can_break(rik, tmp_path) -> None:
+    """The strongest pull of a catalog robot is the Hand-E's friction capacity, 2 pads x 0.3 x 130 N = 78 N: a hinge
+    holding 32 N·m at closed needs 80 N at a handle 0.40 m from its axis."""
+    msg = run_bad(rik, tmp_path, preset("{damping: 0.8, frictionloss: 2.0, provenance: assumed, effects: "
+                                        "[{kind: magnetic_catch, force: 30.0, decay: 0.05}]}"))
+    assert msg.endswith("mine.yaml:5, entry presets[0] 'stuck', field 'hinge.effects.0.force': holds the front shut "
+                        "with 32 N·m at closed (frictionloss 2 + magnetic_catch 30), 80 N at a handle 0.40 m from the "
+                        "axis (the catalog's lever arm); no catalog robot can pull more than 78 N (hand-e: 2 pads x "
+                        "friction 0.3 x grip 130 N), so none could open it"), msg
+    ok = preset("{damping: 0.8, frictionloss: 2.0, provenance: assumed, effects: "
+                "[{kind: magnetic_catch, force: 29.0, decay: 0.05}]}")  # 31 N·m: 77.5 N at the handle
+    (tmp_path / "ok.yaml").write_text(ok)
+    assert rik("catalog", "show", "stuck", "--catalog", str(tmp_path / "ok.yaml")).code == 0
+
+
+def test_preset_whose_self_closing_drawer_no_robot_can_open(rik, tmp_path) -> None:
+    msg = run_bad(rik, tmp_path, preset("{damping: 0.8, frictionloss: 6.0, provenance: assumed}",
+                                        slide="{damping: 5.0, frictionloss: 15.0, provenance: assumed, effects: "
+                                              "[{kind: self_close, zone: 0.05, stiffness: 1400.0}]}"))
+    assert msg.endswith("mine.yaml:4, entry presets[0] 'stuck', field 'slide.effects.0.stiffness': holds the front "
+                        "shut with 85 N at closed (frictionloss 15 + self_close 70); no catalog robot can pull more "
+                        "than 78 N (hand-e: 2 pads x friction 0.3 x grip 130 N), so none could open it"), msg
+
+
+@pytest.mark.parametrize(("source", "field", "problem"), [
+    ("{kind: measured, reference: my drawer}", "source.data", "a measured source names the data file it was "
+                                                              "fitted to"),
+    ("{kind: paper, reference: Real-IKEA, mechanism: door}", "source.mechanism", "only a measured source names its "
+                                                                                "mechanism (this one is paper)"),
+    ("{kind: measured, reference: r, data: d.csv, trials_heldout: ['3']}", "source.heldout_rms_n",
+     "held-out trials need the preset's RMS error over them, N"),
+    ("{kind: guessed, reference: r}", "source.kind", "input should be 'paper', 'literature', 'assumed' or "
+                                                     "'measured' (got 'guessed')"),
+])
+def test_preset_source_that_does_not_hold_together(rik, tmp_path, source, field, problem) -> None:
+    msg = run_bad(rik, tmp_path, preset("{damping: 0.8, frictionloss: 6.0, provenance: assumed}", source=source))
+    assert msg.endswith(f"entry presets[0] 'stuck', field '{field}': {problem}"), msg

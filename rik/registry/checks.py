@@ -1,4 +1,5 @@
-"""Rules that span entries or fields: unique ids, references, per-type handle rules, base-unit geometry.
+"""Rules that span entries or fields: unique ids, references, per-type handle rules, base-unit geometry, presets
+that some catalog robot can open.
 
 Each check raises :class:`rik.errors.CatalogError` through the offending entry, naming file, entry and field.
 """
@@ -12,10 +13,12 @@ from rik.errors import UnknownIdError
 from rik.registry.geometry import cross, dot, site_axes, sub
 from rik.registry.ids import SEPARATOR, slug
 from rik.registry.sources import RawEntry, display_path
-from rik.schemas import BaseUnit, Front, Handle, HandleDesign, HandleType, JointType
+from rik.schemas import BaseUnit, Front, Handle, HandleDesign, HandleType, JointType, ResistancePreset
+from rik.schemas.joints import CATALOG_LEVER_ARM, JointResistance
 
 if TYPE_CHECKING:
     from rik.registry.entries import CatalogModel
+    from rik.schemas.robots import Robot
 
 TOL = 1e-6
 """Geometric tolerance, m."""
@@ -217,3 +220,50 @@ def _overlap(a: Front, b: Front) -> bool:
     dx = (a.size[0] + b.size[0]) / 2 - abs(a.center[0] - b.center[0])
     dz = (a.size[1] + b.size[1]) / 2 - abs(a.center[2] - b.center[2])
     return dx > TOL and dz > TOL
+
+
+def strongest_pull(robots: Mapping[str, Robot]) -> tuple[float, Robot] | None:
+    """The largest pull any catalog robot can put on a handle, N, and that robot (None without robots): its
+    gripper's friction capacity, 2 pads x pad friction x grip force
+    (:attr:`rik.schemas.robots.Gripper.pull_capacity`). A grasp that hooks behind a handle could pull more, but
+    the scripted strategies and the benchmark count on friction (``rik robot-check``'s grip check)."""
+    if not robots:
+        return None
+    robot = max(robots.values(), key=lambda r: r.gripper.pull_capacity)
+    return robot.gripper.pull_capacity, robot
+
+
+def check_preset_breakable(entry: RawEntry, preset: ResistancePreset, robots: Mapping[str, Robot]) -> None:
+    """A preset must let some catalog robot open its fronts: on each side, what holds the front at closed
+    (:meth:`rik.schemas.joints.JointResistance.hold_at_closed`: friction plus a catch's pull, a self-closing
+    spring's ``stiffness x zone``, ...) must not exceed :func:`strongest_pull`. A hinge torque is felt at the handle
+    divided by the catalog's lever arm (:data:`rik.schemas.joints.CATALOG_LEVER_ARM`, 0.40 m). The field named is
+    the largest term."""
+    strongest = strongest_pull(robots)
+    if strongest is None:
+        return
+    capacity, robot = strongest
+    for side in ("slide", "hinge"):
+        resistance = preset.slide if side == "slide" else preset.hinge
+        hold = resistance.hold_at_closed()
+        force = hold if side == "slide" else hold / CATALOG_LEVER_ARM
+        if force <= capacity:
+            continue
+        terms = [(f, v) for f, v in resistance.hold_terms() if v > 0]
+        field = max(terms, key=lambda t: t[1])[0]
+        unit = "N" if side == "slide" else "N·m"
+        parts = " + ".join(f"{_term_name(resistance, f)} {v:.3g}" for f, v in terms)
+        felt = "" if side == "slide" else (f", {force:.3g} N at a handle {CATALOG_LEVER_ARM:.2f} m from the axis "
+                                           "(the catalog's lever arm)")
+        g = robot.gripper
+        raise entry.error(f"{side}.{field}", f"holds the front shut with {hold:.3g} {unit} at closed ({parts}){felt}; "
+                                             f"no catalog robot can pull more than {capacity:.3g} N ({robot.id}: "
+                                             f"2 pads x friction {g.pad_friction.value:g} x grip {g.grip_force.value:g}"
+                                             " N), so none could open it")
+
+
+def _term_name(resistance: JointResistance, field: str) -> str:
+    """How a term of :meth:`~rik.schemas.joints.JointResistance.hold_terms` is named in a message."""
+    if field.startswith("effects."):
+        return str(resistance.effects[int(field.split(".")[1])].kind)
+    return field.split(".")[0]

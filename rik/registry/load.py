@@ -51,6 +51,8 @@ def build_catalog(entries: Sequence[RawEntry]) -> Catalog:
         checks.check_design(entry, design, used.count(design.id))
     for entry, base in _entries(parsed, "base_units", BaseUnit):
         checks.check_base_unit(entry, base, finishes, presets)
+    for entry, preset in _entries(parsed, "presets", ResistancePreset):
+        checks.check_preset_breakable(entry, preset, robots)
     origins = {(s, m.id): Origin(str(e.file), e.builtin) for s, items in parsed.items() for e, m in items}
     splits, version = assign_splits(split_entries, {m.id: e.builtin for e, m in _entries(parsed, "designs",
                                                                                            HandleDesign)})

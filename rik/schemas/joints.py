@@ -19,12 +19,17 @@ import math
 from enum import StrEnum
 from typing import Annotated, Literal
 
-from pydantic import Field, ValidationInfo, field_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from rik.schemas.common import CatalogId, Frozen, Provenance, Real, Vec3
+from rik.schemas.common import CatalogId, FieldError, Frozen, Provenance, Real, Vec3
 
 NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+
+CATALOG_LEVER_ARM = 0.40
+"""The lever arm at which the catalog states hinge values, m: the handle's distance from the hinge axis (a handle
+near the opening edge of a 40-45 cm door; ``presets.yaml``'s header). A force F at the handle is a torque
+F × 0.40 m about the hinge, and a hinge torque T is felt as T / 0.40 m at the handle."""
 
 
 class JointType(StrEnum):
@@ -190,6 +195,83 @@ class JointResistance(Frozen):
             raise ValueError(f"at most one effect of each kind, got {', '.join(repeated)} more than once")
         return effects
 
+    def hold_terms(self) -> list[tuple[str, float]]:
+        """What it takes to start the front opening from rest at closed (q = 0), term by term: (the field, its
+        share) in N (slide) or N·m (hinge), positive holding the front shut. The Coulomb friction
+        (``frictionloss``), the friction effects at rest when opening (stiction's ``breakaway``, a
+        ``direction_friction`` that acts opening), the pulls towards closed at q = 0 (a magnetic catch's
+        ``force``, a self-closing spring's ``stiffness × zone``), and minus what pushes the front open there (a
+        tilt's ``force``, a spring's ``stiffness × reference``). Terms that are zero at rest or at closed (damping,
+        soft close, quadratic damping, load friction) are left out."""
+        terms = [("frictionloss", self.frictionloss)]
+        for i, e in enumerate(self.effects):
+            match e:
+                case Stiction():
+                    terms.append((f"effects.{i}.breakaway", e.breakaway))
+                case DirectionFriction(direction="opening"):
+                    terms.append((f"effects.{i}.extra", e.extra))
+                case MagneticCatch():
+                    terms.append((f"effects.{i}.force", e.force))
+                case SelfClose():
+                    terms.append((f"effects.{i}.stiffness", e.stiffness * e.zone))
+                case Tilt():
+                    terms.append((f"effects.{i}.force", -e.force))
+        if self.spring is not None and self.spring.stiffness * self.spring.reference != 0:
+            terms.append(("spring.reference", -self.spring.stiffness * self.spring.reference))
+        return terms
+
+    def hold_at_closed(self) -> float:
+        """The force (N, slide) or torque (N·m, hinge) it takes to start the front opening from rest at closed:
+        the sum of :meth:`hold_terms`, 0 when the front would open by itself."""
+        return max(0.0, sum(v for _, v in self.hold_terms()))
+
+
+class PresetSource(Frozen):
+    """Where a preset's values come from: the paper, a fit to measured data, the literature or an assumption.
+
+    A measured source names its data: the file, the mechanism in it, the trials fitted and held out, and the
+    preset's error against them (forces in N; a hinge's at the handle, at ``lever_arm_m``)."""
+
+    kind: Provenance
+    """``paper`` (the Real-IKEA paper), ``literature``, ``measured`` (fitted to data) or ``assumed``."""
+    reference: str = Field(min_length=1)
+    """The publication, study or derivation the values come from."""
+    data: str | None = Field(default=None, min_length=1)
+    """Measured: the data file fitted, by its published name."""
+    mechanism: str | None = Field(default=None, min_length=1)
+    """Measured: the mechanism (door, drawer) of the data file fitted, as the file names it."""
+    trials_fitted: int | None = Field(default=None, ge=1)
+    """Measured: how many trials (openings) were fitted."""
+    trials_heldout: tuple[str, ...] = ()
+    """Measured: the trials held out of the fit (to test it on), as the file names them."""
+    fit_rms_n: NonNeg | None = None
+    """Measured: RMS difference between the preset's force and the measured one over the fitted trials, N (a
+    hinge's at the handle, at ``lever_arm_m``)."""
+    heldout_rms_n: NonNeg | None = None
+    """Measured: the same over the held-out trials, N."""
+    lever_arm_m: Positive | None = None
+    """The lever arm at which forces at the handle became hinge torques (torque = force × lever arm), m."""
+
+    @model_validator(mode="after")
+    def _measured_fields(self) -> PresetSource:
+        measured = ("data", "mechanism", "trials_fitted", "trials_heldout", "fit_rms_n", "heldout_rms_n")
+        if self.kind is not Provenance.measured:
+            given = next((f for f in measured if getattr(self, f) not in (None, ())), None)
+            if given is not None:
+                raise FieldError((given,), f"only a measured source names its {given.replace('_', ' ')} "
+                                           f"(this one is {self.kind.value})")
+            return self
+        if self.data is None:
+            raise FieldError(("data",), "a measured source names the data file it was fitted to")
+        if self.trials_heldout and self.heldout_rms_n is None:
+            raise FieldError(("heldout_rms_n",), "held-out trials need the preset's RMS error over them, N")
+        if self.heldout_rms_n is not None and not self.trials_heldout:
+            raise FieldError(("trials_heldout",), "an RMS error over held-out trials needs the trials it was taken "
+                                                  "over")
+        if self.fit_rms_n is not None and self.trials_fitted is None:
+            raise FieldError(("trials_fitted",), "a fit's RMS error needs the number of trials fitted")
+        return self
+
 
 class ResistancePreset(Frozen):
     """A named level of joint resistance, with values for slides and for hinges."""
@@ -202,6 +284,16 @@ class ResistancePreset(Frozen):
     """Values for drawer slides."""
     hinge: JointResistance
     """Values for door and flap hinges."""
+    source: PresetSource | None = None
+    """Where the values come from (None: not stated, as in older user catalogs)."""
+
+    @property
+    def in_default_set(self) -> bool:
+        """Whether variants are built with this preset when no preset is named (``rik variants build --all``,
+        :func:`rik.registry.ids.select_variants`, datasets): every preset except measured ones, which are built
+        when named (``--preset real-hai-refrigerator``). The one rule; :attr:`rik.registry.catalog.Catalog.
+        default_presets` applies it."""
+        return self.source is None or self.source.kind is not Provenance.measured
 
     def for_joint(self, joint_type: JointType) -> JointResistance:
         """The resistance that applies to a joint of this type."""

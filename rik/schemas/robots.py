@@ -224,6 +224,13 @@ class Gripper(Frozen):
     actuation: GripperActuation | None = None
     """How an arm's gripper is driven (the Hand-E's is built by rik)."""
 
+    @property
+    def pull_capacity(self) -> float:
+        """The largest pull the gripper transmits to a handle by friction alone, N: two pads (both jaws of a
+        parallel gripper; the fixed and the swinging jaw of a swinging one), each pressed with ``grip_force``,
+        times ``pad_friction``: ``2 μ F``, as the simulator's ``GripperSpec.friction_capacity``."""
+        return 2.0 * self.pad_friction.value * self.grip_force.value
+
 
 class WristCamera(Frozen):
     """The camera that rides on the gripper (``wrist`` in images and datasets)."""
