@@ -78,7 +78,10 @@ def test_slide_presets_are_the_papers(catalog) -> None:
 
 def test_hinge_presets_follow_their_written_derivation(catalog) -> None:
     lever = 0.40  # m, stated in presets.yaml
-    for preset in catalog.presets.values():
+    paper = [p for p in catalog.presets.values() if p.source is not None and p.source.kind.value == "paper"]
+    assert [p.id for p in paper] == ["smooth", "normal", "high"] == catalog.default_presets
+    for preset in paper:
+        assert preset.source is not None and preset.source.lever_arm_m == lever
         assert math.isclose(preset.hinge.frictionloss, preset.slide.frictionloss * lever)
         assert math.isclose(preset.hinge.damping, preset.slide.damping * lever**2)
         assert "0.40" in preset.hinge.notes

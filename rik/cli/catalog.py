@@ -183,7 +183,9 @@ def print_summary(numbers: dict[str, Any]) -> None:
     fronts = ", ".join(f"{n} {k}{'s' if n > 1 else ''}" for k, n in numbers["fronts_by_kind"].items())
     joints = ", ".join(f"{n} with {j} joints" for j, n in numbers["base_units_by_joint"].items())
     out.print(f"base units: {numbers['base_units']} ({joints}); fronts: {fronts}")
-    out.print(f"resistance presets: {', '.join(numbers['presets'])}; finishes: {numbers['finishes']}")
+    named = numbers.get("named_presets") or []
+    more = f" (and {len(named)} measured, built when named: rik catalog list --kind presets)" if named else ""
+    out.print(f"resistance presets: {', '.join(numbers['presets'])}{more}; finishes: {numbers['finishes']}")
     out.print(f"pairings that fit: {numbers['pairings']['fit']} of {numbers['pairings']['total']} "
                   "(base units x handles)")
     out.print(f"robots: {', '.join(numbers['robots'])} (rik catalog list --kind robots)")

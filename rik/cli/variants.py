@@ -35,7 +35,8 @@ BaseOpt = Annotated[list[str] | None, typer.Option("--base", "-b", help="Base un
 TypeOpt = Annotated[list[HandleTypeOpt] | None, typer.Option("--handle-type", "-t", help="Handle type (repeatable).")]
 HandleOpt = Annotated[list[str] | None, typer.Option("--handle", help="Handle id (repeatable).")]
 PresetOpt = Annotated[list[str] | None, typer.Option("--preset", "-p", help="Resistance preset id (repeatable; "
-                                                     "default: every preset).")]
+                                                     "default: every preset but the measured ones, which are "
+                                                     "built when named).")]
 OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Directory of built variants.")]
 DirOpt = Annotated[Path, typer.Option("--dir", "-d", help="Directory of built variants.")]
 

@@ -38,11 +38,18 @@ CARD_FIELDS = "rik_card.json"
 
 
 def _presets_table(catalog: Catalog) -> str:
+    """The catalog's default presets (those variants are built with when none is named) as a markdown table, and
+    how many measured presets it holds besides (built when named; their hinges have effects a table of damping and
+    friction does not show)."""
     lines = ["| preset | slide damping (N·s/m) | slide friction (N) | hinge damping (N·m·s/rad) "
              "| hinge friction (N·m) |", "|---|---|---|---|---|"]
-    for p in catalog.presets.values():
+    for p in (catalog.presets[k] for k in catalog.default_presets):
         lines.append(f"| {p.id} | {p.slide.damping:g} | {p.slide.frictionloss:g} | {p.hinge.damping:g} | "
                      f"{p.hinge.frictionloss:g} |")
+    named = len(catalog.presets) - len(catalog.default_presets)
+    if named:
+        lines += ["", f"The catalog also holds {named} presets measured on real doors (`rik catalog list --kind "
+                      "presets`); an episode uses one only where its `rik/preset` names it."]
     return "\n".join(lines)
 
 

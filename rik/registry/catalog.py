@@ -61,6 +61,13 @@ class Catalog:
         return _get(self.robots, robot_id, "robot")
 
     # ---- derived facts --------------------------------------------------------------------------------------
+    @property
+    def default_presets(self) -> list[str]:
+        """Ids of the presets variants are built with when none is named (``rik variants build --all``, datasets,
+        :func:`rik.registry.ids.select_variants`), in catalog order: every preset but the measured ones
+        (:attr:`rik.schemas.joints.ResistancePreset.in_default_set`), which are built when named."""
+        return [p.id for p in self.presets.values() if p.in_default_set]
+
     def handle_type(self, handle: Handle) -> HandleType:
         """The type of a handle, from its design."""
         return self.designs[handle.design].type

@@ -63,12 +63,15 @@ def parse_variant_id(catalog: Catalog, text: str) -> VariantKey:
 def select_variants(catalog: Catalog, *, bases: Iterable[str] = (), handle_types: Iterable[str] = (),
                     handles: Iterable[str] = (), presets: Iterable[str] = (),
                     split: str | None = None) -> list[VariantKey]:
-    """Every base unit x handle x preset pairing, filtered; empty filters mean all. Unknown ids raise.
+    """Every base unit x handle x preset pairing, filtered; empty filters mean all (for presets: the default set).
+    Unknown ids raise.
 
     ``split`` (train, val or test) keeps the handles of that split (:mod:`rik.registry.splits`); base units and
     presets are not split. An unknown split name raises.
 
-    Order: base units and handles in catalog order, presets in the order asked for (default: catalog order).
+    Order: base units and handles in catalog order, presets in the order asked for (default: the catalog's
+    default presets, :attr:`~rik.registry.catalog.Catalog.default_presets`, in catalog order: measured presets are
+    built only when named).
     """
     base_ids = [catalog.base_unit(b).id for b in bases] or list(catalog.base_units)
     handle_ids = [catalog.handle(h).id for h in handles] or list(catalog.handles)
@@ -78,5 +81,5 @@ def select_variants(catalog: Catalog, *, bases: Iterable[str] = (), handle_types
     if split is not None:
         in_split = set(split_handles(catalog, split))
         handle_ids = [h for h in handle_ids if h in in_split]
-    preset_ids = [catalog.preset(p).id for p in presets] or list(catalog.presets)
+    preset_ids = [catalog.preset(p).id for p in presets] or catalog.default_presets
     return [VariantKey(b, h, p) for b in base_ids for h in handle_ids for p in preset_ids]

@@ -35,7 +35,8 @@ LOOKUP_ORDER = ("handles", "designs", "base_units", "presets", "finishes", "robo
 @dataclass(frozen=True)
 class CatalogIndex:
     """Catalog entries as plain dicts (SI units, as in the YAML), in definition order, with derived fields:
-    handles get ``type``, designs ``handle_count``, handles and designs ``split``, base units ``joint_types``;
+    handles get ``type``, designs ``handle_count``, handles and designs ``split``, base units ``joint_types``,
+    presets ``in_default_set`` (:attr:`rik.schemas.joints.ResistancePreset.in_default_set`);
     every entry gets ``origin`` (``builtin`` or ``overlay``)."""
 
     fingerprint: str
@@ -130,6 +131,8 @@ def build_index(catalog: Catalog, key: str = "") -> CatalogIndex:
     for row in sections["designs"]:
         row["handle_count"] = len(catalog.handles_of(row["id"]))
         row["split"] = catalog.splits[row["id"]]
+    for row in sections["presets"]:
+        row["in_default_set"] = catalog.presets[row["id"]].in_default_set
     for row in sections["base_units"]:
         row["joint_types"] = [j.value for j in catalog.joint_types(catalog.base_units[row["id"]])]
     fit = sum(fits_base_unit(h, b) for b in catalog.base_units.values() for h in catalog.handles.values())

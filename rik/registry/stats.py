@@ -13,7 +13,8 @@ HANDLE_TYPES = ("knob", "two_point", "finger_pull")
 
 def catalog_stats(index: CatalogIndex) -> dict[str, Any]:
     """Counts per handle type, base units per joint type and front kind, presets, finishes, fitting pairings,
-    and the robots' ids."""
+    and the robots' ids. ``presets``: the default set, which variants are built with when no preset is named;
+    ``named_presets``: the others (measured), built only when named."""
     handles, designs = index.entries("handles"), index.entries("designs")
     bases = index.entries("base_units")
     fronts = [f for b in bases for f in b["fronts"]]
@@ -26,7 +27,8 @@ def catalog_stats(index: CatalogIndex) -> dict[str, Any]:
         "fronts": len(fronts),
         "fronts_by_kind": dict(Counter(f["kind"] for f in fronts)),
         "base_units_by_joint": {j: sum(j in b["joint_types"] for b in bases) for j in ("slide", "hinge")},
-        "presets": [p["id"] for p in index.entries("presets")],
+        "presets": [p["id"] for p in index.entries("presets") if p["in_default_set"]],
+        "named_presets": [p["id"] for p in index.entries("presets") if not p["in_default_set"]],
         "finishes": len(index.entries("finishes")),
         "pairings": dict(index.pairings),
         "robots": [r["id"] for r in index.entries("robots")],

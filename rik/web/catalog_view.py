@@ -52,16 +52,18 @@ class CatalogView:
         return path if path.is_file() else None
 
     def pairings_of_handle(self, handle_id: str) -> list[Row]:
-        """The base units a handle fits, each with the variant id per preset (default preset first)."""
+        """The base units a handle fits, each with the variant id per preset of the default set (the base unit's
+        default preset first; measured presets are built when named)."""
         return [self._pairing(b, handle_id, self.bases[b]) for b in self.fits[handle_id]]
 
     def pairings_of_base(self, base_id: str) -> list[Row]:
-        """The handles that fit a base unit, each with the variant id per preset (default preset first)."""
+        """The handles that fit a base unit, each with the variant id per preset of the default set (the base unit's
+        default preset first)."""
         return [self._pairing(base_id, h, self.handles[h]) for h, fit in self.fits.items() if base_id in fit]
 
     def _pairing(self, base_id: str, handle_id: str, other: Row) -> Row:
         default = self.bases[base_id]["default_preset"]
-        presets = [default, *(p["id"] for p in self.presets if p["id"] != default)]
+        presets = [default, *(p["id"] for p in self.presets if p["id"] != default and p["in_default_set"])]
         return {"id": other["id"], "label": other.get("name") or other.get("design_name") or other["id"],
                 "type": other.get("type"),
                 "variants": {p: variant_id(base_id, handle_id, p) for p in presets}}
