@@ -84,7 +84,9 @@ def render_catalog_md(index: CatalogIndex, root: Path) -> str:
         f"{CATALOG_SCHEMA}). Do not edit by hand: edit the YAML and run `rik catalog doc`. -->",
         "",
         f"**{stats['handles']} handles** in **{stats['designs']} designs**, **{stats['base_units']} base units** "
-        f"with {stats['fronts']} moving fronts, **{len(stats['presets'])} resistance presets** and "
+        f"with {stats['fronts']} moving fronts, **{len(stats['presets'])} resistance presets** "
+        + (f"(and {len(stats['named_presets'])} measured on real doors, built when named) "
+           if stats["named_presets"] else "") + "and "
         f"{stats['finishes']} finishes. {stats['pairings']['fit']} of the {stats['pairings']['total']} "
         "base unit x handle pairings fit every front of their base unit.",
         "",
@@ -132,7 +134,12 @@ def render_catalog_md(index: CatalogIndex, root: Path) -> str:
                        " x ".join(mm(v) for v in f["mount"]["size"])]
                       for b in index.entries("base_units") for f in b["fronts"]])
     out += ["", "## Resistance presets", "",
-            "Slide values are the paper's three modes; hinge values are derived from them (notes below).", ""]
+            "The paper's three modes give the slide values of smooth, normal and high; their hinge values are derived "
+            "from them (notes below). The `real-*` presets are real doors: their hinge fitted to measured opening "
+            "forces (`rik/registry/data/presets_measured.yaml`, written by `scripts/real_door_presets.py`; "
+            "[docs/sysid.md](docs/sysid.md#real-doors-as-presets)). Variants are built with the paper's presets by "
+            "default and with a measured one when it is named (`rik variants build --preset real-hai-refrigerator`).",
+            ""]
     out += _md_table([h for h, _ in COLUMNS["presets"]],
                      [[cell(p) for _, cell in COLUMNS["presets"]] for p in index.entries("presets")])
     out += [""] + [f"- **{p['id']}**: {p['description']} Slide: {p['slide']['notes']}. Hinge: {p['hinge']['notes']}."

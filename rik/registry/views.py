@@ -40,6 +40,26 @@ def _resistance(row: Row, joint: str) -> str:
     return f"{r['damping']:g} / {r['frictionloss']:g}"
 
 
+def preset_source(row: Row) -> str:
+    """Where a preset comes from, in a few words: ``paper``, or ``measured: door X of FILE, RMS a N fitted / b N
+    held out`` (forces at the handle), or ``–`` when the entry does not say."""
+    src = row.get("source")
+    if not src:
+        return "–"
+    if src["kind"] != "measured" or not src.get("data"):
+        return str(src["kind"])
+    where = f"{src['data']} {src['mechanism']}" if src.get("mechanism") else str(src["data"])
+    errors = [f"{src[k]:.3g} N {what}" for k, what in (("fit_rms_n", "fitted"), ("heldout_rms_n", "held out"))
+              if src.get(k) is not None]
+    return f"measured: {where}" + (f"; RMS {', '.join(errors)}" if errors else "")
+
+
+def _effects(row: Row, joint: str) -> str:
+    r = row[joint]
+    kinds = [e["kind"] for e in r.get("effects") or ()] + (["spring"] if r.get("spring") else [])
+    return ", ".join(kinds) or "–"
+
+
 def _generator(row: Row) -> str:
     gen = dict(row["generator"])
     name = gen.pop("name")
@@ -93,7 +113,9 @@ COLUMNS: dict[str, list[tuple[str, Callable[[Row], str]]]] = {
         ("name", lambda r: r["name"]),
         ("slide damping N·s/m / friction N", lambda r: _resistance(r, "slide")),
         ("hinge damping N·m·s/rad / friction N·m", lambda r: _resistance(r, "hinge")),
+        ("hinge effects", lambda r: _effects(r, "hinge")),
         ("provenance (slide, hinge)", lambda r: f"{r['slide']['provenance']}, {r['hinge']['provenance']}"),
+        ("source", preset_source),
     ],
     "finishes": [
         ("id", lambda r: r["id"]),
@@ -120,7 +142,9 @@ COLUMNS: dict[str, list[tuple[str, Callable[[Row], str]]]] = {
 }
 
 #: What the table of a kind shows its figures in (``rik catalog list``'s last line); lengths in mm by default.
-UNITS = {"robots": "stroke in mm, forces in N, torques in N·m"}
+UNITS = {"robots": "stroke in mm, forces in N, torques in N·m",
+         "presets": "variants are built with measured presets only when named (--preset ID); RMS: the error of the "
+                    "force at the handle, N"}
 
 
 def table(section: str, rows: list[Row]) -> tuple[list[str], list[list[str]]]:

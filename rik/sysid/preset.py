@@ -65,8 +65,9 @@ def write_preset(resistance: JointResistance, joint_type: JointType, name: str, 
         raise RikError(f"{display_path(catalog_dir)}: not a directory; give the user catalog's directory")
     builtin = load_catalog([])
     if name in builtin.presets:
-        raise RikError(f"{shown}: preset '{name}' is a built-in preset ({display_path(BUILTIN_DIR / 'presets.yaml')});"
-                       " choose another name")
+        where = builtin.origins.get(("presets", name))
+        raise RikError(f"{shown}: preset '{name}' is a built-in preset "
+                       f"({display_path(Path(where.file) if where else BUILTIN_DIR)}); choose another name")
     if catalog_dir.is_dir() and catalog_files(catalog_dir):
         existing = load_catalog([catalog_dir])
         origin = existing.origins.get(("presets", name))
