@@ -202,3 +202,26 @@ def test_bad_pulls_are_one_line_errors(variants: dict[str, Path], tmp_path: Path
     with pytest.raises(RikError, match=r"the pulls mix slides and hinges"):
         write_profiles(tmp_path / "x.csv", [pull_profile(variants["slide"], stroke=0.01),
                                             pull_profile(variants["hinge"], stroke=0.1)])
+
+
+def test_rik_variants_probe_pulls_a_front_and_writes_what_sysid_reads(rik, variants: dict[str, Path],
+                                                                      tmp_path: Path) -> None:
+    root = variants["slide"].parent.parent
+    where = ("--dir", str(root / "variants"), "--catalog", str(root / "catalog"))
+    res = rik("variants", "probe", VARIANTS["slide"], *where, "--stroke", "60", "--csv", str(tmp_path / "d.csv"))
+    assert res.code == 0, res.err
+    assert "opened at 5 mm/s" in res.out and "force at the handle: first" in res.out
+    lines = (tmp_path / "d.csv").read_text().splitlines()
+    assert lines[0] == "trial,position [m],force [N]" and len(lines) == 1 + 60  # one sample a mm
+    q, f = (float(x) for x in lines[50].split(",")[1:])  # 50 mm: past the 30 mm pull-in zone
+    assert q == pytest.approx(0.050, abs=1e-4) and f == pytest.approx(15.0 + 5.0 * 0.005, abs=0.05)
+
+    door = rik("variants", "probe", VARIANTS["hinge"], *where, "--stroke", "10", "--speed", "2")
+    assert door.code == 0, door.err
+    assert "opened at 2 deg/s" in door.out and "lever arm" in door.out and "torque (N·m)" in door.out
+
+    for args, message in ((("--front", "lid"), "has no front 'lid' (fronts: drawer)"),
+                          (("--stroke", "500"), "a stroke of 0.5 m does not fit front 'drawer'"),
+                          (("--csv", str(tmp_path)), "a folder is there")):
+        bad = rik("variants", "probe", VARIANTS["slide"], *where, *args)
+        assert bad.code == 2 and message in bad.err and len(bad.err.strip().splitlines()) == 1, bad.err

@@ -254,3 +254,51 @@ def show(variant: Annotated[str, typer.Argument(metavar="ID", help="A variant id
     path = render_variant(cat, parse_variant_id(cat, variant), png, out=directory, open_fraction=open_fraction,
                           width=width, height=height)
     console().print(f"wrote {path}")
+
+
+
+@app.command()
+def probe(variant: Annotated[str, typer.Argument(metavar="ID", help="A variant id (built into --dir if needed).")],
+          front: Annotated[str | None, typer.Option("--front", help="Front id (default: the variant's first).")] = None,
+          speed: Annotated[float | None, typer.Option("--speed", help="Opening speed: mm/s for a drawer, deg/s for a "
+                                                      "door or flap (default 5).")] = None,
+          stroke: Annotated[float | None, typer.Option("--stroke", help="How far to open: mm or deg (default 100 mm "
+                                                       "or 36 deg).")] = None,
+          csv: Annotated[Path | None, typer.Option("--csv", help="Write the profile here, as a file rik sysid fit "
+                                                   "--quasi-static reads (a hinge's as the force at the handle).")]
+          = None,
+          directory: DirOpt = Path("variants"), catalog: CatalogOption = None) -> None:
+    """Pull a front open through its handle, slowly, as a force gauge measures a real drawer or door, and print the
+    force it took against the opening (rik.sim.pull)."""
+    import math
+
+    import numpy as np
+    from rich.table import Table
+
+    from rik.episodes.record import variant_dir
+    from rik.registry.load import load_catalog
+    from rik.sim.pull import front_joint, pull_profile, write_profiles
+
+    if csv is not None and csv.is_dir():
+        raise RikError(f"--csv {csv}: a folder is there; give the path of the CSV file to write")
+    folder = variant_dir(load_catalog(overlays(catalog)), variant, directory)
+    slide = front_joint(folder, front) == "slide"
+    to_si = 1e-3 if slide else math.pi / 180  # mm -> m, deg -> rad
+    unit = "mm" if slide else "deg"
+    pull = pull_profile(folder, front, speed=None if speed is None else speed * to_si,
+                        stroke=None if stroke is None else stroke * to_si)
+    table = Table(title=f"{pull.variant} / {pull.front}: opened at {pull.speed / to_si:.3g} {unit}/s")
+    table.add_column(f"opening ({unit})", justify="right")
+    table.add_column("force at the handle (N)", justify="right")
+    if not slide:
+        table.add_column("torque (N·m)", justify="right")
+    picks = np.unique(np.linspace(0, len(pull.q) - 1, min(len(pull.q), 12)).round().astype(int))
+    for i in picks:
+        row = [f"{pull.q[i] / to_si:.1f}", f"{pull.force[i]:.2f}"]
+        table.add_row(*(row if slide else [*row, f"{pull.joint_force[i]:.3f}"]))
+    console().print(table)
+    console().print(f"force at the handle: first {pull.force[0]:.2f} N, median {float(np.median(pull.force)):.2f} N, "
+                    f"largest {float(np.max(pull.force)):.2f} N" + ("" if slide else f" (lever arm "
+                    f"{float(np.median(pull.lever)):.3f} m)"))
+    if csv is not None:
+        console().print(f"wrote {write_profiles(csv, [pull], at_handle=True)}")

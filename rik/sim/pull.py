@@ -54,8 +54,8 @@ from rik.sim.build import add_environment, front_of, variant_info
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["DEFAULT_SPACING", "DEFAULT_SPEED", "DEFAULT_STROKE", "HOOK_STIFFNESS", "PullProfile", "pull_profile",
-           "write_profiles"]
+__all__ = ["DEFAULT_SPACING", "DEFAULT_SPEED", "DEFAULT_STROKE", "HOOK_STIFFNESS", "PullProfile", "front_joint",
+           "pull_profile", "write_profiles"]
 
 DEFAULT_SPEED = {"slide": 5e-3, "hinge": math.radians(5.0)}
 """Joint speed of a pull, m/s or rad/s: 5 mm/s, 5 °/s (slow enough that damping adds little: a door of rik's
@@ -130,6 +130,20 @@ def _positive(name: str, value: float, unit: str) -> float:
     if not (math.isfinite(value) and value > 0):
         raise RikError(f"pull: {name} must be a positive number of {unit}, got {value}")
     return float(value)
+
+
+def front_joint(source: str | Path | mujoco.MjSpec, front: str | None = None) -> str:
+    """``slide`` or ``hinge``: the joint of ``front`` (default: the first) of a built variant (``source`` as for
+    :func:`pull_profile`)."""
+    import mujoco
+
+    spec, file = _load(source)
+    record = front_of(variant_info(spec, file), front, file)
+    model = spec.compile()
+    joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, record["joint"])
+    if joint < 0:
+        raise RikError(f"{file}: front '{record['id']}': its joint is not in the model")
+    return "slide" if int(model.jnt_type[joint]) == mujoco.mjtJoint.mjJNT_SLIDE else "hinge"
 
 
 def pull_profile(source: str | Path | mujoco.MjSpec, front: str | None = None, *, speed: float | None = None,
