@@ -184,12 +184,12 @@ def test_hold_keys_to_open_the_drawer_save_and_replay(display: str, variants: Pa
         assert float(st["ahead"]) <= 0.0, st
         t.press("space")
         assert t.settled()["grip"] == "closed"
-        for _ in range(15):
-            if int(st["open"]) >= 90:
+        for _ in range(15):  # 91: the status rounds to whole percent (89.8 % shows as 90 %), and a drawer whose
+            if int(st["open"]) >= 91:  # friction holds stays where the pull left it (it no longer creeps on)
                 break
             t.hold("s", 1.5)
             st = t.settled()
-        assert int(st["open"]) >= 90, st
+        assert int(st["open"]) >= 91, st
         t.press("Return")
         t.line("saved ")
         text = t.quit()
