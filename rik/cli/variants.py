@@ -297,8 +297,8 @@ def probe(variant: Annotated[str, typer.Argument(metavar="ID", help="A variant i
         row = [f"{pull.q[i] / to_si:.1f}", f"{pull.force[i]:.2f}"]
         table.add_row(*(row if slide else [*row, f"{pull.joint_force[i]:.3f}"]))
     console().print(table)
+    lever = "" if pull.lever is None else f" (lever arm {float(np.median(pull.lever)):.3f} m)"
     console().print(f"force at the handle: first {pull.force[0]:.2f} N, median {float(np.median(pull.force)):.2f} N, "
-                    f"largest {float(np.max(pull.force)):.2f} N" + ("" if slide else f" (lever arm "
-                    f"{float(np.median(pull.lever)):.3f} m)"))
+                    f"largest {float(np.max(pull.force)):.2f} N{lever}")
     if csv is not None:
         console().print(f"wrote {write_profiles(csv, [pull], at_handle=True)}")
