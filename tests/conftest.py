@@ -17,6 +17,11 @@ os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1's banner
 # The CLI silences lerobot's tqdm bars (rik.cli.common.quiet_writers) before tqdm is first imported, which tqdm
 # requires; in a test process another test may import tqdm first, so the in-process CLI needs it set here too.
 os.environ.setdefault("TQDM_DISABLE", "1")
+# One BLAS thread per test process: each pytest-xdist worker has a core of its own. OpenBLAS otherwise starts a
+# thread per core in every worker and dispatches even a 430 x 5 least-squares to them; its waits spin, so with two
+# workers in BLAS at once (the sysid tests) on 2 cores each call waited on a thread that could not run, and the
+# suite crawled for many minutes. Set before numpy is first imported (OpenBLAS reads it then).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 
 SESSION_LIMIT = 3600
