@@ -58,6 +58,17 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     items.sort(key=lambda item: item.path not in slow_files)  # stable: each file's own order is kept
 
 
+@pytest.fixture(autouse=True)
+def _normal_scheduling() -> None:
+    """Fail a test that leaves its process at real-time scheduling, and put it back: SVT-AV1 raises the thread that
+    encodes video to SCHED_FIFO 99 when run as root (rik.scheduling), and a browser a later test starts from that
+    thread inherits it: its spinning helpers then starved the machine."""
+    yield
+    if hasattr(os, "sched_getscheduler") and os.sched_getscheduler(0) != os.SCHED_OTHER:
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+        pytest.fail("the test left its process at real-time scheduling (an unguarded video encode? rik.scheduling)")
+
+
 @pytest.fixture(autouse=True, scope="session")
 def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     """Keep the catalog index cache out of the user's home and free of other runs' state."""

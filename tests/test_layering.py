@@ -24,6 +24,7 @@ FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
     (("rik.errors", "`RikError` and its kinds: the one-line messages every command ends with."),),
     (("rik.paths", "Files and folders: atomic writes, bounded JSON reads, what may be replaced or removed."),
      ("rik.locks", "Cross-process file locks (content-addressed caches, shared folders)."),
+     ("rik.scheduling", "Threads kept at normal scheduling where a library raises them to real time (SVT-AV1)."),
      ("rik.schemas", "pydantic models of everything rik reads: catalog entries, episodes, dataset specs, "
                      "measured trajectories. SI units.")),
     (("rik.joints", "Joint mechanisms and resistance laws: MJCF for MuJoCo's own, runtime effects for the rest."),),

@@ -27,6 +27,7 @@ from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 from rik.errors import RikError
 from rik.evaluation.load import policy_needs
 from rik.evaluation.policy_files import check_policy_folder
+from rik.scheduling import normal_scheduling
 
 STRATEGY_PREFIX = "strategy:"
 DEFAULT_SEED = 1000
@@ -176,7 +177,8 @@ def run_episode(spec: EvalSpec, seed: int, video_dir: Path | None = None) -> dic
 
         video_dir.mkdir(parents=True, exist_ok=True)
         path = video_dir / f"episode_{seed}.mp4"
-        write_video(str(path), frames, CONTROL_FPS)
+        with normal_scheduling():  # a video encoder may leave the thread at real-time priority (rik.scheduling)
+            write_video(str(path), frames, CONTROL_FPS)
         row["video"] = str(path)
     return row
 

@@ -39,6 +39,7 @@ from rik.exporters.lerobot_frames import (
 )
 from rik.exporters.spec import ENCODER_OPTIONS, ExportSpec, check_codec_size, check_spec
 from rik.paths import check_folder, json_object, write_atomic
+from rik.scheduling import normal_scheduling
 from rik.sim.feature_keys import TASK
 
 if TYPE_CHECKING:
@@ -185,7 +186,8 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
             # lerobot encodes each camera in a process of its own: cheap where processes fork (measured faster for
             # h264), but in a spawned worker (rik dataset build -j N) each would be a fresh interpreter importing
             # lerobot again, per episode; there the worker encodes itself (the workers already run side by side).
-            ds.save_episode(parallel_encoding=multiprocessing.get_start_method() == "fork")
+            with normal_scheduling():  # SVT-AV1 leaves an encoding thread at real-time priority when run as root
+                ds.save_episode(parallel_encoding=multiprocessing.get_start_method() == "fork")
             frames_total += count
     finally:
         ds.finalize()
