@@ -71,7 +71,7 @@ class SimulatedDoor:
     rms_fitted_n: float
     """The same with the door's fitted preset, N."""
     rms_law_n: float
-    """The fitted preset's own law (no simulation; the catalog's ``heldout_rms_n``) against the same samples, N."""
+    """The fitted preset's own law (no simulation) against the same samples, N: its source's ``heldout_rms_n``."""
 
 
 def simulated_force(catalog: Catalog, preset: str, variants: Path, stroke: float, *,
@@ -97,27 +97,25 @@ def _rms(angles: Sequence[np.ndarray], measured: Sequence[np.ndarray], q: np.nda
 def simulate_door(catalog: Catalog, door: RealDoor, variants: Path) -> SimulatedDoor:
     """Pull ``door``'s variants (its fitted preset, which must be in ``catalog``, and the nearest paper preset) and
     compare both with its held-out openings."""
-    from rik.sysid.real_presets import handle_force, nearest_paper_preset
+    from rik.sysid.real_presets import door_paper_preset
 
     fitted = door.preset
     if fitted.id not in catalog.presets:
         raise RikError(f"preset '{fitted.id}' of door '{door.group.name}' is not in the catalog; regenerate "
                        "rik/registry/data/presets_measured.yaml with scripts/real_door_presets.py")
     fitted_q = np.concatenate([p.q for p in door.split.fitted])
-    fitted_f = np.concatenate([p.f for p in door.split.fitted])
-    paper = nearest_paper_preset(float(np.mean(fitted_f)), catalog.presets)
+    paper = door_paper_preset(door.split, catalog.presets)
     angles = tuple(np.asarray(p.q, np.float64) for p in door.split.heldout)
     measured = tuple(np.asarray(p.f, np.float64) for p in door.split.heldout)
     stroke = float(max(np.max(fitted_q), *(np.max(a) for a in angles))) + STROKE_MARGIN
     sim_q, sim_force = {}, {}
     for preset in (paper.id, fitted.id):
         sim_q[preset], sim_force[preset] = simulated_force(catalog, preset, variants, stroke)
-    law = float(np.sqrt(np.mean(np.concatenate(
-        [handle_force(fitted.hinge, a) - f for a, f in zip(angles, measured, strict=True)]) ** 2)))
+    assert fitted.source is not None and fitted.source.heldout_rms_n is not None  # door_preset states both
     return SimulatedDoor(door.group.name, door.door_class, fitted.id, paper.id,
                          tuple(p.name for p in door.split.heldout), angles, measured, sim_q, sim_force,
                          _rms(angles, measured, sim_q[paper.id], sim_force[paper.id]),
-                         _rms(angles, measured, sim_q[fitted.id], sim_force[fitted.id]), law)
+                         _rms(angles, measured, sim_q[fitted.id], sim_force[fitted.id]), fitted.source.heldout_rms_n)
 
 
 def simulate_doors(catalog: Catalog, data: Path, variants: Path,

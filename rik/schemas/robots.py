@@ -189,6 +189,12 @@ class GripperActuation(Frozen):
         return self
 
 
+def friction_capacity(pad_friction: float, grip_force: float) -> float:
+    """The largest pull a pinch transmits to a handle by friction alone, N: two pads, each pressed with
+    ``grip_force`` (N), times ``pad_friction``: ``2 μ F``. The catalog's gripper and the simulator's both use it."""
+    return 2.0 * pad_friction * grip_force
+
+
 class Gripper(Frozen):
     """A robot's gripper: its figures with their sources, and its geometry as the scripted strategies plan with
     it."""
@@ -228,8 +234,8 @@ class Gripper(Frozen):
     def pull_capacity(self) -> float:
         """The largest pull the gripper transmits to a handle by friction alone, N: two pads (both jaws of a
         parallel gripper; the fixed and the swinging jaw of a swinging one), each pressed with ``grip_force``,
-        times ``pad_friction``: ``2 μ F``, as the simulator's ``GripperSpec.friction_capacity``."""
-        return 2.0 * self.pad_friction.value * self.grip_force.value
+        times ``pad_friction``: :func:`friction_capacity`."""
+        return friction_capacity(self.pad_friction.value, self.grip_force.value)
 
 
 class WristCamera(Frozen):

@@ -42,6 +42,21 @@ FRONT_CAMERA_DISTANCE = 0.9
 """Distance from the operated handle to the front camera, m."""
 
 
+def load_variant_spec(path: str | Path) -> tuple[mujoco.MjSpec, Path]:
+    """A built variant's ``model.xml`` (``path``: the variant folder or the file) loaded as an MjSpec, and the file;
+    a missing file or one MuJoCo cannot parse is a one-line :class:`RikError`."""
+    import mujoco
+
+    path = Path(path)
+    file = path / "model.xml" if path.is_dir() else path
+    if not file.is_file():
+        raise RikError(f"{file}: no such variant file; build the variant with rik variants build")
+    try:
+        return mujoco.MjSpec.from_file(str(file)), file
+    except Exception as exc:  # MuJoCo's parse errors are ValueErrors with the file's problem
+        raise RikError(f"{file}: MuJoCo cannot load it: {str(exc).splitlines()[0]}") from None
+
+
 def variant_info(spec: mujoco.MjSpec, file: Path) -> dict[str, Any]:
     """The variant's own description (its ``rik.variant`` text element: id, preset, fronts); ``file`` names the
     model in the error when there is none."""
@@ -108,13 +123,7 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     import mujoco
 
     arm = robot is not None and robot.as_arm is not None
-    file = Path(variant_dir) / "model.xml"
-    if not file.is_file():
-        raise RikError(f"{file}: no such variant file; build the variant with rik variants build")
-    try:
-        spec = mujoco.MjSpec.from_file(str(file))
-    except Exception as exc:  # MuJoCo's parse errors are ValueErrors with the file's problem
-        raise RikError(f"{file}: MuJoCo cannot load it: {str(exc).splitlines()[0]}") from None
+    spec, file = load_variant_spec(Path(variant_dir) / "model.xml")
     info = variant_info(spec, file)
     record = front_of(info, front, file)
     add_environment(spec)

@@ -49,7 +49,7 @@ import numpy as np
 
 from rik.errors import RikError
 from rik.joints.runtime import front_effects
-from rik.sim.build import add_environment, front_of, variant_info
+from rik.sim.build import add_environment, front_of, load_variant_spec, variant_info
 
 if TYPE_CHECKING:
     import mujoco
@@ -116,14 +116,7 @@ def _load(source: str | Path | mujoco.MjSpec) -> tuple[mujoco.MjSpec, Path]:
 
     if isinstance(source, mujoco.MjSpec):
         return source.copy(), Path(source.modelname or "spec")
-    path = Path(source)
-    file = path / "model.xml" if path.is_dir() else path
-    if not file.is_file():
-        raise RikError(f"{file}: no such variant file; build the variant with rik variants build")
-    try:
-        return mujoco.MjSpec.from_file(str(file)), file
-    except Exception as exc:  # MuJoCo's parse errors are ValueErrors with the file's problem
-        raise RikError(f"{file}: MuJoCo cannot load it: {str(exc).splitlines()[0]}") from None
+    return load_variant_spec(source)
 
 
 def _positive(name: str, value: float, unit: str) -> float:

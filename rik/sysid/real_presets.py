@@ -169,6 +169,13 @@ def nearest_paper_preset(mean_force: float, presets: Mapping[str, ResistancePres
     return min(paper, key=lambda p: abs(math.log(max(p.hinge.frictionloss, 1e-9) / torque)))
 
 
+def door_paper_preset(split: OpeningSplit, presets: Mapping[str, ResistancePreset],
+                      lever_arm: float = CATALOG_LEVER_ARM) -> ResistancePreset:
+    """The paper preset a door's preset takes its damping and armature from (:func:`door_preset`), and the one
+    to compare it with: the nearest (:func:`nearest_paper_preset`) to the mean force of its fitted openings."""
+    return nearest_paper_preset(float(np.mean(np.concatenate([p.f for p in split.fitted]))), presets, lever_arm)
+
+
 def _round(x: float) -> float:
     return float(f"{x:.{DIGITS}g}")
 
@@ -217,7 +224,7 @@ def door_preset(group: ProfileGroup, door_class: str, presets: Mapping[str, Resi
     friction, effects, spring, level_note = _convert(fit, lever_arm)
     q_fit = np.concatenate([p.q for p in split.fitted])
     f_fit = np.concatenate([p.f for p in split.fitted])
-    nearest = nearest_paper_preset(float(np.mean(f_fit)), presets, lever_arm)
+    nearest = door_paper_preset(split, presets, lever_arm)
     hinge = JointResistance(damping=nearest.hinge.damping, frictionloss=friction, armature=nearest.hinge.armature,
                             spring=spring, effects=effects, provenance=Provenance.measured, notes="")
     q_out = np.concatenate([p.q for p in split.heldout])

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.registry.robots import builtin_robot
+from rik.schemas.robots import friction_capacity
 
 if TYPE_CHECKING:
     import mujoco
@@ -99,7 +100,7 @@ class GripperSpec:
 
     def friction_capacity(self) -> float:
         """The largest pull a pinch can transmit by friction alone: two pads, each pressed with the grip force, N."""
-        return 2.0 * self.pad_friction * self.grip_force
+        return friction_capacity(self.pad_friction, self.grip_force)
 
 
 def gripper_spec(robot: Robot) -> GripperSpec:
