@@ -121,3 +121,21 @@ def test_record_split_skips_variants_rejected_in_a_hull_folder(rik, tmp_path: Pa
            "handle_seated failed" in " ".join(res.out.split())
     assert "__s0002: " in res.out and "__s0000: " not in res.out
     assert sorted(p.name.rsplit("__", 1)[1] for p in (tmp_path / "eps").iterdir()) == ["s0002"]
+
+
+def _plans(directory: Path, strategy: str) -> list[tuple[str, tuple[float, ...], tuple[float, ...]]]:
+    from rik.episodes.operators import STRATEGIES
+    from rik.sim.build import build_scene
+
+    scene = build_scene(directory)
+    return [(p.mode, tuple(p.tcp.round(9)), tuple(p.angles.round(9))) for p in STRATEGIES[strategy].make().planner(scene)]
+
+
+def test_the_planned_strategy_grasps_the_same_under_hull_and_coacd_collision(folders: dict[str, Path]) -> None:
+    """The fidelity ablation's demonstrator plans on the catalog's visual mesh: the same grasps, in the same order,
+    whichever collision model the simulator has; contact_rich, which ray casts the collision model, does not."""
+    planned = {mode: _plans(folders[mode] / BOW, "planned") for mode in ("coacd", "hull")}
+    assert planned["coacd"] and planned["coacd"] == planned["hull"]
+    assert planned["coacd"][0][0].startswith("hook")  # the loop of the bow is found on the visual mesh
+    rich = {mode: _plans(folders[mode] / BOW, "contact_rich") for mode in ("coacd", "hull")}
+    assert rich["coacd"] != rich["hull"]

@@ -61,6 +61,11 @@ def record(variant: Annotated[str | None, typer.Argument(
                                                      "(default drawer).", show_default=False)] = None,
            workers: Annotated[int, typer.Option("--workers", "-j", callback=_check_workers,
                                                 help="With --split: episodes in this many processes.")] = 1,
+           action_noise: Annotated[float, typer.Option("--action-noise", min=0.0, max=0.05,
+                                                       help="DART-style demonstrations: the robot runs the "
+                                                       "strategy's target plus correlated noise of this standard "
+                                                       "deviation (m; angles 5 rad per m) while the episode "
+                                                       "records the strategy's own action.")] = 0.0,
            robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """Record episodes of a scripted strategy on a variant, or on variants drawn from a catalog split (--split),
     into --out/<id>/ (meta.json, states.parquet)."""
@@ -80,6 +85,7 @@ def record(variant: Annotated[str | None, typer.Argument(
         raise RikError(f"--front {front}: with --split each episode's front is drawn from its seed; drop --front")
     cat = load_catalog(overlays(catalog))
     arm: Any = robot_entry(cat, robot)
+    params = {"action_noise": action_noise} if action_noise > 0 else None
     con = console()
     skipped: list[tuple[int, str, str]] = []
     with progress_bar() as progress:
@@ -93,11 +99,11 @@ def record(variant: Annotated[str | None, typer.Argument(
 
             metas = record_split(cat, Draw.parse(split, types, presets, kinds), strategy, episodes=episodes, seed=seed,
                                  out=out, variants=variants, workers=workers, overlays=overlays(catalog),
-                                 progress=report, skipped=skipped, robot=arm)
+                                 progress=report, skipped=skipped, robot=arm, params=params)
         else:
             assert variant is not None
             metas = run(cat, variant, strategy, episodes=episodes, seed=seed, out=out, variants=variants,
-                        front=front, robot=arm, progress=report)
+                        front=front, robot=arm, progress=report, params=params)
     for m in metas:
         con.print(f"{out / m.id}: {m.outcome} (opened {m.final_opening:.0%}, {m.steps} steps at {m.fps} Hz)")
     for s, _, reason in skipped:

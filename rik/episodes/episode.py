@@ -64,8 +64,19 @@ COLUMNS = (*COLUMNS_2, "tcp_quat", "robot_joints", "robot_targets")
 """``tcp_quat``: the gripper frame's world orientation (w, x, y, z); ``robot_joints``: the robot's joint positions
 and its gripper's (meta.json's ``robot_joints`` names them); ``robot_targets``: what the servos were commanded in
 the row's step (the IK's joint targets for an arm, then the gripper's goal)."""
-VECTORS = {"state": None, "action": 7, "tcp": 3, "tcp_quat": 4, "robot_joints": None, "robot_targets": None}
+EXECUTED = "executed_action"
+"""The column of an episode recorded with action noise (meta ``action_noise``): the action sent to the robot, where
+``action`` holds the operator's own (the label a policy learns, DART-style); episodes without noise lack it."""
+VECTORS = {"state": None, "action": 7, "tcp": 3, "tcp_quat": 4, "robot_joints": None, "robot_targets": None,
+           EXECUTED: 7}
 """Vector columns and their widths (None: the meta's ``state_size``, or the robot's joint count)."""
+
+
+def columns_of(meta: EpisodeMeta) -> tuple[str, ...]:
+    """The columns of an episode's ``states.parquet``, in order, by its meta's format and noise."""
+    if meta.format < 3:
+        return COLUMNS_2
+    return (*COLUMNS, EXECUTED) if meta.action_noise is not None else COLUMNS
 
 
 class EpisodeError(RikError):
@@ -86,10 +97,13 @@ class EpisodeRecorder:
     advances the physics by one control step."""
 
     scene: SimScene
-    rows: dict[str, list[Any]] = field(default_factory=lambda: {c: [] for c in COLUMNS})
+    rows: dict[str, list[Any]] = field(default_factory=lambda: {c: [] for c in (*COLUMNS, EXECUTED)})
     max_opening: float = 0.0
+    perturbed: bool = False
+    """Whether any step executed another action than the one recorded (the table then has :data:`EXECUTED`)."""
 
-    def _store(self, action: np.ndarray, targets: np.ndarray | None = None) -> None:
+    def _store(self, action: np.ndarray, targets: np.ndarray | None = None,
+               executed: np.ndarray | None = None) -> None:
         s = self.scene
         q, qd = s.front_q()
         contact = s.contact_summary()
@@ -109,12 +123,17 @@ class EpisodeRecorder:
         r["tcp_quat"].append(s.tcp_quat())
         r["robot_joints"].append(s.robot_joints())
         r["robot_targets"].append(targets)
+        r[EXECUTED].append(np.asarray(action if executed is None else executed, np.float64).copy())
         self.max_opening = max(self.max_opening, s.opening())
 
-    def step(self, action: np.ndarray) -> None:
-        self._store(action)
-        self.scene.step(action)
-        self.rows["robot_targets"][-1] = self.scene.robot_drive.targets(self.scene, np.asarray(action, np.float64))
+    def step(self, action: np.ndarray, executed: np.ndarray | None = None) -> None:
+        """Record ``action`` and run ``executed`` (default: the same action) for one control step."""
+        if executed is not None:
+            self.perturbed = True
+        self._store(action, executed=executed)
+        sent = np.asarray(action if executed is None else executed, np.float64)
+        self.scene.step(sent)
+        self.rows["robot_targets"][-1] = self.scene.robot_drive.targets(self.scene, sent)
 
     @property
     def steps(self) -> int:
@@ -126,8 +145,10 @@ class EpisodeRecorder:
 
         r = self.rows
         last = r["action"][-1] if r["action"] else np.zeros(7)
-        held = r["robot_targets"][-1] if r["robot_targets"] else self.scene.robot_drive.targets(self.scene, last)
-        self._store(last, held)
+        sent = r[EXECUTED][-1] if r[EXECUTED] else last
+        held = r["robot_targets"][-1] if r["robot_targets"] else self.scene.robot_drive.targets(self.scene, sent)
+        self._store(last, held, sent)
+        columns = (*COLUMNS, EXECUTED) if self.perturbed else COLUMNS
         try:
             def vectors(name: str) -> pa.Array:
                 return pa.FixedSizeListArray.from_arrays(pa.array(np.concatenate(r[name]), pa.float64()),
@@ -137,15 +158,15 @@ class EpisodeRecorder:
                 "step": pa.array(r["step"], pa.int32()),
                 "time": pa.array(r["time"], pa.float64()),
                 "contacts": pa.array(r["contacts"], pa.int32()),
-                **{name: vectors(name) for name in VECTORS},
+                **{name: vectors(name) for name in VECTORS if name in columns},
             }
-            for c in COLUMNS:
+            for c in columns:
                 if c not in arrays:
                     arrays[c] = pa.array(r[c], pa.float64())
-            return pa.table({c: arrays[c] for c in COLUMNS})
+            return pa.table({c: arrays[c] for c in columns})
         finally:
-            for c in COLUMNS:
-                self.rows[c].pop()
+            for rows in self.rows.values():
+                rows.pop()
 
 
 def episode_id(variant: str, front: str, operator: str, seed: int, robot: str = "hand-e") -> str:
@@ -166,8 +187,9 @@ def _robot_base(scene: SimScene) -> Any:
 
 
 def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operator: str, operator_kind: str,
-                  seed: int, log: tuple[str, ...] = ()) -> EpisodeMeta:
-    """Write the recorded episode to ``out/<episode>`` (through a staging directory); returns its meta."""
+                  seed: int, log: tuple[str, ...] = (), action_noise: float | None = None) -> EpisodeMeta:
+    """Write the recorded episode to ``out/<episode>`` (through a staging directory); returns its meta.
+    ``action_noise``: the operator's noise on the executed action (m), for an episode recorded with it."""
     import pyarrow.parquet as pq
 
     from rik.schemas.episodes import EpisodeMeta, GripperInfo
@@ -195,8 +217,12 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
             gripper=GripperInfo(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
                                 arm_force=g.arm_force),
             robot=s.robot_id, robot_base=_robot_base(s), robot_joints=s.robot_drive.joint_names,
-            versions=_versions(), log=tuple(log), states_sha256=digest)
-        meta = write_meta(staging, meta.model_dump(mode="json"))
+            versions=_versions(), log=tuple(log), states_sha256=digest,
+            action_noise=action_noise if recorder.perturbed else None)
+        data = meta.model_dump(mode="json")
+        if data["action_noise"] is None:  # episodes without noise keep the meta.json they always had
+            del data["action_noise"]
+        meta = write_meta(staging, data)
         if final.exists():
             check_replaceable(final, EPISODE_FOLDER)
             shutil.rmtree(final)
@@ -273,12 +299,12 @@ def read_episode(directory: Path) -> tuple[EpisodeMeta, pa.Table]:
     except (pa.ArrowException, OSError) as exc:
         raise EpisodeError(f"{file}: not a readable Parquet file ({type(exc).__name__}: "
                            f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
-    columns = COLUMNS if meta.format >= 3 else COLUMNS_2
+    columns = columns_of(meta)
     if table.num_rows != meta.steps + 1 or list(table.column_names) != list(columns):
         raise EpisodeError(f"{file}: {table.num_rows} rows and columns {table.column_names}, expected "
                            f"{meta.steps + 1} rows and {list(columns)}")
     widths = {"state": meta.state_size, "action": None, "tcp": 3, "tcp_quat": 4,
-              "robot_joints": len(meta.robot_joints), "robot_targets": len(meta.robot_joints)}
+              "robot_joints": len(meta.robot_joints), "robot_targets": len(meta.robot_joints), EXECUTED: 7}
     for name in VECTORS:
         if name in columns:
             _check_vectors(file, table, name, widths[name])
@@ -341,10 +367,12 @@ def run_operator(scene: SimScene, operator: Operator, rng: np.random.Generator, 
     """Run ``operator`` on ``scene`` until it is done or ``max_seconds`` of simulated time have passed."""
     recorder = recorder or EpisodeRecorder(scene)
     operator.reset(scene, rng)
+    perturb = getattr(operator, "perturb", None)  # an operator that records one action and executes another
     for _ in range(int(round(max_seconds * scene.control_fps))):
         if operator.done:
             break
-        recorder.step(operator.act(scene))
+        action = operator.act(scene)
+        recorder.step(action, perturb(action) if perturb is not None else None)
         if on_step is not None:
             on_step(scene)
     return recorder

@@ -36,6 +36,11 @@ STALL_TIME = 1.5
 STALL_PROGRESS = 0.01
 DONE_OPENING = 0.97
 """A strategy stops pulling when the front is this far open (fraction of its range)."""
+NOISE_TIME = 0.5
+"""Correlation time of the action noise, s: an Ornstein-Uhlenbeck offset, so the gripper drifts off the path far
+enough for the strategy's way back to be worth learning (white noise at 20 Hz averages out in the servos)."""
+NOISE_ANGLE_PER_M = 5.0
+"""Standard deviation of the angle noise per metre of position noise, rad/m (0.01 m: 0.05 rad, 2.9 degrees)."""
 
 
 class Operator(Protocol):
@@ -81,6 +86,11 @@ class ScriptedGrasp:
     regrasps: int = 3
     jitter: float = 0.0
     """Standard deviation of a random offset of the grasp point (m), drawn per episode."""
+    action_noise: float = 0.0
+    """Standard deviation of the noise on the executed target position, m (angles: :data:`NOISE_ANGLE_PER_M`
+    times it, rad; the gripper command is never disturbed). DART-style: the episode records the strategy's own
+    action while the robot runs the disturbed one, so the recorded actions lead back to the path from wherever
+    the noise took the gripper. 0: none."""
     done: bool = False
     log: list[str] = field(default_factory=list)
 
@@ -89,6 +99,10 @@ class ScriptedGrasp:
         self._rng = rng
         self._offset = rng.normal(0.0, self.jitter, 3) if self.jitter > 0 else np.zeros(3)
         self._offset[1] = 0.0
+        # the noise has a generator of its own, drawn last: without noise the episode is what it always was
+        self._noise_rng = np.random.default_rng(int(rng.integers(2**63))) if self.action_noise > 0 else None
+        self._noise = np.zeros(6)
+        self._noise_decay = float(np.exp(-1.0 / (scene.control_fps * NOISE_TIME)))
         self._tried: list[str] = []
         self._attempts = 0
         self._cmd_tcp = scene.tcp()
@@ -113,6 +127,19 @@ class ScriptedGrasp:
                          _Motion(pre, target, plan.angles, plan.angles, APPROACH_SPEED)]
         self._phase, self._clock = "approach", 0.0
         self.log.append(f"attempt {self._attempts + 1}: {plan.mode} {plan.detail}".strip())
+
+    def perturb(self, action: np.ndarray) -> np.ndarray | None:
+        """The action the robot runs for the strategy's ``action`` (None: the same one): ``action`` plus this
+        step's correlated noise on the target pose."""
+        if self._noise_rng is None:
+            return None
+        sigma = self.action_noise * np.array([1.0, 1.0, 1.0, NOISE_ANGLE_PER_M, NOISE_ANGLE_PER_M,
+                                              NOISE_ANGLE_PER_M])
+        a = self._noise_decay
+        self._noise = a * self._noise + np.sqrt(1.0 - a * a) * self._noise_rng.normal(0.0, 1.0, 6) * sigma
+        executed = np.asarray(action, np.float64).copy()
+        executed[:6] += self._noise
+        return executed
 
     def _action(self, scene: SimScene) -> np.ndarray:
         return np.concatenate([base_for_tcp(scene.gripper, self._cmd_tcp, self._angles), [self._grip]])
@@ -194,9 +221,14 @@ def _pinch_natural(scene: SimScene) -> list[GraspPlan]:
     return [pinch_plan(scene, vertical=pinch_fits(scene))]
 
 
-def _contact_rich(scene: SimScene) -> list[GraspPlan]:
-    natural = pinch_fits(scene)
-    return [*hook_plans(scene, limit=2), pinch_plan(scene, vertical=natural), pinch_plan(scene, vertical=not natural)]
+def _contact_rich(scene: SimScene, geometry: str = "collision") -> list[GraspPlan]:
+    natural = pinch_fits(scene, geometry)
+    return [*hook_plans(scene, limit=2, geometry=geometry), pinch_plan(scene, vertical=natural, geometry=geometry),
+            pinch_plan(scene, vertical=not natural, geometry=geometry)]
+
+
+def _planned(scene: SimScene) -> list[GraspPlan]:
+    return _contact_rich(scene, geometry="visual")
 
 
 @dataclass(frozen=True)
@@ -217,11 +249,17 @@ STRATEGIES: dict[str, Strategy] = {s.name: s for s in (
     Strategy("contact_rich", "closed loop: a finger behind material (into a loop, under a lip, behind a knob's "
              "head) found by ray casts; on slip or stall let go and re-grasp with the next plan",
              lambda: ScriptedGrasp("contact_rich", _contact_rich, closed_loop=True, jitter=0.002)),
+    Strategy("planned", "as contact_rich, but every grasp is planned on the catalog's visual meshes, not on the "
+             "collision model: the same plan whichever collision a variant was built with (hull, CoACD)",
+             lambda: ScriptedGrasp("planned", _planned, closed_loop=True, jitter=0.002)),
 )}
+PARAMS = ("jitter", "regrasps", "action_noise")
+"""Parameters :func:`make_operator` sets on a strategy."""
 
 
 def make_operator(name: str, params: Mapping[str, float | int] | None = None) -> ScriptedGrasp:
-    """A fresh scripted operator by strategy name, with ``params`` (``jitter``, m; ``regrasps``) set on it."""
+    """A fresh scripted operator by strategy name, with ``params`` (``jitter``, m; ``regrasps``; ``action_noise``,
+    m) set on it."""
     try:
         operator = STRATEGIES[name].make()
     except KeyError:
@@ -231,8 +269,8 @@ def make_operator(name: str, params: Mapping[str, float | int] | None = None) ->
         hint = f"; did you mean '{close[0]}'?" if close else ""
         raise RikError(f"unknown strategy '{name}' (strategies: {', '.join(STRATEGIES)}){hint}") from None
     for key, value in (params or {}).items():
-        if key not in ("jitter", "regrasps"):
-            raise RikError(f"strategy {name}: unknown parameter '{key}' (parameters: jitter, regrasps)")
+        if key not in PARAMS:
+            raise RikError(f"strategy {name}: unknown parameter '{key}' (parameters: {', '.join(PARAMS)})")
         setattr(operator, key, value)
     return operator
 

@@ -67,13 +67,14 @@ def randomise_start(scene: SimScene, rng: np.random.Generator) -> None:
 def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, seed: int = 0,
            out: Path = DEFAULT_EPISODES, variants: Path = Path("variants"), front: str | None = None,
            gripper: GripperSpec = HAND_E, max_seconds: float = MAX_SECONDS, robot: Robot | None = None,
-           progress: Callable[[Any], None] | None = None) -> list[Any]:
-    """Record ``episodes`` episodes of ``strategy`` on ``variant`` (seeds ``seed``, ``seed + 1``, ...) into
-    ``out`` with the Hand-E ``gripper`` or an arm (``robot``, a catalog entry); returns their metas. An arm that
-    cannot reach the variant's handle is refused before anything is recorded."""
+           progress: Callable[[Any], None] | None = None,
+           params: Mapping[str, float | int] | None = None) -> list[Any]:
+    """Record ``episodes`` episodes of ``strategy`` (with its ``params``) on ``variant`` (seeds ``seed``,
+    ``seed + 1``, ...) into ``out`` with the Hand-E ``gripper`` or an arm (``robot``, a catalog entry); returns
+    their metas. An arm that cannot reach the variant's handle is refused before anything is recorded."""
     check_seeds(seed, episodes)
     check_folder(out, "--out")
-    make_operator(strategy)  # unknown strategy: fail before building anything
+    make_operator(strategy, params)  # unknown strategy or parameter: fail before building anything
     directory = variant_dir(catalog, variant, variants)
     if robot is not None:
         from rik.sim.robots.checks import require_reach
@@ -82,7 +83,7 @@ def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, 
     metas = []
     for k in range(episodes):
         meta = record_one(directory, strategy, seed + k, out, front=front, gripper=gripper, max_seconds=max_seconds,
-                          robot=robot)
+                          robot=robot, params=params)
         metas.append(meta)
         if progress is not None:
             progress(meta)
@@ -104,23 +105,26 @@ def record_one(directory: Path, strategy: str, seed: int, out: Path, *, front: s
     name = label or strategy
     return write_episode(recorder, out, episode=episode_id(scene.info["id"], scene.front.id, name, seed,
                                                            scene.robot_id),
-                         operator=name, operator_kind="strategy", seed=seed, log=tuple(operator.log))
+                         operator=name, operator_kind="strategy", seed=seed, log=tuple(operator.log),
+                         action_noise=operator.action_noise or None)
 
 
 def _record_drawn(catalog: Catalog, seed: str, *, draw: Draw, strategy: str, out: Path, dirs: dict[str, Path],
-                  gripper: GripperSpec, max_seconds: float, robot: Robot | None = None) -> Any:
+                  gripper: GripperSpec, max_seconds: float, robot: Robot | None = None,
+                  params: Mapping[str, float | int] | None = None) -> Any:
     """One episode of :func:`record_split` (module level: it runs in worker processes)."""
     episode = draw.episode(catalog, int(seed))
     return record_one(dirs[episode.variant], strategy, int(seed), out, front=episode.front, gripper=gripper,
-                      max_seconds=max_seconds, robot=robot)
+                      max_seconds=max_seconds, robot=robot, params=params)
 
 
 def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int = 1, seed: int = 0,
                  out: Path = DEFAULT_EPISODES, variants: Path = Path("variants"), gripper: GripperSpec = HAND_E,
                  max_seconds: float = MAX_SECONDS, workers: int = 1, overlays: Sequence[Path] = (),
                  progress: Callable[[Any], None] | None = None,
-                 skipped: list[tuple[int, str, str]] | None = None, robot: Robot | None = None) -> list[Any]:
-    """Record ``episodes`` episodes of ``strategy`` whose variant and front come from ``draw``
+                 skipped: list[tuple[int, str, str]] | None = None, robot: Robot | None = None,
+                 params: Mapping[str, float | int] | None = None) -> list[Any]:
+    """Record ``episodes`` episodes of ``strategy`` (with its ``params``) whose variant and front come from ``draw``
     (:class:`rik.episodes.draw.Draw`) for seeds ``seed``, ``seed + 1``, ...: each exactly as :func:`record` writes that
     variant, front and seed. Builds the variants first, then records in ``workers`` processes; metas in seed
     order. A seed whose variant fails its checks in ``variants`` (e.g. a handle whose single convex hull sinks
@@ -135,7 +139,7 @@ def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int =
     check_workers(workers)
     check_folder(out, "--out")
     check_folder(variants, "--variants")
-    make_operator(strategy)  # unknown strategy: fail before building anything
+    make_operator(strategy, params)  # unknown strategy or parameter: fail before building anything
     draw.check(catalog)
     seeds = list(range(seed, seed + episodes))
     drawn = {s: draw.episode(catalog, s).variant for s in seeds}
@@ -151,7 +155,7 @@ def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int =
         seeds = [s for s in seeds if drawn[s] not in rejected]
     dirs = {v: inside(variants, v, what="variant id") for v in set(drawn.values()) if v not in rejected}
     fn = functools.partial(_record_drawn, draw=draw, strategy=strategy, out=out, dirs=dirs, gripper=gripper,
-                           max_seconds=max_seconds, robot=robot)
+                           max_seconds=max_seconds, robot=robot, params=params)
     metas: dict[int, Any] = {}
     for s, meta in map_ids(fn, catalog, [str(s) for s in seeds], workers=workers, overlays=overlays):
         metas[int(s)] = meta

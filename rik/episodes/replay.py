@@ -69,7 +69,10 @@ def verify_episode(catalog: Catalog, directory: Path, variants: Path = Path("var
     meta, table = read_episode(directory)
     scene = episode_scene(catalog, directory, variants, meta)
     recorded = states(table)
-    actions = cast("pa.ListArray", table.column("action").combine_chunks()).values.to_numpy().reshape(len(recorded), -1)
+    from rik.episodes.episode import EXECUTED
+
+    sent = EXECUTED if EXECUTED in table.column_names else "action"  # the action the robot ran
+    actions = cast("pa.ListArray", table.column(sent).combine_chunks()).values.to_numpy().reshape(len(recorded), -1)
     worst = 0.0
     for k in range(len(recorded) - 1):
         scene.restore(recorded[k])

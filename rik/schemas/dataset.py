@@ -10,7 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from rik.schemas.common import CatalogId, Frozen, SimpleId
 
 SPEC_FORMAT = 1
-STRATEGY_PARAMS = ("jitter", "regrasps")
+STRATEGY_PARAMS = ("jitter", "regrasps", "action_noise")
 """Parameters of a scripted strategy a spec may set (:func:`rik.episodes.operators.make_operator`)."""
 
 
@@ -51,6 +51,9 @@ class OperatorSpec(Frozen):
     """Standard deviation of the random offset of the grasp point, m (None: the strategy's own)."""
     regrasps: int | None = Field(default=None, ge=0, le=20)
     """Re-grasps a closed-loop strategy may try (None: the strategy's own)."""
+    action_noise: float | None = Field(default=None, ge=0, le=0.05, allow_inf_nan=False)
+    """Standard deviation of the noise on the executed target position, m (DART-style: the episode records the
+    strategy's own action; None: no noise)."""
 
     @property
     def label(self) -> str:

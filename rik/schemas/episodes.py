@@ -70,5 +70,9 @@ class EpisodeMeta(Frozen):
     versions: dict[str, str]
     log: tuple[str, ...] = ()
     states_sha256: str = Field(pattern=r"^[0-9a-f]{64}$")
+    action_noise: float | None = Field(default=None, ge=0, allow_inf_nan=False)
+    """Standard deviation of the noise added to the executed target position (m) for an episode recorded with
+    noise (DART-style: ``states.parquet``'s ``action`` holds the operator's own action, ``executed_action`` what
+    the robot was sent); absent (None) where every action ran as recorded."""
     meta_sha256: str | None = Field(default=None, pattern=r"^[0-9a-f]{64}$")
     """sha256 of this file's other fields (:func:`rik.episodes.episode.meta_digest`); required from format 2 on."""

@@ -36,12 +36,13 @@ class GraspPlan:
     """Plans with the same key are one way of grasping; a re-grasp tries another."""
 
 
-def pinch_plan(scene: SimScene, vertical: bool) -> GraspPlan:
-    """Friction grasp: fingers towards the front, jaws horizontal or vertical, pads on the handle's outer part."""
+def pinch_plan(scene: SimScene, vertical: bool, geometry: str = "collision") -> GraspPlan:
+    """Friction grasp: fingers towards the front, jaws horizontal or vertical, pads on the handle's outer part
+    (measured on the ``geometry`` source's geoms, :data:`rik.sim.probe.GEOMETRY`)."""
     g = scene.gripper
-    lo, hi = handle_extent(scene)
+    lo, hi = handle_extent(scene, geometry)
     centre = scene.grasp_point()
-    face = min(front_face_y(scene, centre[0], centre[2], hi[1] + 0.05), lo[1])
+    face = min(front_face_y(scene, centre[0], centre[2], hi[1] + 0.05, geometry), lo[1])
     pad_y = max(hi[1] - g.pad_length / 2, face + CLEARANCE + 0.001 + g.pad_length / 2)
     tcp = np.array([centre[0], pad_y, centre[2]])
     angles = np.array([0.0, 0.0, math.pi / 2 if vertical else 0.0])
@@ -53,17 +54,17 @@ def pinch_plan(scene: SimScene, vertical: bool) -> GraspPlan:
     return GraspPlan(mode, tcp, angles, np.array([0.0, 1.0, 0.0]), key=mode)
 
 
-def hook_plans(scene: SimScene, limit: int = 6) -> list[GraspPlan]:
+def hook_plans(scene: SimScene, limit: int = 6, geometry: str = "collision") -> list[GraspPlan]:
     """Form-closure grasps: a finger behind material of the front (see :func:`rik.sim.probe.find_hooks`), with
     the jaws open across the handle and the whole gripper clear of the furniture there and on the way in."""
     g = scene.gripper
     plans: list[GraspPlan] = []
-    for h in find_hooks(scene, g.finger_thickness, g.finger_width, g.stroke, g.pad_length):
+    for h in find_hooks(scene, g.finger_thickness, g.finger_width, g.stroke, g.pad_length, geometry=geometry):
         sign = 1.0 if h.side == "above" else -1.0
         tcp = h.pad + h.normal * g.finger_travel
         angles = np.array([sign * h.tilt, 0.0, math.pi / 2])
-        if not all(pose_is_free(scene, base_for_tcp(g, tcp - h.finger * k * APPROACH, angles), g.finger_travel)
-                   for k in (0.0, 0.5, 1.0)):
+        if not all(pose_is_free(scene, base_for_tcp(g, tcp - h.finger * k * APPROACH, angles), g.finger_travel,
+                                geometry) for k in (0.0, 0.5, 1.0)):
             continue
         plan = GraspPlan(f"hook_{h.side}", tcp, angles, -h.finger,
                          f"tilt {math.degrees(h.tilt):.0f} deg, bite {h.engagement * 1000:.0f} mm",
@@ -75,7 +76,7 @@ def hook_plans(scene: SimScene, limit: int = 6) -> list[GraspPlan]:
     return plans
 
 
-def pinch_fits(scene: SimScene) -> bool:
+def pinch_fits(scene: SimScene, geometry: str = "collision") -> bool:
     """Whether the handle is narrower vertically than horizontally (so a vertical pinch is the natural one)."""
-    lo, hi = handle_extent(scene)
+    lo, hi = handle_extent(scene, geometry)
     return (hi[2] - lo[2]) <= (hi[0] - lo[0])

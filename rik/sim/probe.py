@@ -1,7 +1,10 @@
 """Ground-truth geometry for scripted strategies, read from the compiled scene by ray casting.
 
 The strategies get the handle's true pose and shape, as the paper's baselines do. Rays are cast against the
-collision geoms of the furniture (never the gripper), so what a strategy plans is what the fingers will touch.
+furniture (never the gripper), in one of two :data:`GEOMETRY` sources: its ``collision`` geoms, so that what a
+strategy plans is what the fingers will touch; or its ``visual`` geoms, the catalog's own meshes, which are the
+same whichever collision model a variant was built with (convex hull, CoACD), so that a plan made on them is the
+same plan in simulators of different fidelity.
 """
 
 from __future__ import annotations
@@ -15,6 +18,10 @@ from rik.sim.scene import SimScene
 
 COLLISION_GROUPS = np.array([0, 0, 0, 1, 0, 0], np.uint8)
 """Only group 3 (rik's collision geoms) is hit."""
+VISUAL_GROUPS = np.array([0, 0, 1, 0, 0, 0], np.uint8)
+"""Only group 2 (rik's visual geoms, the catalog's meshes) is hit."""
+GEOMETRY = {"collision": (COLLISION_GROUPS, 3), "visual": (VISUAL_GROUPS, 2)}
+"""Geometry source -> (the geom groups rays hit, the geom group read for bounds)."""
 CLEARANCE = 0.002
 """Gap left between a finger and the surface it is placed against, m."""
 APPROACH = 0.04
@@ -26,24 +33,25 @@ OVERREACH = 0.004
 
 
 def ray(scene: SimScene, origin: np.ndarray, direction: np.ndarray, exclude_body: int = -1,
-        normal: np.ndarray | None = None) -> tuple[float, int]:
-    """Distance to the first collision geom hit from ``origin`` along unit ``direction`` (inf if none), and the
-    geom's id (-1 if none); geoms of ``exclude_body`` are passed through. ``normal``, when given, receives the
-    surface normal at the hit."""
+        normal: np.ndarray | None = None, geometry: str = "collision") -> tuple[float, int]:
+    """Distance to the first geom of the ``geometry`` source hit from ``origin`` along unit ``direction`` (inf if
+    none), and the geom's id (-1 if none); geoms of ``exclude_body`` are passed through. ``normal``, when given,
+    receives the surface normal at the hit."""
     import mujoco
 
     geom = np.array([-1], np.int32)
     d = mujoco.mj_ray(scene.model, scene.data, np.asarray(origin, np.float64), np.asarray(direction, np.float64),
-                      COLLISION_GROUPS, 1, exclude_body, geom, normal)
+                      GEOMETRY[geometry][0], 1, exclude_body, geom, normal)
     return (float(d) if d >= 0 else float("inf")), int(geom[0])
 
 
-def handle_extent(scene: SimScene) -> tuple[np.ndarray, np.ndarray]:
-    """World-axis bounding box (min, max corners) of the operated handle's collision geoms, m."""
+def handle_extent(scene: SimScene, geometry: str = "collision") -> tuple[np.ndarray, np.ndarray]:
+    """World-axis bounding box (min, max corners) of the operated handle's geoms of the ``geometry`` source, m."""
     m, d = scene.model, scene.data
+    group = GEOMETRY[geometry][1]
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
     for g in range(m.ngeom):
-        if int(m.geom_bodyid[g]) != scene.front.handle_body or m.geom_group[g] != 3:
+        if int(m.geom_bodyid[g]) != scene.front.handle_body or m.geom_group[g] != group:
             continue
         centre, half = m.geom_aabb[g][:3], m.geom_aabb[g][3:]
         rot = d.geom_xmat[g].reshape(3, 3)
@@ -53,10 +61,11 @@ def handle_extent(scene: SimScene) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def front_face_y(scene: SimScene, x: float, z: float, y_from: float) -> float:
+def front_face_y(scene: SimScene, x: float, z: float, y_from: float, geometry: str = "collision") -> float:
     """World y of the front's surface behind the handle: the first surface met going from ``y_from`` towards -y
     at (x, z), passing through the handle."""
-    dist, _ = ray(scene, np.array([x, y_from, z]), np.array([0.0, -1.0, 0.0]), scene.front.handle_body)
+    dist, _ = ray(scene, np.array([x, y_from, z]), np.array([0.0, -1.0, 0.0]), scene.front.handle_body,
+                  geometry=geometry)
     return y_from - dist
 
 
@@ -90,12 +99,12 @@ HOOK_TILTS = (math.pi / 2, math.pi / 3, math.pi / 4)
 
 
 def find_hooks(scene: SimScene, finger_thickness: float, finger_width: float, stroke: float, pad_length: float,
-               step: float = 0.0015) -> list[Hook]:
+               step: float = 0.0015, geometry: str = "collision") -> list[Hook]:
     """Places where a finger can come down from above (or up from below), straight or leaning towards the front,
     behind some part of the front, with material in front of its pad within the jaws' span: the pocket behind
     a bar, the neck behind a knob's head, the groove behind a lip, the cup of a hood. Best (largest bite)
     first. Only the finger's path is checked here; :func:`pose_is_free` checks the whole gripper."""
-    lo, hi = handle_extent(scene)
+    lo, hi = handle_extent(scene, geometry)
     centre = scene.grasp_point()
     pull = scene.pull_direction()
     x = float(centre[0])
@@ -115,14 +124,15 @@ def find_hooks(scene: SimScene, finger_thickness: float, finger_width: float, st
                     for u in (0.0005, finger_thickness / 2, finger_thickness - 0.0005):
                         origin = face - normal * u + finger * (-back)
                         origin[0] = xx
-                        travel = min(travel, ray(scene, origin, finger)[0] - CLEARANCE)
+                        travel = min(travel, ray(scene, origin, finger, geometry=geometry)[0] - CLEARANCE)
                 tip = face + finger * (travel - back)
                 # material of the front in front of the pad, within the jaws' span, along the pad from the tip,
                 # whose surface there faces back against the pull (a back face the pad can push outwards)
                 bite = 0.0
                 hit_normal = np.zeros(3)
                 for h in np.arange(0.001, pad_length, step):
-                    dist, geom = ray(scene, tip - finger * h + normal * 0.0005, normal, normal=hit_normal)
+                    dist, geom = ray(scene, tip - finger * h + normal * 0.0005, normal, normal=hit_normal,
+                                     geometry=geometry)
                     if (dist < stroke and int(scene.model.geom_bodyid[geom]) in scene.front_bodies
                             and hit_normal @ pull <= -BACK_FACE_COS):
                         bite += step
@@ -133,8 +143,10 @@ def find_hooks(scene: SimScene, finger_thickness: float, finger_width: float, st
     return hooks
 
 
-def pose_is_free(scene: SimScene, pose: np.ndarray, opening: float) -> bool:
+def pose_is_free(scene: SimScene, pose: np.ndarray, opening: float, geometry: str = "collision") -> bool:
     """Whether the gripper at base ``pose`` with each finger ``opening`` from the centre touches nothing (the
     furniture, the floor); an arm is solved to the pose and all of it must be free. The scene's state is left as
-    it was."""
-    return scene.robot_drive.pose_is_free(scene, np.asarray(pose, np.float64), opening)
+    it was. With ``visual`` geometry the handle's collision geoms do not count (they differ between collision
+    models; the finger's path past the handle was checked on the visual mesh)."""
+    ignore = frozenset({scene.front.handle_body}) if geometry == "visual" else frozenset()
+    return scene.robot_drive.pose_is_free(scene, np.asarray(pose, np.float64), opening, ignore)

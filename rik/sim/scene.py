@@ -53,7 +53,8 @@ class Drive(Protocol):
 
     def targets(self, scene: SimScene, action: np.ndarray) -> np.ndarray: ...
 
-    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float) -> bool: ...
+    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float,
+                     ignore_bodies: frozenset[int] = frozenset()) -> bool: ...
 
     @property
     def mount(self) -> Placement | None:

@@ -41,15 +41,17 @@ if TYPE_CHECKING:
     from rik.sim.scene import SimScene
 
 
-def _touches(scene: SimScene, geoms: frozenset[int]) -> bool:
-    """Whether any of ``geoms`` penetrates anything, with the scene's current positions (collision only)."""
+def _touches(scene: SimScene, geoms: frozenset[int], ignore_bodies: frozenset[int] = frozenset()) -> bool:
+    """Whether any of ``geoms`` penetrates anything but geoms of ``ignore_bodies``, with the scene's current
+    positions (collision only)."""
     import mujoco
 
-    d = scene.data
-    mujoco.mj_collision(scene.model, d)
+    m, d = scene.model, scene.data
+    mujoco.mj_collision(m, d)
     for i in range(d.ncon):
         g1, g2 = int(d.contact.geom1[i]), int(d.contact.geom2[i])
-        if (g1 in geoms or g2 in geoms) and d.contact.dist[i] < 0:
+        if (g1 in geoms or g2 in geoms) and d.contact.dist[i] < 0 \
+                and int(m.geom_bodyid[g1]) not in ignore_bodies and int(m.geom_bodyid[g2]) not in ignore_bodies:
             return True
     return False
 
@@ -95,7 +97,8 @@ class FloatingDrive:
     def targets(self, scene: SimScene, action: np.ndarray) -> np.ndarray:
         return np.concatenate([scene.data.ctrl[self.arm_ctrl], [jaw_target(scene.gripper, float(action[6]))]])
 
-    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float) -> bool:
+    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float,
+                     ignore_bodies: frozenset[int] = frozenset()) -> bool:
         import mujoco
 
         m, d = scene.model, scene.data
@@ -103,7 +106,7 @@ class FloatingDrive:
         d.qpos[self.base_qpos] = pose
         d.qpos[self.finger_qpos] = opening
         mujoco.mj_kinematics(m, d)
-        free = not _touches(scene, scene.gripper_geoms)
+        free = not _touches(scene, scene.gripper_geoms, ignore_bodies)
         d.qpos[:] = saved
         mujoco.mj_forward(m, d)
         return free
@@ -249,8 +252,10 @@ class ArmDrive:
         goal, _ = self.jaw(scene, float(action[6]))
         return np.concatenate([scene.data.ctrl[self.arm_ctrl], [goal]])
 
-    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float) -> bool:
-        """Whether the arm, solved to ``pose`` from where its joints are, touches nothing (gripper open)."""
+    def pose_is_free(self, scene: SimScene, pose: np.ndarray, opening: float,
+                     ignore_bodies: frozenset[int] = frozenset()) -> bool:
+        """Whether the arm, solved to ``pose`` from where its joints are, touches nothing but ``ignore_bodies``
+        (gripper open)."""
         import mujoco
 
         m, d = scene.model, scene.data
@@ -259,7 +264,7 @@ class ArmDrive:
         q, dp, _ = self.ik.solve(position, rotation, d.qpos[self.qpos], iterations=PROBE_ITERATIONS, floor=False)
         d.qpos[self.qpos] = q
         mujoco.mj_kinematics(m, d)
-        free = dp < 0.01 and not _touches(scene, self.robot_geoms)
+        free = dp < 0.01 and not _touches(scene, self.robot_geoms, ignore_bodies)
         d.qpos[:] = saved
         mujoco.mj_forward(m, d)
         return free
