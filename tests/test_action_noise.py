@@ -69,3 +69,16 @@ def test_an_unknown_strategy_parameter_is_one_line(bow_variants: Path, tmp_path:
     with pytest.raises(RikError, match=r"^strategy planned: unknown parameter 'noise' \(parameters: jitter, "
                                        r"regrasps, action_noise\)$"):
         record(load_catalog(), BOW, "planned", out=tmp_path / "e", variants=bow_variants, params={"noise": 0.01})
+
+
+def test_a_spec_operator_with_noise_hashes_apart_and_old_specs_keep_their_hash(tmp_path: Path) -> None:
+    from rik.dataset.spec import load_spec, spec_hash
+
+    example = Path(__file__).parents[1] / "examples" / "dataset-drawers.yaml"
+    # the hash rik gave this spec before operators had action_noise (main at f47b46e): its datasets stay current
+    assert spec_hash(load_spec(example)) == "ac4fc7fcddaee1f45a48277a3404af7e7f41d87865c923f00b8247ccd32d0509"
+    noisy = tmp_path / "noisy.yaml"
+    noisy.write_text(example.read_text(encoding="utf-8").replace("  - strategy: contact_rich\n",
+                                                                 "  - strategy: contact_rich\n    action_noise: 0.01\n"))
+    assert load_spec(noisy).operators[0].params == {"action_noise": 0.01}
+    assert spec_hash(load_spec(noisy)) != spec_hash(load_spec(example))

@@ -55,10 +55,14 @@ def check_spec_shape(path: Path) -> None:
 
 def spec_data(spec: DatasetSpec) -> dict[str, Any]:
     """The spec as JSON data, every default filled in (what its hash covers), but ``robot`` where it is the
-    Hand-E: specs written before robots existed keep their hash, and the datasets built from them stay current."""
+    Hand-E and an operator's ``action_noise`` where it has none: specs written before those existed keep their
+    hash, and the datasets built from them stay current."""
     data = spec.model_dump(mode="json")
     if data.get("robot") == DEFAULT_ROBOT:
         del data["robot"]
+    for operator in data["operators"]:
+        if operator.get("action_noise") is None:
+            operator.pop("action_noise", None)
     return data
 
 
