@@ -179,6 +179,10 @@ def build_command(spec: SpecArg,
         more = f" (and {len(result.failures) - 20} more)" if len(result.failures) > 20 else ""
         raise RikError(f"{len(result.failures)} units failed{more}, listed above (and in {result.work}/units/failed); "
                        f"the dataset was not published; rerun the same command to retry them")
+    from rik.exporters.lerobot_check import constant_warning
+
+    if (warning := constant_warning(result.constant)) is not None:
+        print(f"warning: {warning}")
     outcomes = ", ".join(f"{k} {v}" for k, v in result.outcomes.items())
     print(f"{out}: {result.episodes} episodes, {result.dataset_frames} frames (outcomes {outcomes}); load it with "
           f"LeRobotDataset('{plan.spec.repo_id}', root='{out}')")

@@ -76,6 +76,10 @@ def export_lerobot(
     con.print(f"robot: {result.robot} (robot_type {result.robot_type}); features: {', '.join(result.features)}")
     con.print(f"checked: loads offline with LeRobotDataset; state layout {result.checks['layout']}; "
               + result.checks["frame_counts"])
+    from rik.exporters.lerobot_check import constant_warning
+
+    if (warning := constant_warning(result.checks.get("constant", {}))) is not None:
+        con.print(f"[yellow]warning[/]: {warning}", soft_wrap=True)
     con.print(f'load it: LeRobotDataset("{result.repo_id}", root="{result.root}")')
     if push_to_hub:
         from rik.exporters.lerobot_export import push

@@ -70,6 +70,8 @@ class BuildResult:
     episodes: int = 0
     dataset_frames: int = 0
     outcomes: dict[str, int] = field(default_factory=dict)
+    constant: dict[str, list[str]] = field(default_factory=dict)
+    """Feature -> dimensions that never change in the dataset (:func:`rik.exporters.lerobot_check.constant_dimensions`)."""
 
 
 def default_work(out: Path) -> Path:
@@ -494,6 +496,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
     fps = int(checks["fps"])
     write_card(catalog, merged, schedule.xspec, fps, checks, extra=_card_text(plan), robot=plan.spec.robot)
     result.episodes, result.dataset_frames = int(checks["episodes"]), int(checks["frames"])
+    result.constant = checks.get("constant", {})
     data = {"format": 1, "spec_hash": plan.spec_hash, "source": plan.source,
             "spec": plan.spec.model_dump(mode="json"), "versions": library_versions("mujoco", "lerobot", "mitsuba"),
             "collision": plan.collision, "variants": plan.variants, "rejected_variants": plan.rejected,

@@ -16,6 +16,42 @@ if TYPE_CHECKING:
     from rik.sim.robots.layout import RobotLayout
 
 TOLERANCE_S = 1e-4
+CONSTANT_STD = 1e-6
+"""A dimension of a state or action feature whose standard deviation over the dataset is below this (its own units:
+m, rad, N, ...) never changes: normalisation divides by about zero there (LeRobot's ``MEAN_STD`` adds 1e-8)."""
+
+
+def constant_dimensions(root: Path) -> dict[str, list[str]]:
+    """Feature -> names of its dimensions that never change in the dataset at ``root`` (from ``meta/stats.json``):
+    on a dataset of one variant the handle's pose is one number, and a policy normalised on it sees every other
+    handle as millions of standard deviations away."""
+    stats_file, info_file = root / "meta" / "stats.json", root / "meta" / "info.json"
+    if not stats_file.is_file():
+        return {}
+    stats = json.loads(stats_file.read_text(encoding="utf-8"))
+    features = json.loads(info_file.read_text(encoding="utf-8"))["features"]
+    out: dict[str, list[str]] = {}
+    for key in (OBS_STATE, OBS_ENV_STATE, EE_POSE, ACTION):
+        std = (stats.get(key) or {}).get("std")
+        if key not in features or std is None:
+            continue
+        names = features[key].get("names") or [str(i) for i in range(len(std))]
+        flat = [n for n in names] if isinstance(names, list) else [str(i) for i in range(len(std))]
+        constant = [flat[i] if i < len(flat) else str(i) for i, v in enumerate(std) if float(v) < CONSTANT_STD]
+        if constant:
+            out[key] = constant
+    return out
+
+
+def constant_warning(constant: dict[str, list[str]]) -> str | None:
+    """One line for :func:`constant_dimensions`' result (None when nothing is constant)."""
+    if not constant:
+        return None
+    count = sum(len(names) for names in constant.values())
+    parts = "; ".join(f"{key}: {', '.join(names)}" for key, names in constant.items())
+    return (f"{count} dimension{'s' if count != 1 else ''} never change in this dataset ({parts}): normalisation "
+            "divides by about zero there, so a policy trained on it reads any other value as far out of its "
+            "training range (record more variants, e.g. with --split, or leave those dimensions out)")
 
 
 def _episodes_table(root: Path) -> list[dict[str, Any]]:
@@ -140,4 +176,4 @@ def check_dataset(root: Path, repo_id: str, episodes: int, robot: RobotLayout | 
               "no video features to check (a state-only export)")
     return {"episodes": ds.meta.total_episodes, "frames": ds.meta.total_frames, "fps": ds.meta.fps,
             "layout": layout, "layout_text": describe_layout(layout, robot), "video_frames_decoded": decoded,
-            "frame_counts": counts}
+            "frame_counts": counts, "constant": constant_dimensions(root)}

@@ -27,12 +27,16 @@ passes any other array key ``k`` through as ``observation.k``: ``ee_pose`` becom
 name the Panda's export gives it.
 
 List-valued options are comma-separated strings (``--env.presets=smooth,normal``); ``--env.cameras=`` (empty)
-evaluates a state-only policy without rendering.
+evaluates a state-only policy without rendering. The default, ``--env.cameras=auto``, renders what the policy of
+``--policy.path`` reads (``lerobot-eval``: its cameras, streams and image size, from its ``config.json``), and
+nothing where no policy folder is given (``lerobot-train`` of a state-only policy); cameras given by hand that
+leave out an image the policy reads are refused with the names of both, before any episode runs.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
@@ -42,7 +46,10 @@ import rik.envs.open_front  # noqa: F401  (registers rik/OpenFront-v0 with gymna
 from rik.sim.feature_keys import EE_POSE
 from rik.sim.robots.layout import EE_NAMES, RobotLayout, robot_layout
 
-__all__ = ["RikEnvConfig", "env_kwargs", "robot_layout_of"]
+__all__ = ["AUTO", "RikEnvConfig", "env_kwargs", "robot_layout_of"]
+
+AUTO = "auto"
+"""``--env.cameras=auto``: the cameras of the command line's policy."""
 
 
 def robot_layout_of(robot: str) -> RobotLayout:
@@ -75,8 +82,9 @@ class RikEnvConfig(EnvConfig):
     presets: str = "smooth,normal,high"
     kinds: str = "drawer"
     """Front kinds of the base units drawn (drawer, door, flap, ...)."""
-    cameras: str = ""
-    """Cameras rendered for the policy, e.g. ``front,wrist``; empty for a state-only policy."""
+    cameras: str = AUTO
+    """Cameras rendered for the policy, e.g. ``front,wrist``; empty for a state-only policy; ``auto``: those the
+    policy of ``--policy.path`` reads (none without one)."""
     streams: str = "sim"
     """Image streams of those cameras: ``sim`` (MuJoCo) and/or ``rerendered`` (Mitsuba, slow without a GPU)."""
     observation_height: int = 96
@@ -93,6 +101,7 @@ class RikEnvConfig(EnvConfig):
         from rik.sim.observation import ENV_STATE_NAMES, image_name
 
         layout = robot_layout_of(self.robot)
+        _fit_policy(self, layout)
         self.features = {ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(len(layout.action_names),)),
                          "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(len(layout.state_names),)),
                          "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(len(ENV_STATE_NAMES),))}
@@ -118,6 +127,49 @@ class RikEnvConfig(EnvConfig):
     @property
     def gym_kwargs(self) -> dict:
         return {**env_kwargs(self), "max_episode_steps": self.episode_length}
+
+
+def _policy_folder() -> Path | None:
+    """The local folder of the policy named on the command line (``--policy.path``, as LeRobot's own parser reads
+    it), or None (no policy, or a hub id)."""
+    from lerobot.configs.parser import get_path_arg
+
+    path = get_path_arg("policy")
+    return Path(path) if path and (Path(path) / "config.json").is_file() else None
+
+
+def _fit_policy(cfg: RikEnvConfig, layout: RobotLayout) -> None:
+    """Resolve ``cameras=auto`` from the command line's policy, and refuse cameras that leave out one of its
+    images: otherwise ``lerobot-eval`` of an image policy on the state-only default ends in a ``KeyError`` inside
+    the policy."""
+    folder = _policy_folder()
+    if folder is None:
+        if cfg.cameras == AUTO:
+            cfg.cameras = ""
+        return
+    from rik.evaluation.load import policy_needs
+    from rik.sim.observation import image_name
+
+    needs = policy_needs(folder, allow_rerendered=True, layout=layout)
+    if cfg.cameras == AUTO:
+        cfg.cameras = ",".join(needs.cameras)
+        if needs.cameras:
+            cfg.streams = ",".join(needs.streams)
+            cfg.observation_height, cfg.observation_width = needs.image_size
+        return
+    given = {image_name(c, s) for c in _names(cfg.cameras) for s in _names(cfg.streams)}
+    wanted = [image_name(c, s) for c in needs.cameras for s in needs.streams]
+    missing = [w for w in wanted if w not in given]
+    if missing:
+        raise ValueError(f"--env.cameras={cfg.cameras!r} --env.streams={cfg.streams!r}: the policy in {folder} "
+                         f"reads {', '.join(f'{OBS_IMAGES}.{m}' for m in missing)}, which they do not render; "
+                         f"leave --env.cameras out (it then follows the policy) or pass "
+                         f"--env.cameras={','.join(needs.cameras)}")
+    if needs.cameras and (cfg.observation_height, cfg.observation_width) != needs.image_size:
+        h, w = needs.image_size
+        raise ValueError(f"--env.observation_height/width {cfg.observation_height}x{cfg.observation_width}: the "
+                         f"policy in {folder} reads {h}x{w} images; pass --env.observation_height={h} "
+                         f"--env.observation_width={w}, or leave them and --env.cameras out")
 
 
 def env_kwargs(cfg: RikEnvConfig) -> dict:

@@ -1,0 +1,61 @@
+"""``--env.cameras=auto`` (the default): ``lerobot-eval --env.type=rik --policy.path=<an image policy>`` renders the
+cameras the policy reads instead of ending in ``KeyError: 'observation.images.front'`` inside it; cameras given by
+hand that leave one out are refused, naming it."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from lerobot.configs import FeatureType, PolicyFeature
+from lerobot.policies.act.configuration_act import ACTConfig
+from lerobot_env_rik import RikEnvConfig
+
+
+def _policy(folder: Path, cameras: tuple[str, ...], size: tuple[int, int] = (72, 96)) -> Path:
+    """A saved ACT config (LeRobot's own writer) that reads ``cameras`` at ``size`` (height, width) and the states."""
+    inputs = {"observation.state": PolicyFeature(type=FeatureType.STATE, shape=(11,)),
+              "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(13,))}
+    for camera in cameras:
+        inputs[f"observation.images.{camera}"] = PolicyFeature(type=FeatureType.VISUAL, shape=(3, *size))
+    config = ACTConfig(input_features=inputs,
+                       output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(7,))},
+                       device="cpu", push_to_hub=False)
+    folder.mkdir()
+    config._save_pretrained(folder)
+    return folder
+
+
+def _argv(monkeypatch: pytest.MonkeyPatch, *args: str) -> None:
+    monkeypatch.setattr(sys, "argv", ["lerobot-eval", "--env.type=rik", *args])
+
+
+def test_auto_cameras_follow_the_command_lines_image_policy(monkeypatch, tmp_path: Path) -> None:
+    policy = _policy(tmp_path / "act", ("front", "wrist"))
+    _argv(monkeypatch, f"--policy.path={policy}")
+    cfg = RikEnvConfig()
+    assert cfg.cameras == "front,wrist" and cfg.streams == "sim"
+    assert (cfg.observation_height, cfg.observation_width) == (72, 96)
+    assert cfg.features["pixels/front"].shape == (72, 96, 3)
+    assert cfg.features_map["pixels/wrist"] == "observation.images.wrist"
+
+
+def test_auto_cameras_are_none_for_a_state_policy_or_without_one(monkeypatch, tmp_path: Path) -> None:
+    _argv(monkeypatch, f"--policy.path={_policy(tmp_path / 'act', ())}")
+    assert RikEnvConfig().cameras == ""
+    _argv(monkeypatch)
+    cfg = RikEnvConfig()
+    assert cfg.cameras == "" and not any(k.startswith("pixels/") for k in cfg.features)
+
+
+def test_cameras_that_leave_out_the_policys_image_are_refused(monkeypatch, tmp_path: Path) -> None:
+    policy = _policy(tmp_path / "act", ("front",))
+    _argv(monkeypatch, f"--policy.path={policy}")
+    with pytest.raises(ValueError, match=r"^--env.cameras='' --env.streams='sim': the policy in .*act reads "
+                                         r"observation.images.front, which they do not render; leave --env.cameras "
+                                         r"out \(it then follows the policy\) or pass --env.cameras=front$"):
+        RikEnvConfig(cameras="")
+    with pytest.raises(ValueError, match=r"reads 72x96 images; pass --env.observation_height=72"):
+        RikEnvConfig(cameras="front")
+    assert RikEnvConfig(cameras="front,wrist", observation_height=72, observation_width=96).cameras == "front,wrist"
