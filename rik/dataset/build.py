@@ -71,7 +71,8 @@ class BuildResult:
     dataset_frames: int = 0
     outcomes: dict[str, int] = field(default_factory=dict)
     constant: dict[str, list[str]] = field(default_factory=dict)
-    """Feature -> dimensions that never change in the dataset (:func:`rik.exporters.lerobot_check.constant_dimensions`)."""
+    """Feature -> dimensions that never change in the dataset
+    (:func:`rik.exporters.lerobot_check.constant_dimensions`)."""
 
 
 def default_work(out: Path) -> Path:

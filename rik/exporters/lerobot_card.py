@@ -186,8 +186,8 @@ in your data loader.
     state_text += action
     if checks.get("constant"):
         parts = "; ".join(f"`{k}`: {', '.join(f'`{n}`' for n in v)}" for k, v in checks["constant"].items())
-        state_text += f"""- **Constant dimensions** (standard deviation below 1e-6 over the whole dataset): {parts}. They never
-  change here (one variant, one handle pose), so `MEAN_STD` normalisation divides by about zero there: a policy
+        state_text += f"""- **Constant dimensions** (standard deviation below 1e-6 over the whole dataset): {parts}.
+  They never change here (one variant, one handle pose), so `MEAN_STD` normalisation divides by about zero there: a policy
   trained on this dataset reads any other value (another handle, another unit) as far out of its training range.
   Train on more variants, or leave those dimensions out.
 """

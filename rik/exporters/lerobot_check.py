@@ -36,7 +36,7 @@ def constant_dimensions(root: Path) -> dict[str, list[str]]:
         if key not in features or std is None:
             continue
         names = features[key].get("names") or [str(i) for i in range(len(std))]
-        flat = [n for n in names] if isinstance(names, list) else [str(i) for i in range(len(std))]
+        flat = list(names) if isinstance(names, list) else [str(i) for i in range(len(std))]
         constant = [flat[i] if i < len(flat) else str(i) for i, v in enumerate(std) if float(v) < CONSTANT_STD]
         if constant:
             out[key] = constant
