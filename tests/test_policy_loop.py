@@ -102,6 +102,12 @@ def test_rik_eval_and_lerobot_eval_run_the_same_episodes(loop: dict[str, Path], 
     assert np.abs(mine_film.astype(int) - theirs_film).mean(axis=(1, 2, 3)).max() < 1.0
     assert np.abs(mine_film[-1].astype(int) - mine_film[0]).mean() > 1.0, "the gripper did not move: a weak check"
     assert (out / "episodes.csv").read_text().splitlines()[0].startswith("seed,handle_type,preset,strategy")
+    # trained on two train-split knobs, the policy meets test-split handles far outside its training states
+    assert all(isinstance(r["stats_sd"], float) and r["stats_dim"].startswith("observation.") for r in rows)
+    far = [r for r in rows if r["stats_sd"] > 5.0]
+    assert far, [r["stats_sd"] for r in rows]
+    warning = next(line for line in r.out.splitlines() if line.startswith("warning: "))
+    assert f"in {len(far)} of 4 episodes the states fell more than 5 standard deviations" in warning
 
 
 def _frames(path: Path) -> np.ndarray:

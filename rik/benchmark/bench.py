@@ -204,8 +204,9 @@ def table_markdown(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFA
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
     buf = io.StringIO()
-    if rows:
-        w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    if rows:  # the union of the rows' fields, in order: an operator's rows may carry fields another's lack
+        w = csv.DictWriter(buf, fieldnames=list(dict.fromkeys(k for r in rows for k in r)), restval="",
+                           lineterminator="\n")
         w.writeheader()
         w.writerows(rows)
     return buf.getvalue()

@@ -62,7 +62,16 @@ def eval_policy(
     trained on an arm's export runs with --robot and that arm (its joint actions); scripted strategies run with any
     robot."""
     from rik.errors import RikError
-    from rik.evaluation.evaluate import EvalSpec, check_eval_out, finished_rows, prepare, run_eval, slug, write_tables
+    from rik.evaluation.evaluate import (
+        EvalSpec,
+        check_eval_out,
+        finished_rows,
+        out_of_stats_warning,
+        prepare,
+        run_eval,
+        slug,
+        write_tables,
+    )
     from rik.registry.load import load_catalog
 
     if label and len(policies) > 1:
@@ -89,6 +98,8 @@ def eval_policy(
                                                                                       len(spec.seeds())))
         else:
             con.print(f"{spec.label}: already evaluated on these episodes in {where}")
+        if (warning := out_of_stats_warning(spec.label, rows)) is not None:
+            con.print(f"[yellow]warning[/]: {warning}", soft_wrap=True)
         wins = sum(r["success"] for r in rows)
         con.print(f"{spec.label}: {len(rows)} episodes, {wins} successes ({100 * wins / len(rows):.1f} %); "
                   f"table.md, episodes.csv, eval_info.json in {where}")

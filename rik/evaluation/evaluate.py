@@ -115,6 +115,65 @@ def env_config(spec: EvalSpec) -> Any:
 
 # ---- one worker's episodes ----------------------------------------------------------------------------------
 _CONTEXT: dict[str, Any] = {}
+OUT_OF_STATS_SD = 5.0
+"""An observation this many standard deviations of the training data from its mean is far outside what the policy
+was trained on (``rik eval`` warns; the dimension's standard deviation counts as at least 1e-6)."""
+
+
+def _state_stats(pre: Any, robot: str) -> dict[str, tuple[Any, Any, tuple[str, ...]]]:
+    """The training data's mean and standard deviation of each state feature the policy normalises (from its
+    preprocessor's normaliser), with the dimensions' names: feature -> (mean, std, names)."""
+    import numpy as np
+
+    from rik.registry.load import load_catalog
+    from rik.sim.feature_keys import EE_POSE, OBS_ENV_STATE, OBS_STATE
+    from rik.sim.observation import ENV_STATE_NAMES
+    from rik.sim.robots.layout import EE_NAMES, robot_layout
+
+    layout = robot_layout(load_catalog().robot(robot).as_arm)
+    names = {OBS_STATE: tuple(layout.state_names), OBS_ENV_STATE: ENV_STATE_NAMES, EE_POSE: EE_NAMES}
+    out = {}
+    for step in getattr(pre, "steps", []):
+        stats = getattr(step, "stats", None) or {}
+        for key, dims in names.items():
+            feature = stats.get(key) or {}
+            if "mean" in feature and "std" in feature:
+                mean = np.asarray(feature["mean"], np.float64).reshape(-1)
+                std = np.maximum(np.asarray(feature["std"], np.float64).reshape(-1), 1e-6)
+                if len(mean) == len(dims):
+                    out[key] = (mean, std, dims)
+    return out
+
+
+def _worst_state(observations: dict[str, Any], stats: dict[str, tuple[Any, Any, tuple[str, ...]]],
+                 last: int) -> tuple[float, str]:
+    """The largest distance of an episode's states from the training data, in its standard deviations, and the
+    dimension (``observation.environment_state.grasp_y``)."""
+    import numpy as np
+
+    worst, where = 0.0, ""
+    for key, (mean, std, dims) in stats.items():
+        if key not in observations:
+            continue
+        values = observations[key][0][:last + 1].double().numpy().reshape(-1, len(mean))
+        z = np.abs(values - mean) / std
+        i = int(np.argmax(z.max(axis=0)))
+        if float(z[:, i].max()) > worst:
+            worst, where = float(z[:, i].max()), f"{key}.{dims[i]}"
+    return worst, where
+
+
+def out_of_stats_warning(label: str, rows: Sequence[dict[str, Any]]) -> str | None:
+    """One line when some episodes' states fell more than :data:`OUT_OF_STATS_SD` standard deviations from the
+    policy's training data (None otherwise, and for scripted operators)."""
+    far = [r for r in rows if isinstance(r.get("stats_sd"), int | float) and r["stats_sd"] > OUT_OF_STATS_SD]
+    if not far:
+        return None
+    worst = max(far, key=lambda r: r["stats_sd"])
+    return (f"{label}: in {len(far)} of {len(rows)} episodes the states fell more than {OUT_OF_STATS_SD:g} standard "
+            f"deviations from the policy's training data (worst: {worst['stats_dim']} at {worst['stats_sd']:.1f}, "
+            f"seed {worst['seed']}): its results there are extrapolation; train on data that covers those "
+            "handles and units")
 
 
 def _context(spec: EvalSpec) -> dict[str, Any]:
@@ -143,7 +202,9 @@ def _context(spec: EvalSpec) -> dict[str, Any]:
                                              preprocessor_overrides={"device_processor":
                                                                      {"device": str(policy.config.device)}})
         env_pre, env_post = make_env_pre_post_processors(env_cfg=cfg, policy_cfg=policy_cfg)
-        ctx |= {"policy": policy, "processors": (env_pre, env_post, pre, post),
+        # the states are kept per step only for state policies: with images every step's frames would be copied
+        stats = {} if spec.needs.get("cameras") else _state_stats(pre, spec.robot)
+        ctx |= {"policy": policy, "processors": (env_pre, env_post, pre, post), "stats": stats,
                 "vec": cfg.create_envs(n_envs=1)[cfg.type][0]}
     else:
         import gymnasium as gym
@@ -169,7 +230,8 @@ def run_episode(spec: EvalSpec, seed: int, video_dir: Path | None = None) -> dic
            "success": bool(result["success"]), "final_opening": round(float(result["final_opening"]), 4),
            "max_opening": round(float(result["max_opening"]), 4), "steps": int(result["steps"]),
            "sum_reward": float(result["sum_reward"]), "max_reward": float(result["max_reward"]),
-           "seconds": round(time.perf_counter() - start, 3), "video": ""}
+           "seconds": round(time.perf_counter() - start, 3), "video": "",
+           "stats_sd": result.get("stats_sd"), "stats_dim": result.get("stats_dim", "")}
     if video_dir is not None and frames:
         from lerobot.utils.io_utils import write_video
 
@@ -199,7 +261,8 @@ def _policy_episode(ctx: dict[str, Any], seed: int, frames: list[Any] | None) ->
             frames.append(env.call("render")[0])
     torch.manual_seed(seed)  # stochastic policies (diffusion) draw the same noise for the same episode
     with contextlib.redirect_stderr(io.StringIO()), torch.no_grad():  # rollout's own progress bar, per episode
-        data = rollout(vec, ctx["policy"], env_pre, env_post, pre, post, seeds=[seed], render_callback=callback)
+        data = rollout(vec, ctx["policy"], env_pre, env_post, pre, post, seeds=[seed], render_callback=callback,
+                       return_observations=bool(ctx["stats"]))
     done = data["done"][0].numpy()
     last = int(np.argmax(done)) if done.any() else len(done) - 1
     if frames is not None:
@@ -209,8 +272,12 @@ def _policy_episode(ctx: dict[str, Any], seed: int, frames: list[Any] | None) ->
     if not result:
         raise RikError(f"episode {seed}: the environment recorded no end of episode")
     rewards = data["reward"][0].numpy()[:last + 1]
-    return {**result, "success": bool(data["success"][0].numpy()[:last + 1].any()),
-            "sum_reward": float(rewards.sum()), "max_reward": float(rewards.max(initial=0.0))}
+    out = {**result, "success": bool(data["success"][0].numpy()[:last + 1].any()),
+           "sum_reward": float(rewards.sum()), "max_reward": float(rewards.max(initial=0.0))}
+    if ctx["stats"]:
+        worst, where = _worst_state(data["observation"], ctx["stats"], last)
+        out |= {"stats_sd": round(worst, 2), "stats_dim": where}
+    return out
 
 
 def _scripted_episode(ctx: dict[str, Any], strategy: str, seed: int, frames: list[Any] | None) -> dict[str, Any]:

@@ -187,9 +187,9 @@ in your data loader.
     if checks.get("constant"):
         parts = "; ".join(f"`{k}`: {', '.join(f'`{n}`' for n in v)}" for k, v in checks["constant"].items())
         state_text += f"""- **Constant dimensions** (standard deviation below 1e-6 over the whole dataset): {parts}.
-  They never change here (one variant, one handle pose), so `MEAN_STD` normalisation divides by about zero there: a policy
-  trained on this dataset reads any other value (another handle, another unit) as far out of its training range.
-  Train on more variants, or leave those dimensions out.
+  They never change here (one variant, one handle pose), so `MEAN_STD` normalisation divides by about zero
+  there: a policy trained on this dataset reads any other value (another handle, another unit) as far out of its
+  training range. Train on more variants, or leave those dimensions out.
 """
     who = "gripper" if layout.is_pose else f"robot arm ({robot.name})"
     return f"""Episodes of a simulated {who} opening articulated furniture (drawers, doors and flaps with real
