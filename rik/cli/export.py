@@ -44,6 +44,9 @@ def export_lerobot(
                                              "scalar_rgb).")] = "auto",
         shard_episodes: Annotated[int, typer.Option("--shard-episodes", min=1, help="Episodes per shard (the "
                                                     "unit of resuming).")] = 16,
+        outcomes: Annotated[str, typer.Option("--outcomes", help="Export only episodes with these outcomes, "
+                                              "comma-separated (S: the successful demonstrations; F failed, P "
+                                              "partly opened).")] = "F,P,S",
         resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted export into --out.")] = False,
         push_to_hub: Annotated[bool, typer.Option("--push-to-hub", help="Upload the finished dataset to the "
                                                   "Hugging Face Hub as --repo-id (needs a login).")] = False,
@@ -55,7 +58,7 @@ def export_lerobot(
     video per camera and stream (none with --streams none), a task string and rik's metadata per episode, a dataset
     card. Renders missing image streams first; crash-safe (sharded, --resume); checks every episode's frame count."""
     from rik.exporters.lerobot_export import export_lerobot as run
-    from rik.exporters.spec import ExportSpec, parse_streams
+    from rik.exporters.spec import ExportSpec, parse_outcomes, parse_streams
     from rik.registry.load import load_catalog
     from rik.render.streams import parse_resolution
 
@@ -63,7 +66,7 @@ def export_lerobot(
     width, height = parse_resolution(res)
     spec = ExportSpec(repo_id, parse_streams(streams),
                       tuple(c.strip() for c in cameras.split(",") if c.strip()) if cameras else (), width, height,
-                      fps, codec, spp, denoise, variant, shard_episodes)
+                      fps, codec, spp, denoise, variant, shard_episodes, parse_outcomes(outcomes))
     cat = load_catalog(overlays(catalog))
     with progress_bar() as progress:
         report = stage_progress(progress)

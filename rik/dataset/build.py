@@ -38,9 +38,9 @@ STAGES = ("record", "render", "shard")
 DEFAULT_RETRIES = 2
 MARKER_FIELDS: dict[str, tuple[tuple[str, type | tuple[type, ...]], ...]] = {
     "record": (("output", str), ("episode", str), ("outcome", str), ("states_sha256", str)),
-    "render": (("output", str),), "shard": (("output", str),)}
+    "render": (("output", str),), "shard": (("output", (str, type(None))),)}
 """The fields of a unit's marker the build reads back, and their types; a marker without them is damaged and its
-unit runs again."""
+unit runs again. A shard's output is None where the spec's outcomes left out all its episodes."""
 
 
 @dataclass
@@ -124,6 +124,8 @@ def read_marker(folders: Folders, stage: str, key: str) -> dict[str, Any] | None
     if not isinstance(data, dict) or not all(isinstance(data.get(f), t) for f, t in MARKER_FIELDS[stage]):
         return None  # a damaged marker: the unit runs again
     output = data["output"]
+    if output is None:
+        return data  # a shard whose episodes the spec's outcomes all left out
     parts = output.split("/")
     if output.startswith("/") or any(p in ("", ".", "..") for p in parts) or not (folders.work / output).exists():
         return None  # its output is gone, or the marker points outside the work folder
@@ -183,8 +185,13 @@ def run_shard(catalog: Catalog, arg: tuple[Folders, ShardUnit, ExportSpec, dict[
     t0 = time.perf_counter()
     sources = []
     for e in unit.episodes:
+        if read_meta(folders.episodes / e.episode_id).outcome not in spec.outcomes:
+            continue  # left out of the dataset by the spec's outcomes
         streams = {s: folders.work / stream_dirs[f"{e.key}/{s}"] for s in spec.streams}
         sources.append(EpisodeSource(folders.episodes / e.episode_id, streams))
+    if not sources:  # a shard whose episodes are all left out: nothing to write, nothing to merge
+        return _mark(folders, "shard", unit.key, {"output": None, "episodes": 0, "frames": 0, "fps": None,
+                                                  "seconds": time.perf_counter() - t0})
     cameras = list(spec.cameras)
     if not cameras and spec.streams:
         first = next(iter(sources[0].streams.values()))
@@ -194,7 +201,8 @@ def run_shard(catalog: Catalog, arg: tuple[Folders, ShardUnit, ExportSpec, dict[
     frames = write_shard(catalog, root, f"{spec.repo_id}-shard-{unit.index:04d}", sources, cameras, spec, fps,
                          folders.variants)
     return _mark(folders, "shard", unit.key, {"output": str(root.relative_to(folders.work)), "frames": frames,
-                                              "fps": fps, "seconds": time.perf_counter() - t0})
+                                              "episodes": len(sources), "fps": fps,
+                                              "seconds": time.perf_counter() - t0})
 
 
 def export_spec(plan: Plan) -> ExportSpec:
@@ -204,7 +212,7 @@ def export_spec(plan: Plan) -> ExportSpec:
     w, h = s.size
     return ExportSpec(s.repo_id, streams=s.streams, cameras=s.cameras, width=w, height=h, fps=s.fps, codec=s.codec,
                       spp=s.render.spp, denoise=s.render.denoise, variant=s.render.variant,
-                      shard_episodes=s.shard_episodes)
+                      shard_episodes=s.shard_episodes, outcomes=tuple(s.outcomes))
 
 
 # ---- the scheduler ----------------------------------------------------------------------------------------------
@@ -485,14 +493,20 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
     merged = folders.work / f"merged-{plan.spec_hash[:16]}"
     if merged.exists():
         shutil.rmtree(merged)
-    roots = [folders.work / schedule.done[s.key]["output"] / "ds" for s in plan.shards]
+    done = [schedule.done[s.key] for s in plan.shards]
+    roots = [folders.work / d["output"] / "ds" for d in done if d.get("output")]
+    if not roots:
+        raise RikError(f"no episode of the build has outcome {' or '.join(plan.spec.outcomes)} (outcomes: "
+                       f"{', '.join(f'{k} {v}' for k, v in result.outcomes.items())}); nothing to publish: record "
+                       "more episodes, or widen the spec's outcomes")
+    kept = sum(int(d.get("episodes", len(s.episodes))) for d, s in zip(done, plan.shards, strict=True))
     quiet_encoders()
     aggregate_shards(plan.spec.repo_id, roots, merged)
     order_stats(merged)
     from rik.sim.robots.layout import robot_layout
 
     robot = catalog.robot(plan.spec.robot)
-    checks = check_dataset(merged, plan.spec.repo_id, len(plan.episodes),
+    checks = check_dataset(merged, plan.spec.repo_id, kept,
                            robot_layout(robot.as_arm))
     fps = int(checks["fps"])
     write_card(catalog, merged, schedule.xspec, fps, checks, extra=_card_text(plan), robot=plan.spec.robot)

@@ -55,7 +55,8 @@ def check_spec_shape(path: Path) -> None:
 
 def spec_data(spec: DatasetSpec) -> dict[str, Any]:
     """The spec as JSON data, every default filled in (what its hash covers), but ``robot`` where it is the
-    Hand-E and an operator's ``action_noise`` where it has none: specs written before those existed keep their
+    Hand-E, an operator's ``action_noise`` where it has none and ``outcomes`` where all are exported: specs written
+    before those existed keep their
     hash, and the datasets built from them stay current."""
     data = spec.model_dump(mode="json")
     if data.get("robot") == DEFAULT_ROBOT:
@@ -63,6 +64,8 @@ def spec_data(spec: DatasetSpec) -> dict[str, Any]:
     for operator in data["operators"]:
         if operator.get("action_noise") is None:
             operator.pop("action_noise", None)
+    if data.get("outcomes") == ["F", "P", "S"]:
+        del data["outcomes"]
     return data
 
 

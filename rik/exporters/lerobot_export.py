@@ -251,8 +251,11 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     if partial_dir.exists() and not resume:
         raise RikError(f"{partial_dir}: an interrupted export is there; run again with --resume to continue it, or "
                        "delete it")
-    dirs = find_episodes(list(episodes))
-    metas = {d: read_meta(d) for d in dirs}
+    from rik.exporters.spec import keep_outcomes
+
+    metas = keep_outcomes({d: read_meta(d) for d in find_episodes(list(episodes))}, spec.outcomes,
+                          ", ".join(str(e) for e in episodes))
+    dirs = list(metas)
     robot = one_robot(metas)
     layout = [episode_layout(catalog, d, m) for d, m in metas.items()][0]  # in the catalog, with its joints
     _check_episodes(catalog, metas)

@@ -5,6 +5,7 @@ its card (:mod:`rik.exporters.lerobot_card`), ``rik dataset build`` and the CLI.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from rik.errors import RikError
 from rik.sim.observation import STREAM_SUFFIX
@@ -49,6 +50,34 @@ class ExportSpec:
     denoise: bool = True
     variant: str = "auto"
     shard_episodes: int = 16
+    outcomes: tuple[str, ...] = ("F", "P", "S")
+    """Outcomes of the episodes exported (``("S",)``: the successful demonstrations only); the others are left out."""
+
+
+OUTCOMES = ("F", "P", "S")
+"""Episode outcomes: failed, partly opened, succeeded (:mod:`rik.sim.outcome`)."""
+
+
+def parse_outcomes(text: str) -> tuple[str, ...]:
+    """The outcomes of ``--outcomes`` (comma-separated letters, e.g. ``S``), in F, P, S order."""
+    items = {s.strip().upper() for s in text.split(",") if s.strip()}
+    unknown = sorted(items - set(OUTCOMES))
+    if unknown or not items:
+        raise RikError(f"--outcomes {text}: give some of F, P, S (failed, partly opened, succeeded), comma-separated"
+                       + (f"; '{unknown[0]}' is none of them" if unknown else ""))
+    return tuple(o for o in OUTCOMES if o in items)
+
+
+def keep_outcomes(metas: dict[Any, Any], outcomes: tuple[str, ...], where: str) -> dict[Any, Any]:
+    """The episodes of ``metas`` (path -> meta) whose outcome is one of ``outcomes``; none is one line."""
+    kept = {d: m for d, m in metas.items() if m.outcome in outcomes}
+    if metas and not kept:
+        from collections import Counter
+
+        counts = ", ".join(f"{k} {v}" for k, v in sorted(Counter(m.outcome for m in metas.values()).items()))
+        raise RikError(f"{where}: none of the {len(metas)} episodes has outcome {' or '.join(outcomes)} (they are "
+                       f"{counts}): nothing to export")
+    return kept
 
 
 def parse_streams(text: str) -> tuple[str, ...]:

@@ -105,6 +105,9 @@ class DatasetSpec(Frozen):
     codec: Literal["libsvtav1", "h264", "hevc"] = "libsvtav1"
     shard_episodes: int = Field(default=16, ge=1, le=10_000)
     """Episodes per shard: each shard is a LeRobot dataset of its own, merged at the end."""
+    outcomes: tuple[Literal["F", "P", "S"], ...] = Field(default=("F", "P", "S"), min_length=1)
+    """Outcomes of the episodes exported into the dataset: ``[S]`` keeps the successful demonstrations only (every
+    episode is recorded, and counted in the build's outcomes, either way)."""
 
     @field_validator("resolution")
     @classmethod
