@@ -230,8 +230,9 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
     check_operators(spec, source)
     check_cameras(spec, source)
     check_codec(spec, source)
-    chosen = select_variants(catalog, spec, source)
-    check_size(spec, len(chosen), source)
+    drawn = draw_episodes(catalog, spec, source)
+    chosen = list(dict.fromkeys(v for v, _, _ in drawn)) if drawn else select_variants(catalog, spec, source)
+    check_size(spec, len(drawn) if drawn else len(chosen), source)
     collision = resolve_collision(variants_dir)
     rejected = {r.id: f"check {r.failed_check} failed: {r.reason}"
                 for r in rejected_variants(catalog, chosen, variants_dir, workers=workers,
@@ -244,25 +245,52 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
     keys = {v: parse_variant_id(catalog, v) for v in kept}
     plan = Plan(spec, hash_of_spec(spec), source, {v: spec_hash(catalog, k, collision) for v, k in keys.items()},
                 rejected, collision)
-    lay_out_units(plan, {v: catalog.base_units[k.base].fronts[0].id for v, k in keys.items()})
+    if drawn:
+        lay_out_units(plan, {}, [d for d in drawn if d[0] not in rejected])
+    else:
+        lay_out_units(plan, {v: catalog.base_units[k.base].fronts[0].id for v, k in keys.items()})
     return plan
 
 
-def lay_out_units(plan: Plan, fronts: dict[str, str]) -> None:
+def draw_episodes(catalog: Catalog, spec: DatasetSpec, source: str) -> list[tuple[str, str, int]]:
+    """(variant, front, seed) of each episode of ``variants.draw`` (empty without it), drawn from its seed as the
+    gym environment draws it."""
+    sel = spec.variants
+    if sel.draw is None:
+        return []
+    from rik.episodes.draw import DEFAULT_PRESETS, DEFAULT_TYPES, Draw
+
+    draw = Draw(sel.split, tuple(sel.handle_types) or DEFAULT_TYPES, tuple(sel.presets) or DEFAULT_PRESETS,
+                tuple(sel.kinds))
+    try:
+        draw.check(catalog)
+    except RikError as exc:
+        raise _field_error(source, "variants", exc) from None
+    out = []
+    for seed in range(spec.seed, spec.seed + sel.draw):
+        episode = draw.episode(catalog, seed)
+        out.append((episode.variant, episode.front, seed))
+    return out
+
+
+def lay_out_units(plan: Plan, fronts: dict[str, str], drawn: Sequence[tuple[str, str, int]] = ()) -> None:
     """Fill ``plan``'s episodes, renders and shards, with their keys, for its variants (``fronts``: variant id ->
-    the front its episodes operate, in plan order). Linear in the episodes: each shard takes its renders by index
+    the front its episodes operate, in plan order; or ``drawn``: the (variant, front, seed) of each episode of
+    ``variants.draw``). Linear in the episodes: each shard takes its renders by index
     (:meth:`Plan.episode_renders`), never by a search."""
     spec = plan.spec
     record_versions = library_versions("mujoco")
-    for v, front in fronts.items():
-        for op in spec.operators:
-            for k in range(spec.episodes_per_variant):
-                seed = spec.seed + k
-                key = json_sha256({"stage": "record", "variant": v, "variant_hash": plan.variants[v],
-                                   "front": front, "strategy": op.strategy, "params": op.params, "label": op.label,
-                                   "seed": seed, "max_seconds": spec.max_seconds, "gripper": spec.robot,
-                                   "versions": record_versions})  # the robot ("gripper" since the Hand-E's days)
-                plan.episodes.append(EpisodeUnit(len(plan.episodes), v, front, op, seed, key, spec.robot))
+    if drawn:
+        runs = [(v, front, op, seed) for v, front, seed in drawn for op in spec.operators]
+    else:
+        runs = [(v, front, op, spec.seed + k) for v, front in fronts.items() for op in spec.operators
+                for k in range(spec.episodes_per_variant)]
+    for v, front, op, seed in runs:
+        key = json_sha256({"stage": "record", "variant": v, "variant_hash": plan.variants[v],
+                           "front": front, "strategy": op.strategy, "params": op.params, "label": op.label,
+                           "seed": seed, "max_seconds": spec.max_seconds, "gripper": spec.robot,
+                           "versions": record_versions})  # the robot ("gripper" since the Hand-E's days)
+        plan.episodes.append(EpisodeUnit(len(plan.episodes), v, front, op, seed, key, spec.robot))
     render_versions = library_versions("mujoco", "mitsuba")
     stream_keys = {s: plan.stream_spec(s).key for s in spec.streams}
     cameras = list(spec.cameras)

@@ -66,6 +66,8 @@ def spec_data(spec: DatasetSpec) -> dict[str, Any]:
             operator.pop("action_noise", None)
     if data.get("outcomes") == ["F", "P", "S"]:
         del data["outcomes"]
+    if data["variants"].get("draw") is None:
+        data["variants"].pop("draw", None)
     return data
 
 

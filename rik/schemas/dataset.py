@@ -30,12 +30,21 @@ class VariantSelection(Frozen):
     presets: tuple[SimpleId, ...] = ()
     sample: int | None = Field(default=None, ge=1)
     """Keep this many of the selected variants, drawn with the spec's seed (None: all)."""
+    draw: int | None = Field(default=None, ge=1, le=1_000_000)
+    """Instead of every selected variant: this many episodes, each drawn from its seed (the spec's seed, then +1
+    each) as the gym environment, ``rik eval`` and ``rik record --split`` draw them: the seed's handle type x preset
+    cell in turn, a variant and front of the split's handles (:mod:`rik.episodes.draw`), so ``draw: 360`` records
+    exactly ``rik record --split train --episodes 360``'s episodes. Takes ``split``, ``handle_types``, ``presets``
+    and ``kinds``; each drawn episode runs once per operator."""
 
     @model_validator(mode="after")
     def _ids_alone(self) -> VariantSelection:
         if self.ids and (self.base_units or self.handle_types or self.handles or self.presets or self.split != "all"):
             raise ValueError("give either explicit 'ids' or filters (split, base_units, handle_types, handles, "
                              "presets), not both")
+        if self.draw is not None and (self.ids or self.base_units or self.handles or self.sample is not None):
+            raise ValueError("'draw' takes split, handle_types, presets and kinds; drop ids, base_units, handles "
+                             "and sample")
         return self
 
 
@@ -128,6 +137,9 @@ class DatasetSpec(Frozen):
                 raise ValueError(f"two operators are labelled '{label}'; give each a distinct 'name'")
         if not self.streams and self.cameras:
             raise ValueError("a state-only dataset (streams: []) has no cameras; drop 'cameras'")
+        if self.variants.draw is not None and self.episodes_per_variant != 1:
+            raise ValueError("with variants.draw each drawn episode runs once per operator; drop "
+                             "'episodes_per_variant'")
         return self
 
     @property
