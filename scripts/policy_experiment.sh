@@ -1,95 +1,112 @@
 #!/usr/bin/env bash
-# The experiment of docs/policies.md: scripted demonstrations on the train split -> state-only LeRobot datasets ->
-# ACT and diffusion trained with lerobot-train on the CPU -> evaluated with rik eval on the test split (unseen
-# handles) and on fresh episodes of the train split (seen handles), beside the scripted strategies on the same
-# episodes; and the fidelity ablation: the same demonstrations recorded with convex-hull handle collision.
+# The experiment of docs/policies.md: demonstrations built from the specs of examples/policies (the planned
+# strategy, whose grasps come from the catalog's visual meshes; with and without DART-style action noise; in CoACD
+# and convex-hull collision variants) -> state-only LeRobot datasets -> ACT trained with lerobot-train on the CPU,
+# a checkpoint every STEPS/30 steps -> every chosen checkpoint evaluated with rik eval on the test split (unseen
+# handles) beside the scripted strategy on the same episodes -> learning curves and tables (scripts/policy_curves.py).
 #
 #   bash scripts/policy_experiment.sh [WORK_DIR]     (default: experiments/policies; each step skips finished work)
 #
-# Scale it with the variables below: DEMOS demonstrations per strategy (a multiple of 9: handle types x presets),
-# STEPS training steps, PER_CELL evaluated episodes per handle type x preset. On 2 CPU cores the defaults take
-# about 90 minutes; on a GPU machine add --policy.device=cuda and train on images (--streams sim, --env.cameras).
+# Full size (docs/policies.md, about 7 CPU-hours on 2 cores): the defaults. Reduced size, the same pipeline end to
+# end in about 10 minutes on 2 cores:
+#   DEMOS=18 STEPS=300 SHORT_STEPS=150 PER_CELL=1 bash scripts/policy_experiment.sh experiments/policies-small
+# STAGES picks the stages to run (default "data train eval report"; tests run "data" at DEMOS=1).
+# Every hyper-parameter of the training is pinned below; one thread per process, so two trainings share 2 cores.
 set -euo pipefail
 WORK=${1:-experiments/policies}
-DEMOS=${DEMOS:-90}
-STEPS=${STEPS:-3000}
-PER_CELL=${PER_CELL:-10}
+DEMOS=${DEMOS:-360}            # drawn demonstrations per data set (40 per handle type x preset cell)
+STEPS=${STEPS:-30000}          # training steps of the main run (act-pl); act-pl-quarter trains STEPS/3
+SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, matched CoACD), two seeds each
+PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
-# one thread per process: training and evaluations beside each other otherwise fight over the cores
-export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl} OMP_NUM_THREADS=1
+STAGES=${STAGES:-data train eval report}
+export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl} OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 REPO=$(pwd)
 RIK=(uv run --project "$REPO" --locked rik)
-mkdir -p "$WORK"
+mkdir -p "$WORK/specs"
 cd "$WORK"
+stage() { [[ " $STAGES " == *" $1 "* ]]; }
 
-record() {  # record NAME STRATEGY VARIANTS_DIR
-  [ -d "demos-$1" ] || "${RIK[@]}" record --split train --strategy "$2" --episodes "$DEMOS" --seed 0 \
-    --out "demos-$1" --variants "$3" --workers "$WORKERS"
+build() {  # build NAME SPEC VARIANTS [DRAW]: a spec of examples/policies at DEMOS (or DRAW) drawn episodes
+  local spec="specs/$1.yaml"
+  sed -e "s/^  draw: 360 /  draw: ${4:-$DEMOS} /" -e "s|^repo_id: .*|repo_id: local/rik-$1|" \
+    "$REPO/examples/policies/$2.yaml" > "$spec"
+  [ -d "ds-$1" ] || "${RIK[@]}" dataset build "$spec" --out "ds-$1" --work "work-$1" --variants "$3" -j "$WORKERS"
 }
-export_ds() {  # export_ds NAME VARIANTS_DIR [EPISODE_FOLDERS...]: successful demonstrations, state only
-  local name=$1 variants=$2; shift 2
-  [ -d "ds-$name" ] && return
-  mkdir -p "sel-$name"
-  for d in "$@"; do
-    if grep -q '"outcome": "S"' "$d/meta.json"; then ln -sfn "$(realpath "$d")" "sel-$name/$(basename "$d")"; fi
-  done
-  "${RIK[@]}" export-lerobot "sel-$name" --out "ds-$name" --repo-id "local/rik-$name" --streams none \
-    --variants "$variants"
-}
-train() {  # train NAME DATASET act|diffusion [SEED]
+train() {  # train RUN DATASET STEPS [SEED]: state-only ACT, every hyper-parameter pinned
   [ -f "runs/$1/checkpoints/last/pretrained_model/model.safetensors" ] && return
   rm -rf "runs/$1"
-  local common=(--dataset.repo_id="local/rik-$2" --dataset.root="ds-$2" --policy.push_to_hub=false
-                --policy.device=cpu --steps="$STEPS" --batch_size=32 --log_freq=200 --save_freq="$STEPS"
-                --env_eval_freq=1000000 --output_dir="runs/$1" --wandb.enable=false --num_workers=0 --seed="${4:-0}")
-  if [ "$3" = act ]; then
-    uv run --project "$REPO" --locked lerobot-train "${common[@]}" --policy.type=act --policy.dim_model=128 \
-      --policy.dim_feedforward=512 --policy.n_heads=4 --policy.chunk_size=20 --policy.n_action_steps=10 \
-      --policy.optimizer_lr=1e-4 \
-      --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MEAN_STD", "ENV": "MEAN_STD", "ACTION": "MEAN_STD"}'
-  else
-    uv run --project "$REPO" --locked lerobot-train "${common[@]}" --policy.type=diffusion \
-      --policy.down_dims='[64, 128, 256]' --policy.horizon=16 --policy.n_action_steps=8 --policy.n_obs_steps=2 \
-      --policy.noise_scheduler_type=DDIM --policy.num_inference_steps=10 \
-      --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MIN_MAX", "ENV": "MIN_MAX", "ACTION": "MIN_MAX"}'
-  fi
+  local start=$SECONDS
+  uv run --project "$REPO" --locked lerobot-train --dataset.repo_id="local/rik-$2" --dataset.root="ds-$2" \
+    --policy.push_to_hub=false --policy.device=cpu --steps="$3" --batch_size=32 --log_freq=500 \
+    --save_freq=$(( STEPS / 30 > 1 ? STEPS / 30 : 1 )) --env_eval_freq=1000000 --output_dir="runs/$1" \
+    --wandb.enable=false --num_workers=0 --seed="${4:-0}" \
+    --policy.type=act --policy.dim_model=128 --policy.dim_feedforward=512 --policy.n_heads=4 \
+    --policy.n_encoder_layers=4 --policy.n_decoder_layers=1 --policy.chunk_size=20 --policy.n_action_steps=10 \
+    --policy.optimizer_lr=1e-4 --policy.optimizer_weight_decay=1e-4 --policy.kl_weight=10.0 --policy.dropout=0.1 \
+    --policy.use_vae=true --policy.latent_dim=32 --policy.n_vae_encoder_layers=4 \
+    --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MEAN_STD", "ENV": "MEAN_STD", "ACTION": "MEAN_STD"}' \
+    > "train-$1.log" 2>&1
+  echo "$1 $3 steps $((SECONDS - start)) s" >> train-times.txt
 }
-evaluate() {  # evaluate OPERATOR LABEL SPLIT SEED
-  [ -f "eval/$2-$3/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2" --split "$3" --seed "$4" \
-    --episodes-per-cell "$PER_CELL" --videos 2 --workers "$WORKERS" --out "eval/$2-$3" --variants variants
+evaluate() {  # evaluate OPERATOR LABEL [VARIANTS]: the test split, seeds 1000.., PER_CELL episodes per cell
+  local out="eval/$2-test${3:+-${3#variants-}}"
+  [ -f "$out/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2" --split test --seed 1000 \
+    --episodes-per-cell "$PER_CELL" --videos 2 --workers "$WORKERS" --out "$out" --variants "${3:-variants}"
+}
+checkpoint() {  # checkpoint RUN STEP: the folder of a saved step (the nearest saved one at or below STEP)
+  local saved
+  saved=$(ls "runs/$1/checkpoints" | grep -E '^[0-9]+$' | awk -v s="$2" '$1 + 0 <= s + 0' | sort -n | tail -n 1)
+  echo "runs/$1/checkpoints/$saved/pretrained_model"
 }
 
-# 1. demonstrations (CoACD collision; and convex-hull collision, whose rejected variants are skipped)
-record cr contact_rich variants
-record gv grasp_vertical variants
-[ -f variants-hull/collision.json ] || "${RIK[@]}" variants build drawer-chest-80__two_point-bow-128__normal \
-  --collision hull --out variants-hull
-record cr-hull contact_rich variants-hull
-# 2. state-only datasets of the successful demonstrations; cr72: the CoACD demonstrations of the seeds that also
-#    succeeded with hull collision (the same episodes, so the ablation compares collision, not data size)
-export_ds cr variants demos-cr/*
-export_ds gv variants demos-gv/*
-export_ds hull variants-hull demos-cr-hull/*
-matched=(); for d in demos-cr-hull/*; do
-  grep -q '"outcome": "S"' "$d/meta.json" && matched+=("demos-cr/$(basename "$d")"); done
-export_ds cr72 variants "${matched[@]}"
-# 3. training (timed)
-for job in "act-cr cr act" "act-gv gv act" "act-hull hull act" "act-cr72 cr72 act" "dp-cr cr diffusion" \
-           "act-hull-s1 hull act 1" "act-cr72-s1 cr72 act 1"; do
-  set -- $job
-  start=$SECONDS
-  if [ ! -f "runs/$1/checkpoints/last/pretrained_model/model.safetensors" ]; then
-    train "$1" "$2" "$3" "${4:-0}" > "train-$1.log" 2>&1
-    echo "$1 $((SECONDS - start)) s" >> train-times.txt
+if stage data; then
+  # CoACD variants (the catalog's default) and convex-hull ones, whose single hull per handle is the low-fidelity arm
+  [ -f variants-hull/collision.json ] || "${RIK[@]}" variants build drawer-chest-80__two_point-bow-128__normal \
+    --collision hull --out variants-hull
+  build pl planned-360 variants                      # the main data set
+  build pl-quarter planned-360 variants $(( DEMOS / 4 > 0 ? DEMOS / 4 : 1 ))  # the first quarter of them
+  build pln planned-dart-360 variants                # the same episodes, DART-style
+  build hull planned-hull-360 variants-hull          # the same episodes in hull variants (rejected ones left out)
+  # the CoACD demonstrations of exactly the episodes the hull data set holds (the ablation compares collision,
+  # not data size): same seeds, same demonstrator, same plans (tests/test_collision_mode.py)
+  if [ ! -d ds-cm ]; then
+    rm -rf sel-cm; mkdir -p sel-cm
+    for meta in work-hull/episodes/*/meta.json; do
+      grep -q '"outcome": "S"' "$meta" || continue
+      seed=$(sed -n 's/.*"seed": \([0-9]*\).*/\1/p' "$meta")
+      match=$(grep -l "\"seed\": $seed," work-pl/episodes/*/meta.json | head -n 1)
+      ln -sfn "$(realpath "$(dirname "$match")")" "sel-cm/$(basename "$(dirname "$match")")"
+    done
+    "${RIK[@]}" export-lerobot sel-cm --out ds-cm --repo-id local/rik-cm --streams none --outcomes S \
+      --variants variants
   fi
-done
-# 4. evaluation: unseen handles (test split) and seen handles (train split, seeds the demonstrations did not use)
-for split_seed in "test 1000" "train 5000"; do
-  set -- $split_seed
-  evaluate strategy:contact_rich contact_rich "$1" "$2"
-  evaluate strategy:grasp_vertical grasp_vertical "$1" "$2"
-  for run in act-cr act-gv act-hull act-cr72 dp-cr act-hull-s1 act-cr72-s1; do
-    evaluate "runs/$run/checkpoints/last/pretrained_model" "$run" "$1" "$2"
+fi
+if stage train; then
+  train act-pl pl "$STEPS"
+  train act-pl-quarter pl-quarter $(( STEPS / 3 ))
+  for seed in 0 1; do
+    train "act-pln-s$seed" pln "$SHORT_STEPS" "$seed"
+    train "act-hull-s$seed" hull "$SHORT_STEPS" "$seed"
+    train "act-cm-s$seed" cm "$SHORT_STEPS" "$seed"
   done
-done
-# (docs/policies.md evaluates the train split with 5 episodes per cell, for the scripted strategies, act-cr and act-gv)
+fi
+if stage eval; then
+  evaluate strategy:planned planned
+  for step in $(( STEPS / 10 )) $(( STEPS / 3 )) $(( STEPS * 2 / 3 )) "$STEPS"; do
+    evaluate "$(checkpoint act-pl "$step")" "act-pl-$step"
+  done
+  evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
+  evaluate "$(checkpoint act-pl "$SHORT_STEPS")" "act-pl-$SHORT_STEPS"
+  for seed in 0 1; do
+    for run in pln hull cm; do
+      evaluate "runs/act-$run-s$seed/checkpoints/last/pretrained_model" "act-$run-s$seed"
+    done
+    # the sim-to-sim gap: each ablation arm also in the other collision model
+    evaluate "runs/act-hull-s$seed/checkpoints/last/pretrained_model" "act-hull-s$seed" variants-hull
+    evaluate "runs/act-cm-s$seed/checkpoints/last/pretrained_model" "act-cm-s$seed" variants-hull
+  done
+fi
+if stage report; then
+  uv run --project "$REPO" --locked python "$REPO/scripts/policy_curves.py" . --out report
+fi

@@ -1,0 +1,117 @@
+"""Learning curves and tables of the policy experiment (scripts/policy_experiment.sh, docs/policies.md).
+
+Reads every ``rik eval`` output under ``WORK/eval`` (its ``eval_info.json``: the policy's folder and every episode's
+outcome), finds each policy's training run, step and data set size from its folder
+(``runs/<run>/checkpoints/<step>/pretrained_model`` and its ``train_config.json``), and writes:
+
+- ``OUT/curves.md``: one row per evaluation (operator, training data, demonstrations, steps, the simulator it was
+  evaluated in, F/P/S, S with its 95 % Wilson interval);
+- ``OUT/curves.png``: S on the test split against training steps, one line per run, with the intervals.
+
+    uv run python scripts/policy_curves.py experiments/policies --out docs/img/policies-curves
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from rik.benchmark.bench import wilson
+from rik.paths import pyplot, save_figure, write_atomic
+
+
+def _train_facts(policy: Path) -> dict[str, Any]:
+    """Run name, step and data set (root, episodes) of a saved checkpoint; empty for a scripted operator."""
+    if policy.name != "pretrained_model" or policy.parents[1].name != "checkpoints":
+        return {}
+    run, step = policy.parents[2].name, policy.parent.name
+    config = json.loads((policy / "train_config.json").read_text(encoding="utf-8"))
+    root = Path(config["dataset"]["root"])
+    if not root.is_absolute():
+        root = policy.parents[4] / root  # lerobot-train ran in the work folder
+    info = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))
+    if step == "last":
+        step = str(config["steps"])
+    return {"run": run, "step": int(step), "data": root.name, "demos": int(info["total_episodes"]),
+            "seed": int(config.get("seed") or 0)}
+
+
+def rows(work: Path) -> list[dict[str, Any]]:
+    """One row per evaluation under ``work/eval``."""
+    out = []
+    for info_file in sorted((work / "eval").glob("*/eval_info.json")):
+        info = json.loads(info_file.read_text(encoding="utf-8"))
+        spec, episodes = info["rik"]["spec"], info["rik"]["per_episode"]
+        operator = spec["operator"]
+        facts = {} if operator.startswith("strategy:") else _train_facts((work / operator).resolve()
+                                                                         if not Path(operator).is_absolute()
+                                                                         else Path(operator))
+        counts = {o: sum(e["outcome"] == o for e in episodes) for o in "FPS"}
+        lo, hi = wilson(counts["S"], len(episodes))
+        out.append({"label": spec.get("label") or operator, "folder": info_file.parent.name,
+                    "simulator": "hull" if "hull" in Path(spec["variants"]).name else "coacd",
+                    "n": len(episodes), **counts, "rate": counts["S"] / len(episodes), "lo": lo, "hi": hi, **facts})
+    return out
+
+
+def table(found: list[dict[str, Any]]) -> str:
+    lines = ["| operator | run | data | demos | steps | seed | simulator | episodes | F | P | S | S, 95 % Wilson |",
+             "|---|---|---|---:|---:|---:|---|---:|---:|---:|---:|---|"]
+    for r in sorted(found, key=lambda r: (r.get("run", ""), r.get("step", 0), r["simulator"])):
+        lines.append(f"| {r['label']} | {r.get('run', '-')} | {r.get('data', '-')} | {r.get('demos', '-')} | "
+                     f"{r.get('step', '-')} | {r.get('seed', '-')} | {r['simulator']} | {r['n']} | {r['F']} | "
+                     f"{r['P']} | {r['S']} | {100 * r['rate']:.0f} % [{100 * r['lo']:.0f}, {100 * r['hi']:.0f}] |")
+    return "\n".join(lines) + "\n"
+
+
+def plot(found: list[dict[str, Any]], png: Path) -> Path:
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    runs: dict[str, list[dict[str, Any]]] = {}
+    for r in found:
+        if "run" in r and r["simulator"] == "coacd":
+            runs.setdefault(f"{r['run']} ({r['demos']} demos)", []).append(r)
+    for name, points in sorted(runs.items()):
+        points.sort(key=lambda r: r["step"])
+        x = [p["step"] for p in points]
+        y = [100 * p["rate"] for p in points]
+        err = [[100 * (p["rate"] - p["lo"]) for p in points], [100 * (p["hi"] - p["rate"]) for p in points]]
+        ax.errorbar(x, y, yerr=err, marker="o", capsize=3, label=name)
+    for r in found:
+        if "run" not in r and r["simulator"] == "coacd":
+            ax.axhline(100 * r["rate"], ls="--", color="grey", lw=1)
+            ax.text(ax.get_xlim()[0], 100 * r["rate"] - 5, f"{r['label']} (scripted)", color="grey", fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xlabel("training steps (batch 32)")
+    ax.set_ylabel("S on unseen handles (test split), %")
+    ax.set_ylim(0, 105)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="center right")
+    ax.set_title("ACT, state only: success against training steps (95 % Wilson intervals)", fontsize=10)
+    fig.tight_layout()
+    return save_figure(fig, png)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("work", type=Path, help="the experiment's folder (scripts/policy_experiment.sh's WORK_DIR)")
+    parser.add_argument("--out", type=Path, default=None, help="where to write curves.md and curves.png")
+    args = parser.parse_args(argv)
+    found = rows(args.work)
+    if not found:
+        print(f"{args.work}/eval: no rik eval outputs yet", file=sys.stderr)
+        return 2
+    out = args.out or args.work / "report"
+    out.mkdir(parents=True, exist_ok=True)
+    write_atomic(out / "curves.md", table(found))
+    plot(found, out / "curves.png")
+    print(table(found), end="")
+    print(f"wrote {out / 'curves.md'} and {out / 'curves.png'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
