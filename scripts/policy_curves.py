@@ -74,9 +74,9 @@ def plot(found: list[dict[str, Any]], png: Path) -> Path:
     for r in found:
         if "run" in r and r["simulator"] == "coacd":
             runs.setdefault(f"{r['run']} ({r['demos']} demos)", []).append(r)
-    for name, points in sorted(runs.items()):
+    for k, (name, points) in enumerate(sorted(runs.items())):
         points.sort(key=lambda r: r["step"])
-        x = [p["step"] for p in points]
+        x = [p["step"] * (1 + 0.02 * k) for p in points]  # a little apart, so equal points stay visible
         y = [100 * p["rate"] for p in points]
         err = [[100 * (p["rate"] - p["lo"]) for p in points], [100 * (p["hi"] - p["rate"]) for p in points]]
         ax.errorbar(x, y, yerr=err, marker="o", capsize=3, label=name)
@@ -84,7 +84,11 @@ def plot(found: list[dict[str, Any]], png: Path) -> Path:
         if "run" not in r and r["simulator"] == "coacd":
             ax.axhline(100 * r["rate"], ls="--", color="grey", lw=1)
             ax.text(ax.get_xlim()[0], 100 * r["rate"] - 5, f"{r['label']} (scripted)", color="grey", fontsize=8)
+    ax.axhline(60, ls=":", color="black", lw=1)
     ax.set_xscale("log")
+    steps = sorted({r["step"] for r in found if "step" in r})
+    ax.set_xticks(steps, [f"{s / 1000:g}k" for s in steps])
+    ax.minorticks_off()
     ax.set_xlabel("training steps (batch 32)")
     ax.set_ylabel("S on unseen handles (test split), %")
     ax.set_ylim(0, 105)
