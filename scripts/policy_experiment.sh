@@ -49,6 +49,22 @@ train() {  # train RUN DATASET STEPS [SEED]: state-only ACT, every hyper-paramet
     > "train-$1.log" 2>&1
   echo "$1 $3 steps $((SECONDS - start)) s" >> train-times.txt
 }
+train_diffusion() {  # train_diffusion RUN DATASET STEPS [SEED]: diffusion with the pre-May-2026 horizon (16/8)
+  [ -f "runs/$1/checkpoints/last/pretrained_model/model.safetensors" ] && return
+  rm -rf "runs/$1"
+  local start=$SECONDS
+  uv run --project "$REPO" --locked lerobot-train --dataset.repo_id="local/rik-$2" --dataset.root="ds-$2" \
+    --policy.push_to_hub=false --policy.device=cpu --steps="$3" --batch_size=32 --log_freq=500 \
+    --save_freq=$(( STEPS / 30 > 1 ? STEPS / 30 : 1 )) --env_eval_freq=1000000 --output_dir="runs/$1" \
+    --wandb.enable=false --num_workers=0 --seed="${4:-0}" \
+    --policy.type=diffusion --policy.n_obs_steps=2 --policy.horizon=16 --policy.n_action_steps=8 \
+    --policy.down_dims='[64, 128, 256]' --policy.kernel_size=5 --policy.n_groups=8 \
+    --policy.diffusion_step_embed_dim=128 --policy.noise_scheduler_type=DDIM --policy.num_train_timesteps=100 \
+    --policy.num_inference_steps=10 --policy.optimizer_lr=1e-4 \
+    --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MIN_MAX", "ENV": "MIN_MAX", "ACTION": "MIN_MAX"}' \
+    > "train-$1.log" 2>&1
+  echo "$1 $3 steps $((SECONDS - start)) s" >> train-times.txt
+}
 evaluate() {  # evaluate OPERATOR LABEL [VARIANTS]: the test split, seeds 1000.., PER_CELL episodes per cell
   local out="eval/$2-test${3:+-${3#variants-}}"
   [ -f "$out/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2" --split test --seed 1000 \
@@ -85,6 +101,8 @@ fi
 if stage train; then
   train act-pl pl "$STEPS"
   train act-pl-quarter pl-quarter $(( STEPS / 3 ))
+  # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
+  if [ "${DIFFUSION:-0}" = 1 ]; then train_diffusion dp-pl pl "$STEPS"; fi
   for seed in 0 1; do
     train "act-pln-s$seed" pln "$SHORT_STEPS" "$seed"
     train "act-hull-s$seed" hull "$SHORT_STEPS" "$seed"
@@ -97,6 +115,23 @@ if stage eval; then
     evaluate "$(checkpoint act-pl "$step")" "act-pl-$step"
   done
   evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
+  if [ "${DIFFUSION:-0}" = 1 ]; then evaluate "$(checkpoint dp-pl "$STEPS")" "dp-pl-$STEPS"; fi
+  # ACT's chunking at evaluation, the same weights: the whole chunk of 20, and one action with temporal ensembling
+  for variant in "n20 20" "te1 1 0.01"; do
+    set -- $variant
+    folder="chunking/act-pl-$1"
+    if [ ! -d "$folder" ]; then
+      mkdir -p "$folder"; cp -r "$(checkpoint act-pl "$STEPS")"/. "$folder"/
+      python3 - "$folder/config.json" "$2" "${3:-}" <<'PY'
+import json, sys
+path, steps, coeff = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+config = json.load(open(path))
+config["n_action_steps"], config["temporal_ensemble_coeff"] = steps, (float(coeff) if coeff else None)
+json.dump(config, open(path, "w"), indent=4)
+PY
+    fi
+    evaluate "$folder" "act-pl-$STEPS-$1"
+  done
   evaluate "$(checkpoint act-pl "$SHORT_STEPS")" "act-pl-$SHORT_STEPS"
   for seed in 0 1; do
     for run in pln hull cm; do
