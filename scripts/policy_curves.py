@@ -6,7 +6,9 @@ outcome), finds each policy's training run, step and data set size from its fold
 
 - ``OUT/curves.md``: one row per evaluation (operator, training data, demonstrations, steps, the simulator it was
   evaluated in, F/P/S, S with its 95 % Wilson interval);
-- ``OUT/curves.png``: S on the test split against training steps, one line per run, with the intervals.
+- ``OUT/curves.png``: S on the test split against training steps, one line per run, with the intervals;
+- ``OUT/table3/``: Table 3 (F/P/S per handle type x preset) of the best learned policy beside the scripted
+  strategies evaluated on the same episodes (``table.md``, ``episodes.csv``, ``success.png``).
 
     uv run python scripts/policy_curves.py experiments/policies --out docs/img/policies-curves
 """
@@ -40,7 +42,7 @@ def _train_facts(policy: Path) -> dict[str, Any]:
 
 
 def rows(work: Path) -> list[dict[str, Any]]:
-    """One row per evaluation under ``work/eval``."""
+    """One row per evaluation under ``work/eval`` (with its ``spec`` and ``episodes`` for :func:`table3`)."""
     out = []
     for info_file in sorted((work / "eval").glob("*/eval_info.json")):
         info = json.loads(info_file.read_text(encoding="utf-8"))
@@ -53,8 +55,30 @@ def rows(work: Path) -> list[dict[str, Any]]:
         lo, hi = wilson(counts["S"], len(episodes))
         out.append({"label": spec.get("label") or operator, "folder": info_file.parent.name,
                     "simulator": "hull" if "hull" in Path(spec["variants"]).name else "coacd",
-                    "n": len(episodes), **counts, "rate": counts["S"] / len(episodes), "lo": lo, "hi": hi, **facts})
+                    "n": len(episodes), **counts, "rate": counts["S"] / len(episodes), "lo": lo, "hi": hi, **facts,
+                    "spec": spec, "episodes": episodes})
     return out
+
+
+def table3(found: list[dict[str, Any]], out: Path) -> str | None:
+    """Table 3 of the best learned policy (highest S in the CoACD simulator) beside the scripted operators that ran
+    the same episodes; returns its label (None without both)."""
+    from rik.evaluation.evaluate import EvalSpec, write_tables
+
+    coacd = [r for r in found if r["simulator"] == "coacd"]
+    learned = [r for r in coacd if "run" in r]
+    if not learned:
+        return None
+    best = max(learned, key=lambda r: (r["S"], r.get("step", 0)))
+    same = [r for r in coacd if "run" not in r and r["spec"]["seed"] == best["spec"]["seed"]
+            and r["n"] == best["n"] and r["spec"]["split"] == best["spec"]["split"]]
+    if not same:
+        return None
+    chosen = [*same, best]
+    specs = [EvalSpec(**{**r["spec"], **{k: tuple(v) for k, v in r["spec"].items() if isinstance(v, list)}})
+             for r in chosen]
+    write_tables(out, specs, [e for r in chosen for e in r["episodes"]])
+    return str(best["label"])
 
 
 def table(found: list[dict[str, Any]]) -> str:
@@ -112,8 +136,10 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "curves.md", table(found))
     plot(found, out / "curves.png")
+    best = table3(found, out / "table3")
     print(table(found), end="")
-    print(f"wrote {out / 'curves.md'} and {out / 'curves.png'}")
+    print(f"wrote {out / 'curves.md'}, {out / 'curves.png'}"
+          + (f" and {out / 'table3'} (the best policy, {best}, beside the scripted strategies)" if best else ""))
     return 0
 
 
