@@ -6,7 +6,8 @@ outcome), finds each policy's training run, step and data set size from its fold
 
 - ``OUT/curves.md``: one row per evaluation (operator, training data, demonstrations, steps, the simulator it was
   evaluated in, F/P/S, S with its 95 % Wilson interval);
-- ``OUT/curves.png``: S on the test split against training steps, one line per run, with the intervals;
+- ``OUT/curves.png``: S on the test split against training steps, one line per run, with the intervals, beside
+  each run's training loss; ``OUT/losses.csv``: that loss (from ``train-<run>.log``);
 - ``OUT/table3/``: Table 3 (F/P/S per handle type x preset) of the best learned policy beside the scripted
   strategies evaluated on the same episodes (``table.md``, ``episodes.csv``, ``success.png``).
 
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -91,9 +93,26 @@ def table(found: list[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def plot(found: list[dict[str, Any]], png: Path) -> Path:
+STEP_LOG = re.compile(r" step:\S+ .*? l1_loss:([0-9.]+)")
+LOG_FREQ = 500
+"""lerobot-train's ``--log_freq`` in scripts/policy_experiment.sh: its log rounds the step to thousands ("step:6K"),
+so the k-th logged loss is taken at step k x LOG_FREQ."""
+
+
+def training_losses(work: Path) -> dict[str, list[tuple[int, float]]]:
+    """Run -> (step, ACT's L1 loss on normalised actions) from lerobot-train's logs ``train-<run>.log``."""
+    out: dict[str, list[tuple[int, float]]] = {}
+    for log in sorted(work.glob("train-*.log")):
+        points = [((k + 1) * LOG_FREQ, float(m.group(1)))
+                  for k, m in enumerate(STEP_LOG.finditer(log.read_text(encoding="utf-8", errors="replace")))]
+        if points:
+            out[log.stem.removeprefix("train-")] = points
+    return out
+
+
+def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[int, float]]] | None = None) -> Path:
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    fig, (ax, loss_ax) = plt.subplots(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [3, 2]})
     runs: dict[str, list[dict[str, Any]]] = {}
     for r in found:
         if "run" in r and r["simulator"] == "coacd":
@@ -104,10 +123,13 @@ def plot(found: list[dict[str, Any]], png: Path) -> Path:
         y = [100 * p["rate"] for p in points]
         err = [[100 * (p["rate"] - p["lo"]) for p in points], [100 * (p["hi"] - p["rate"]) for p in points]]
         ax.errorbar(x, y, yerr=err, marker="o", capsize=3, label=name)
+    scripted: dict[float, list[str]] = {}
     for r in found:
         if "run" not in r and r["simulator"] == "coacd":
-            ax.axhline(100 * r["rate"], ls="--", color="grey", lw=1)
-            ax.text(ax.get_xlim()[0], 100 * r["rate"] - 5, f"{r['label']} (scripted)", color="grey", fontsize=8)
+            scripted.setdefault(round(100 * r["rate"], 1), []).append(str(r["label"]))
+    for rate, labels in scripted.items():
+        ax.axhline(rate, ls="--", color="grey", lw=1)
+        ax.text(ax.get_xlim()[0], rate - 5, f"{', '.join(labels)} (scripted)", color="grey", fontsize=8)
     ax.axhline(60, ls=":", color="black", lw=1)
     ax.set_xscale("log")
     steps = sorted({r["step"] for r in found if "step" in r})
@@ -119,6 +141,15 @@ def plot(found: list[dict[str, Any]], png: Path) -> Path:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="center right")
     ax.set_title("ACT, state only: success against training steps (95 % Wilson intervals)", fontsize=10)
+    for run, points in sorted((losses or {}).items()):
+        loss_ax.plot([p[0] for p in points], [p[1] for p in points], label=run)
+    loss_ax.set_yscale("log")
+    loss_ax.set_xlabel("training steps")
+    loss_ax.set_ylabel("L1 loss (normalised actions)")
+    loss_ax.grid(alpha=0.3, which="both")
+    if losses:
+        loss_ax.legend(fontsize=7)
+    loss_ax.set_title("training loss (lerobot-train's log; 500-step means)", fontsize=10)
     fig.tight_layout()
     return save_figure(fig, png)
 
@@ -135,7 +166,10 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out or args.work / "report"
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "curves.md", table(found))
-    plot(found, out / "curves.png")
+    losses = training_losses(args.work)
+    plot(found, out / "curves.png", losses)
+    write_atomic(out / "losses.csv", "run,step,l1_loss\n" + "".join(
+        f"{run},{step},{loss}\n" for run, points in sorted(losses.items()) for step, loss in points))
     best = table3(found, out / "table3")
     print(table(found), end="")
     print(f"wrote {out / 'curves.md'}, {out / 'curves.png'}"
