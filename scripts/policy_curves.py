@@ -29,18 +29,21 @@ from rik.paths import pyplot, save_figure, write_atomic
 
 def _train_facts(policy: Path) -> dict[str, Any]:
     """Run name, step and data set (root, episodes) of a saved checkpoint; empty for a scripted operator."""
-    if policy.name != "pretrained_model" or policy.parents[1].name != "checkpoints":
+    if not (policy / "train_config.json").is_file():
         return {}
-    run, step = policy.parents[2].name, policy.parent.name
     config = json.loads((policy / "train_config.json").read_text(encoding="utf-8"))
+    saved = policy.name == "pretrained_model" and policy.parents[1].name == "checkpoints"
+    work = policy.parents[4] if saved else policy.parents[1]  # runs/<run>/checkpoints/<step>/..., or <folder>/<copy>
     root = Path(config["dataset"]["root"])
     if not root.is_absolute():
-        root = policy.parents[4] / root  # lerobot-train ran in the work folder
+        root = work / root  # lerobot-train ran in the work folder
     info = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))
-    if step == "last":
-        step = str(config["steps"])
-    return {"run": run, "step": int(step), "data": root.name, "demos": int(info["total_episodes"]),
-            "seed": int(config.get("seed") or 0)}
+    facts: dict[str, Any] = {"run": policy.parents[2].name if saved else policy.name, "data": root.name,
+                             "demos": int(info["total_episodes"]), "seed": int(config.get("seed") or 0)}
+    if saved:  # a copy with other settings (chunking) has no step of its own on the curves
+        step = policy.parent.name
+        facts["step"] = int(config["steps"]) if step == "last" else int(step)
+    return facts
 
 
 def rows(work: Path) -> list[dict[str, Any]]:
@@ -115,7 +118,7 @@ def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[in
     fig, (ax, loss_ax) = plt.subplots(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [3, 2]})
     runs: dict[str, list[dict[str, Any]]] = {}
     for r in found:
-        if "run" in r and r["simulator"] == "coacd":
+        if "step" in r and r["simulator"] == "coacd":
             runs.setdefault(f"{r['run']} ({r['demos']} demos)", []).append(r)
     for k, (name, points) in enumerate(sorted(runs.items())):
         points.sort(key=lambda r: r["step"])
