@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from rik.episodes.episode import EpisodeError, read_episode, states
+from rik.episodes.episode import EXECUTED, EpisodeError, read_episode, states
 from rik.episodes.record import variant_dir
 
 if TYPE_CHECKING:
@@ -69,8 +69,6 @@ def verify_episode(catalog: Catalog, directory: Path, variants: Path = Path("var
     meta, table = read_episode(directory)
     scene = episode_scene(catalog, directory, variants, meta)
     recorded = states(table)
-    from rik.episodes.episode import EXECUTED
-
     sent = EXECUTED if EXECUTED in table.column_names else "action"  # the action the robot ran
     actions = cast("pa.ListArray", table.column(sent).combine_chunks()).values.to_numpy().reshape(len(recorded), -1)
     worst = 0.0

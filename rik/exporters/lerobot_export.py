@@ -37,7 +37,7 @@ from rik.exporters.lerobot_frames import (
     features,
     load_episode,
 )
-from rik.exporters.spec import ENCODER_OPTIONS, ExportSpec, check_codec_size, check_spec
+from rik.exporters.spec import ENCODER_OPTIONS, ExportSpec, check_codec_size, check_spec, keep_outcomes
 from rik.paths import check_folder, json_object, write_atomic
 from rik.scheduling import normal_scheduling
 from rik.sim.feature_keys import TASK
@@ -251,8 +251,6 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     if partial_dir.exists() and not resume:
         raise RikError(f"{partial_dir}: an interrupted export is there; run again with --resume to continue it, or "
                        "delete it")
-    from rik.exporters.spec import keep_outcomes
-
     metas = keep_outcomes({d: read_meta(d) for d in find_episodes(list(episodes))}, spec.outcomes,
                           ", ".join(str(e) for e in episodes))
     dirs = list(metas)
