@@ -144,4 +144,13 @@ PY
 fi
 if stage report; then
   uv run --project "$REPO" --locked python "$REPO/scripts/policy_curves.py" . --out report
+  # the diagnosis: how precisely the policies imitate demonstrations they never saw (test split, teacher-forced)
+  [ -d demos-heldout ] || "${RIK[@]}" record --split test --strategy planned --episodes 18 --seed 2000 \
+    --out demos-heldout --variants variants --workers "$WORKERS"
+  [ -d ds-heldout ] || "${RIK[@]}" export-lerobot demos-heldout --out ds-heldout --repo-id local/rik-heldout \
+    --streams none --outcomes S --variants variants
+  for step in $(( STEPS / 10 )) $(( STEPS / 3 )) "$STEPS"; do
+    uv run --project "$REPO" --locked python "$REPO/scripts/policy_precision.py" "$(checkpoint act-pl "$step")" \
+      ds-heldout
+  done | tee report/precision.txt
 fi

@@ -21,7 +21,7 @@ def test_an_export_of_one_variant_names_its_constant_dimensions(rik, knob_record
     assert {"grasp_x", "grasp_z", "pull_y"} <= set(constant["observation.environment_state"])
     line = next(ln for ln in r.out.splitlines() if ln.startswith("warning: "))
     assert " never change in this dataset (" in line and "observation.environment_state: " in line and "grasp_x" in line
-    assert line.endswith("(record more variants, e.g. with --split, or leave those dimensions out)")
+    assert line.endswith("(train on data where they vary, more variants or front kinds, or leave those dimensions out)")
     stats = json.loads((out / "meta" / "stats.json").read_text(encoding="utf-8"))
     std = stats["observation.environment_state"]["std"]
     names = json.loads((out / "meta" / "info.json").read_text(encoding="utf-8"))["features"][

@@ -51,7 +51,8 @@ def constant_warning(constant: dict[str, list[str]]) -> str | None:
     parts = "; ".join(f"{key}: {', '.join(names)}" for key, names in constant.items())
     return (f"{count} dimension{'s' if count != 1 else ''} never change in this dataset ({parts}): normalisation "
             "divides by about zero there, so a policy trained on it reads any other value as far out of its "
-            "training range (record more variants, e.g. with --split, or leave those dimensions out)")
+            "training range (train on data where they vary, more variants or front kinds, or leave those dimensions "
+            "out)")
 
 
 def _episodes_table(root: Path) -> list[dict[str, Any]]:
