@@ -294,7 +294,9 @@ def test_spec_robot_records_and_exports_that_robot(rik, tmp_path, variants) -> N
     r = rik("dataset", "build", str(spec), "--out", str(out), "-j", "1", "--variants", str(variants))
     assert r.code == 0, r
     assert "robot: so100" in r.out
-    assert " never change in this dataset (observation.environment_state: " in r.out  # one variant
+    warning = next(line for line in r.out.splitlines() if line.startswith("warning: "))  # one variant
+    assert " never change in this dataset (" in warning and "observation.environment_state: " in warning
+    assert "grasp_x" in warning
     episodes = sorted(p.name for p in (tmp_path / "ds.work" / "episodes").iterdir() if not p.name.startswith("."))
     assert episodes == ["drawer-chest-80__two_point-bow-128__normal__drawer-1__contact_rich.so100__s0000"]
     info = json.loads((out / "meta" / "info.json").read_text())
