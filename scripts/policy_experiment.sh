@@ -10,7 +10,7 @@
 # Full size (docs/policies.md, about 7 CPU-hours on 2 cores): the defaults. Reduced size, the same pipeline end to
 # end in about 10 minutes on 2 cores:
 #   DEMOS=18 STEPS=300 SHORT_STEPS=150 PER_CELL=1 bash scripts/policy_experiment.sh experiments/policies-small
-# STAGES picks the stages to run (default "data train eval report"; tests run "data" at DEMOS=1).
+# STAGES picks the stages to run (default "data train eval report"), DATASETS the data sets of the data stage.
 # Every hyper-parameter of the training is pinned below; one thread per process, so two trainings share 2 cores.
 set -euo pipefail
 WORK=${1:-experiments/policies}
@@ -20,6 +20,7 @@ SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, ma
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
 STAGES=${STAGES:-data train eval report}
+DATASETS=${DATASETS:-pl pl-quarter pln hull cm}  # the data sets the data stage builds (tests build three)
 export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl} OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 REPO=$(pwd)
 RIK=(uv run --project "$REPO" --locked rik)
@@ -28,6 +29,7 @@ cd "$WORK"
 stage() { [[ " $STAGES " == *" $1 "* ]]; }
 
 build() {  # build NAME SPEC VARIANTS [DRAW]: a spec of examples/policies at DEMOS (or DRAW) drawn episodes
+  [[ " $DATASETS " == *" $1 "* ]] || return 0
   local spec="specs/$1.yaml"
   sed -e "s/^  draw: 360 /  draw: ${4:-$DEMOS} /" -e "s|^repo_id: .*|repo_id: local/rik-$1|" \
     "$REPO/examples/policies/$2.yaml" > "$spec"
@@ -86,7 +88,7 @@ if stage data; then
   build hull planned-hull-360 variants-hull          # the same episodes in hull variants (rejected ones left out)
   # the CoACD demonstrations of exactly the episodes the hull data set holds (the ablation compares collision,
   # not data size): same seeds, same demonstrator, same plans (tests/test_collision_mode.py)
-  if [ ! -d ds-cm ]; then
+  if [[ " $DATASETS " == *" cm "* ]] && [ ! -d ds-cm ]; then
     rm -rf sel-cm; mkdir -p sel-cm
     for meta in work-hull/episodes/*/meta.json; do
       grep -q '"outcome": "S"' "$meta" || continue
