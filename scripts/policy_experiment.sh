@@ -35,37 +35,27 @@ build() {  # build NAME SPEC VARIANTS [DRAW]: a spec of examples/policies at DEM
     "$REPO/examples/policies/$2.yaml" > "$spec"
   [ -d "ds-$1" ] || "${RIK[@]}" dataset build "$spec" --out "ds-$1" --work "work-$1" --variants "$3" -j "$WORKERS"
 }
-train() {  # train RUN DATASET STEPS [SEED]: state-only ACT, every hyper-parameter pinned
+ACT=(--policy.type=act --policy.dim_model=128 --policy.dim_feedforward=512 --policy.n_heads=4
+     --policy.n_encoder_layers=4 --policy.n_decoder_layers=1 --policy.chunk_size=20 --policy.n_action_steps=10
+     --policy.optimizer_lr=1e-4 --policy.optimizer_weight_decay=1e-4 --policy.kl_weight=10.0 --policy.dropout=0.1
+     --policy.use_vae=true --policy.latent_dim=32 --policy.n_vae_encoder_layers=4
+     --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MEAN_STD", "ENV": "MEAN_STD", "ACTION": "MEAN_STD"}')
+# diffusion with the pre-May-2026 horizon (16/8)
+DIFFUSION_POLICY=(--policy.type=diffusion --policy.n_obs_steps=2 --policy.horizon=16 --policy.n_action_steps=8
+     --policy.down_dims='[64, 128, 256]' --policy.kernel_size=5 --policy.n_groups=8
+     --policy.diffusion_step_embed_dim=128 --policy.noise_scheduler_type=DDIM --policy.num_train_timesteps=100
+     --policy.num_inference_steps=10 --policy.optimizer_lr=1e-4
+     --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MIN_MAX", "ENV": "MIN_MAX", "ACTION": "MIN_MAX"}')
+train() {  # train RUN DATASET STEPS SEED POLICY_FLAGS...: a state-only policy, every hyper-parameter pinned
   [ -f "runs/$1/checkpoints/last/pretrained_model/model.safetensors" ] && return
   rm -rf "runs/$1"
-  local start=$SECONDS
-  uv run --project "$REPO" --locked lerobot-train --dataset.repo_id="local/rik-$2" --dataset.root="ds-$2" \
-    --policy.push_to_hub=false --policy.device=cpu --steps="$3" --batch_size=32 --log_freq=500 \
-    --save_freq=$(( STEPS / 30 > 1 ? STEPS / 30 : 1 )) --env_eval_freq=1000000 --output_dir="runs/$1" \
-    --wandb.enable=false --num_workers=0 --seed="${4:-0}" \
-    --policy.type=act --policy.dim_model=128 --policy.dim_feedforward=512 --policy.n_heads=4 \
-    --policy.n_encoder_layers=4 --policy.n_decoder_layers=1 --policy.chunk_size=20 --policy.n_action_steps=10 \
-    --policy.optimizer_lr=1e-4 --policy.optimizer_weight_decay=1e-4 --policy.kl_weight=10.0 --policy.dropout=0.1 \
-    --policy.use_vae=true --policy.latent_dim=32 --policy.n_vae_encoder_layers=4 \
-    --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MEAN_STD", "ENV": "MEAN_STD", "ACTION": "MEAN_STD"}' \
-    > "train-$1.log" 2>&1
-  echo "$1 $3 steps $((SECONDS - start)) s" >> train-times.txt
-}
-train_diffusion() {  # train_diffusion RUN DATASET STEPS [SEED]: diffusion with the pre-May-2026 horizon (16/8)
-  [ -f "runs/$1/checkpoints/last/pretrained_model/model.safetensors" ] && return
-  rm -rf "runs/$1"
-  local start=$SECONDS
-  uv run --project "$REPO" --locked lerobot-train --dataset.repo_id="local/rik-$2" --dataset.root="ds-$2" \
-    --policy.push_to_hub=false --policy.device=cpu --steps="$3" --batch_size=32 --log_freq=500 \
-    --save_freq=$(( STEPS / 30 > 1 ? STEPS / 30 : 1 )) --env_eval_freq=1000000 --output_dir="runs/$1" \
-    --wandb.enable=false --num_workers=0 --seed="${4:-0}" \
-    --policy.type=diffusion --policy.n_obs_steps=2 --policy.horizon=16 --policy.n_action_steps=8 \
-    --policy.down_dims='[64, 128, 256]' --policy.kernel_size=5 --policy.n_groups=8 \
-    --policy.diffusion_step_embed_dim=128 --policy.noise_scheduler_type=DDIM --policy.num_train_timesteps=100 \
-    --policy.num_inference_steps=10 --policy.optimizer_lr=1e-4 \
-    --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MIN_MAX", "ENV": "MIN_MAX", "ACTION": "MIN_MAX"}' \
-    > "train-$1.log" 2>&1
-  echo "$1 $3 steps $((SECONDS - start)) s" >> train-times.txt
+  local run=$1 data=$2 steps=$3 seed=$4 start=$SECONDS
+  shift 4
+  uv run --project "$REPO" --locked lerobot-train --dataset.repo_id="local/rik-$data" --dataset.root="ds-$data" \
+    --policy.push_to_hub=false --policy.device=cpu --steps="$steps" --batch_size=32 --log_freq=500 \
+    --save_freq=$(( STEPS / 30 > 1 ? STEPS / 30 : 1 )) --env_eval_freq=1000000 --output_dir="runs/$run" \
+    --wandb.enable=false --num_workers=0 --seed="$seed" "$@" > "train-$run.log" 2>&1
+  echo "$run $steps steps $((SECONDS - start)) s" >> train-times.txt
 }
 evaluate() {  # evaluate OPERATOR LABEL [VARIANTS]: the test split, seeds 1000.., PER_CELL episodes per cell
   local out="eval/$2-test${3:+-${3#variants-}}"
@@ -101,14 +91,14 @@ if stage data; then
   fi
 fi
 if stage train; then
-  train act-pl pl "$STEPS"
-  train act-pl-quarter pl-quarter $(( STEPS / 3 ))
+  train act-pl pl "$STEPS" 0 "${ACT[@]}"
+  train act-pl-quarter pl-quarter $(( STEPS / 3 )) 0 "${ACT[@]}"
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
-  if [ "${DIFFUSION:-0}" = 1 ]; then train_diffusion dp-pl pl "$STEPS"; fi
+  if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
   for seed in 0 1; do
-    train "act-pln-s$seed" pln "$SHORT_STEPS" "$seed"
-    train "act-hull-s$seed" hull "$SHORT_STEPS" "$seed"
-    train "act-cm-s$seed" cm "$SHORT_STEPS" "$seed"
+    train "act-pln-s$seed" pln "$SHORT_STEPS" "$seed" "${ACT[@]}"
+    train "act-hull-s$seed" hull "$SHORT_STEPS" "$seed" "${ACT[@]}"
+    train "act-cm-s$seed" cm "$SHORT_STEPS" "$seed" "${ACT[@]}"
   done
 fi
 if stage eval; then
