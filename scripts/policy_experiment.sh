@@ -10,17 +10,23 @@
 # Full size (docs/policies.md, about 7 CPU-hours on 2 cores): the defaults. Reduced size, the same pipeline end to
 # end in about 10 minutes on 2 cores:
 #   DEMOS=18 STEPS=300 SHORT_STEPS=150 PER_CELL=1 bash scripts/policy_experiment.sh experiments/policies-small
-# STAGES picks the stages to run (default "data train eval report"), DATASETS the data sets of the data stage.
+# STAGES picks the stages to run (default "data train eval report"), DATASETS the data sets of the data stage, SEED
+# the first drawn seed (tests/test_policy_experiment.py runs the data stage at DEMOS=2 SEED=378). IMAGES=1 adds the
+# image run (both cameras at 80x80; on a GPU machine: IMAGES=1 DEVICE=cuda LOADERS=12).
 # Every hyper-parameter of the training is pinned below; one thread per process, so two trainings share 2 cores.
 set -euo pipefail
 WORK=${1:-experiments/policies}
 DEMOS=${DEMOS:-360}            # drawn demonstrations per data set (40 per handle type x preset cell)
+SEED=${SEED:-0}                # the first drawn seed: the data sets hold seeds SEED .. SEED+DEMOS-1
 STEPS=${STEPS:-30000}          # training steps of the main run (act-pl); act-pl-quarter trains STEPS/3
 SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, matched CoACD), two seeds each
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
 STAGES=${STAGES:-data train eval report}
-DATASETS=${DATASETS:-pl pl-quarter pln hull cm}  # the data sets the data stage builds (tests build three)
+DATASETS=${DATASETS:-pl pl-quarter pln hull cm}  # the data sets the data stage builds
+IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
+DEVICE=${DEVICE:-cpu}          # lerobot-train's --policy.device (cuda on a GPU machine)
+LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers (data-loading processes; 12 for images on a GPU)
 export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl} OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 REPO=$(pwd)
 RIK=(uv run --project "$REPO" --locked rik)
@@ -28,10 +34,10 @@ mkdir -p "$WORK/specs"
 cd "$WORK"
 stage() { [[ " $STAGES " == *" $1 "* ]]; }
 
-build() {  # build NAME SPEC VARIANTS [DRAW]: a spec of examples/policies at DEMOS (or DRAW) drawn episodes
+build() {  # build NAME SPEC VARIANTS [DRAW]: a spec of examples/policies at DEMOS (or DRAW) drawn episodes from SEED
   [[ " $DATASETS " == *" $1 "* ]] || return 0
   local spec="specs/$1.yaml"
-  sed -e "s/^  draw: 360 /  draw: ${4:-$DEMOS} /" -e "s|^repo_id: .*|repo_id: local/rik-$1|" \
+  sed -E -e "s/^  draw: 360( |$)/  draw: ${4:-$DEMOS}\1/" -e "s|^repo_id: .*|repo_id: local/rik-$1|" -e "s/^seed: 0$/seed: $SEED/" \
     "$REPO/examples/policies/$2.yaml" > "$spec"
   [ -d "ds-$1" ] || "${RIK[@]}" dataset build "$spec" --out "ds-$1" --work "work-$1" --variants "$3" -j "$WORKERS"
 }
@@ -52,9 +58,9 @@ train() {  # train RUN DATASET STEPS SEED POLICY_FLAGS...: a state-only policy, 
   local run=$1 data=$2 steps=$3 seed=$4 start=$SECONDS
   shift 4
   uv run --project "$REPO" --locked lerobot-train --dataset.repo_id="local/rik-$data" --dataset.root="ds-$data" \
-    --policy.push_to_hub=false --policy.device=cpu --steps="$steps" --batch_size=32 --log_freq=500 \
+    --policy.push_to_hub=false --policy.device="$DEVICE" --steps="$steps" --batch_size=32 --log_freq=500 \
     --save_freq=$(( STEPS / 30 > 1 ? STEPS / 30 : 1 )) --env_eval_freq=1000000 --output_dir="runs/$run" \
-    --wandb.enable=false --num_workers=0 --seed="$seed" "$@" > "train-$run.log" 2>&1
+    --wandb.enable=false --num_workers="$LOADERS" --seed="$seed" "$@" > "train-$run.log" 2>&1
   echo "$run $steps steps $((SECONDS - start)) s" >> train-times.txt
 }
 evaluate() {  # evaluate OPERATOR LABEL [VARIANTS]: the test split, seeds 1000.., PER_CELL episodes per cell
@@ -76,6 +82,7 @@ if stage data; then
   build pl-quarter planned-360 variants $(( DEMOS / 4 > 0 ? DEMOS / 4 : 1 ))  # the first quarter of them
   build pln planned-dart-360 variants                # the same episodes, DART-style
   build hull planned-hull-360 variants-hull          # the same episodes in hull variants (rejected ones left out)
+  if [ "$IMAGES" = 1 ]; then DATASETS="$DATASETS pl-images" build pl-images planned-360-images variants; fi
   # the CoACD demonstrations of exactly the episodes the hull data set holds (the ablation compares collision,
   # not data size): same seeds, same demonstrator, same plans (tests/test_collision_mode.py)
   if [[ " $DATASETS " == *" cm "* ]] && [ ! -d ds-cm ]; then
@@ -95,6 +102,11 @@ if stage train; then
   train act-pl-quarter pl-quarter $(( STEPS / 3 )) 0 "${ACT[@]}"
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
   if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
+  # the image run (IMAGES=1): the same recipe with both cameras; ResNet-18 from scratch (no ImageNet weights
+  # offline); docs/policies.md's ran on a GPU machine (DEVICE=cuda LOADERS=12) for SHORT_STEPS
+  if [ "$IMAGES" = 1 ]; then
+    train act-pl-images pl-images "$SHORT_STEPS" 0 "${ACT[@]}" --policy.pretrained_backbone_weights=null
+  fi
   for seed in 0 1; do
     train "act-pln-s$seed" pln "$SHORT_STEPS" "$seed" "${ACT[@]}"
     train "act-hull-s$seed" hull "$SHORT_STEPS" "$seed" "${ACT[@]}"
@@ -108,6 +120,7 @@ if stage eval; then
   done
   evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
   if [ "${DIFFUSION:-0}" = 1 ]; then evaluate "$(checkpoint dp-pl "$STEPS")" "dp-pl-$STEPS"; fi
+  if [ "$IMAGES" = 1 ]; then evaluate "runs/act-pl-images/checkpoints/last/pretrained_model" act-pl-images; fi
   # ACT's chunking at evaluation, the same weights: the whole chunk of 20, and one action with temporal ensembling
   for variant in "n20 20" "te1 1 0.01"; do
     set -- $variant
