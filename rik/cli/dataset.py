@@ -75,12 +75,12 @@ def _print_plan(plan: Plan) -> None:
     ops = ", ".join(o.label + (f" {o.params}" if o.params else "") for o in s.operators)
     print(f"{plan.source}: {s.repo_id} (spec hash {plan.spec_hash[:12]})")
     print(f"  robot: {s.robot}")
-    if s.variants.draw is not None:  # one episode per drawn seed, each on the variant its seed draws
-        print(f"  {s.variants.draw} drawn episodes ({len(plan.variants)} variants) x {len(s.operators)} operators "
-              f"({ops}) = {len(plan.episodes)} episodes, seeds {s.seed}..{s.seed + s.variants.draw - 1}")
-    else:
-        print(f"  {len(plan.variants)} variants x {len(s.operators)} operators ({ops}) x {s.episodes_per_variant} "
-              f"episodes = {len(plan.episodes)} episodes, seeds {s.seed}..{s.seed + s.episodes_per_variant - 1}")
+    shape = (f"{s.variants.draw} drawn episodes ({len(plan.variants)} variants) x {len(s.operators)} operators "
+             f"({ops})" if s.variants.draw is not None  # one episode per drawn seed, on the variant it draws
+             else f"{len(plan.variants)} variants x {len(s.operators)} operators ({ops}) x {s.episodes_per_variant} "
+             "episodes")
+    seeds = [e.seed for e in plan.episodes] or [s.seed]
+    print(f"  {shape} = {len(plan.episodes)} episodes, seeds {min(seeds)}..{max(seeds)}")
     streams = ", ".join(s.streams) or "none (state only)"
     print(f"  streams: {streams}; cameras: {', '.join(s.cameras) or 'all'}; {w}x{h} px; codec {s.codec}; "
           f"{len(plan.shards)} shards of up to {s.shard_episodes} episodes")
