@@ -27,6 +27,7 @@ DATASETS=${DATASETS:-pl pl-quarter pln hull cm}  # the data sets the data stage 
 IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
 DEVICE=${DEVICE:-cpu}          # lerobot-train's --policy.device (cuda on a GPU machine)
 LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers (data-loading processes; 12 for images on a GPU)
+if [ "$IMAGES" = 1 ]; then DATASETS="$DATASETS pl-images"; fi
 export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl} OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 REPO=$(pwd)
 RIK=(uv run --project "$REPO" --locked rik)
@@ -52,7 +53,7 @@ DIFFUSION_POLICY=(--policy.type=diffusion --policy.n_obs_steps=2 --policy.horizo
      --policy.diffusion_step_embed_dim=128 --policy.noise_scheduler_type=DDIM --policy.num_train_timesteps=100
      --policy.num_inference_steps=10 --policy.optimizer_lr=1e-4
      --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MIN_MAX", "ENV": "MIN_MAX", "ACTION": "MIN_MAX"}')
-train() {  # train RUN DATASET STEPS SEED POLICY_FLAGS...: a state-only policy, every hyper-parameter pinned
+train() {  # train RUN DATASET STEPS SEED POLICY_FLAGS...: a policy, every hyper-parameter pinned
   [ -f "runs/$1/checkpoints/last/pretrained_model/model.safetensors" ] && return
   rm -rf "runs/$1"
   local run=$1 data=$2 steps=$3 seed=$4 start=$SECONDS
@@ -82,7 +83,7 @@ if stage data; then
   build pl-quarter planned-360 variants $(( DEMOS / 4 > 0 ? DEMOS / 4 : 1 ))  # the first quarter of them
   build pln planned-dart-360 variants                # the same episodes, DART-style
   build hull planned-hull-360 variants-hull          # the same episodes in hull variants (rejected ones left out)
-  if [ "$IMAGES" = 1 ]; then DATASETS="$DATASETS pl-images" build pl-images planned-360-images variants; fi
+  build pl-images planned-360-images variants        # the main data set with both cameras (IMAGES=1)
   # the CoACD demonstrations of exactly the episodes the hull data set holds (the ablation compares collision,
   # not data size): same seeds, same demonstrator, same plans (tests/test_collision_mode.py)
   if [[ " $DATASETS " == *" cm "* ]] && [ ! -d ds-cm ]; then
