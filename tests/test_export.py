@@ -197,6 +197,30 @@ def test_export_of_one_stream_and_camera_resampled(dataset: Path, work: Path, tm
 
 
 @slow
+def test_an_export_reads_each_episode_once_and_renders_from_that_read(work: Path, tmp_path: Path,
+                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """states.parquet is read (sha256, parse) and the scene built once per episode, also where the export renders
+    the episode's missing stream; the progress counts episodes."""
+    import rik.episodes.episode as episode_module
+    import rik.episodes.replay as replay_module
+
+    reads: list[Path] = []
+    scenes: list[Path] = []
+    read, build = episode_module.read_episode, replay_module.episode_scene
+    monkeypatch.setattr(episode_module, "read_episode", lambda d, *a, **k: reads.append(Path(d)) or read(d, *a, **k))
+    monkeypatch.setattr(replay_module, "episode_scene",
+                        lambda c, d, *a, **k: scenes.append(Path(d)) or build(c, d, *a, **k))
+    stages: list[tuple[str, int, int]] = []
+    spec = ExportSpec(REPO, streams=("sim",), cameras=("front",), **SPEC)
+    export_lerobot(CAT, [work / "episodes"], tmp_path / "once", spec, renders=tmp_path / "renders",
+                   variants=work / "variants", progress=lambda *s: stages.append(s))
+    episodes = sorted((work / "episodes").iterdir())
+    assert sorted(reads) == episodes and sorted(scenes) == episodes  # each once, the renders included
+    assert len(list((tmp_path / "renders").iterdir())) == 3
+    assert ("episodes", 3, 3) in stages and stages[-1] == ("shards", 1, 1)
+
+
+@slow
 def test_resampling_holds_the_latest_row() -> None:
     assert resample_indices(5, 20, 20).tolist() == [0, 1, 2, 3, 4]
     assert resample_indices(5, 20, 10).tolist() == [0, 2, 4]

@@ -31,6 +31,7 @@ from rik.exporters.lerobot_frames import (
     LAYOUT,
     LAYOUT_1_STATE_NAMES,
     EpisodeSource,
+    LoadedEpisode,
     episode_frames,
     episode_layout,
     episode_metadata,
@@ -91,13 +92,6 @@ def one_robot(metas: dict[Path, EpisodeMeta]) -> str:
     return first.robot
 
 
-def _check_episodes(catalog: Catalog, metas: dict[Path, EpisodeMeta]) -> None:
-    """Every episode loads whole (sha256 checked) and records the action rik exports, before any work starts
-    (:func:`~rik.exporters.lerobot_frames.load_episode`; each is let go at once: the shards read it again)."""
-    for d, meta in metas.items():
-        load_episode(catalog, d, meta)
-
-
 def _plan(metas: dict[Path, EpisodeMeta], spec: ExportSpec, fps: int, robot: str = "hand-e") -> dict[str, Any]:
     return {"spec": {**asdict(spec), "fps": fps, "layout": LAYOUT, "robot": robot},
             "encoder_options": ENCODER_OPTIONS.get(spec.codec, {}),
@@ -143,10 +137,24 @@ def shard_layout(catalog: Catalog, metas: dict[Path, EpisodeMeta]) -> RobotLayou
     return episode_layout(catalog, directory, meta)
 
 
+def render_streams(catalog: Catalog, episode: LoadedEpisode, spec: ExportSpec, cameras: Sequence[str],
+                   renders: Path, variants: Path) -> dict[str, Path]:
+    """The finished folder of each of ``spec``'s image streams of ``episode``, rendered (or resumed) into ``renders``
+    where missing, from the episode as it was read: its states and scene are not read or built again."""
+    from rik.render.episodes import render_episode
+
+    return {kind: render_episode(catalog, episode.recorded, spec.stream(kind), renders=renders, variants=variants,
+                                 cameras=cameras).directory for kind in spec.streams}
+
+
 def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[EpisodeSource], cameras: list[str],
-                spec: ExportSpec, fps: int, variants: Path) -> int:
+                spec: ExportSpec, fps: int, variants: Path, renders: Path | None = None,
+                progress: Callable[[], None] | None = None) -> int:
     """Write one shard dataset at ``root`` through lerobot's writer, in its episodes' robot's layout; returns its
-    frame count. Marked done only after ``finalize()`` and the frame-count check."""
+    frame count. Marked done only after ``finalize()`` and the frame-count check. Each episode is read once
+    (:func:`~rik.exporters.lerobot_frames.load_episode`: sha256, rows, action width); with ``renders``, its image
+    streams are rendered there from that read where missing (else the sources' finished folders are used).
+    ``progress()`` is called as each episode is saved."""
     from lerobot.configs import RGBEncoderConfig
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
@@ -178,7 +186,9 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     try:
         for source in sources:
             episode = load_episode(catalog, source.directory, metas[source.directory])  # let go once it is saved
-            task, frames, count = episode_frames(catalog, episode, source.streams, cameras, fps, variants)
+            streams = source.streams if renders is None else render_streams(catalog, episode, spec, cameras,
+                                                                            renders, variants)
+            task, frames, count = episode_frames(catalog, episode, streams, cameras, fps, variants)
             for frame in frames:
                 ds.add_frame({**frame, TASK: task})
             extra.clear()
@@ -189,6 +199,8 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
             with normal_scheduling():  # SVT-AV1 leaves an encoding thread at real-time priority when run as root
                 ds.save_episode(parallel_encoding=multiprocessing.get_start_method() == "fork")
             frames_total += count
+            if progress:
+                progress()
     finally:
         ds.finalize()
     lerobot_check.check_frame_counts(root / "ds")
@@ -200,9 +212,10 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                    renders: Path = Path("renders"), variants: Path = Path("variants"), resume: bool = False,
                    workers: int = 1, overlays: Sequence[Path] = (),
                    progress: Callable[[str, int, int], None] | None = None) -> ExportResult:
-    """Export ``episodes`` (episode folders) to a LeRobot v3.0 dataset at ``out``; renders the image streams that
-    are missing first. ``progress(stage, done, total)`` reports stages ``render:<stream>``, ``shards``. One export at a
-    time writes ``out`` (a lock beside it, :mod:`rik.locks`); a second one is refused at once."""
+    """Export ``episodes`` (episode folders) to a LeRobot v3.0 dataset at ``out``, reading each episode once; its
+    image streams missing from ``renders`` are rendered there from that read. ``progress(stage, done, total)`` reports
+    stages ``episodes`` (one process) and ``shards``. One export at a time writes ``out`` (a lock beside it,
+    :mod:`rik.locks`); a second one is refused at once."""
     from rik.assets.workers import check_workers
     from rik.locks import exclusive
 
@@ -243,20 +256,20 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                    progress: Callable[[str, int, int], None] | None) -> ExportResult:
     """:func:`export_lerobot` once it holds the lock of ``out``."""
     from rik.episodes.episode import find_episodes, read_meta
-    from rik.render.episodes import RecordedEpisode, check_renders_outside, render_episode
-    from rik.render.streams import StreamSpec
+    from rik.render.episodes import RecordedEpisode, check_renders_outside, episode_cameras
 
     _check_out_free(out, resume)  # again, now that it is ours: another export may have finished it meanwhile
     partial_dir = out.with_name(f"{out.name}.partial")
     if partial_dir.exists() and not resume:
         raise RikError(f"{partial_dir}: an interrupted export is there; run again with --resume to continue it, or "
                        "delete it")
+    # 1. What can be checked from meta.json alone, before any work: outcomes, one robot and its joints, one rate.
+    # The states are read once per episode, where its shard writes it (with its renders, which come from that read).
     metas = keep_outcomes({d: read_meta(d) for d in find_episodes(list(episodes))}, spec.outcomes,
                           ", ".join(str(e) for e in episodes))
     dirs = list(metas)
     robot = one_robot(metas)
     layout = [episode_layout(catalog, d, m) for d, m in metas.items()][0]  # in the catalog, with its joints
-    _check_episodes(catalog, metas)
     fps = _episode_fps(metas, spec)
     plan = _plan(metas, spec, fps, robot)
     if partial_dir.exists():
@@ -270,32 +283,19 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         if old != json.loads(json.dumps(plan)):
             raise RikError(f"{partial_dir}: the interrupted export there was of other episodes or settings; delete "
                            "it, or run it again with the same ones")
-
+    cams: list[str] = []
     if spec.streams:
         check_renders_outside(renders, {d: m.id for d, m in metas.items()}, "--renders")
-    # 1. The image streams, rendered where missing (resumable per frame), all at the export's size. An episode's
-    # states are read, and its scene built, only where its stream must be rendered (never for a finished one).
-    cameras: list[str] | None = list(spec.cameras) or None
-    stream_dirs: dict[Path, dict[str, Path]] = {d: {} for d in dirs}
-    for kind in spec.streams:
-        stream = StreamSpec(kind, spec.width, spec.height, spp=spec.spp, denoise=spec.denoise,  # type: ignore[arg-type]
-                            variant=spec.variant)
-        for n, d in enumerate(dirs):
-            r = render_episode(catalog, RecordedEpisode(d, metas[d]), stream, renders=renders, variants=variants,
-                               cameras=cameras)
-            if cameras is None:
-                cameras = list(r.cameras)
-            stream_dirs[d][kind] = r.directory
-            if progress:
-                progress(f"render:{kind}", n + 1, len(dirs))
-    sources = [EpisodeSource(d, stream_dirs[d]) for d in dirs]
-    cams = cameras or []
-    partial_dir.mkdir(parents=True, exist_ok=True)  # only now: bad input found so far leaves nothing behind
+        # every episode's streams hold these cameras: the ones asked for, or every camera of the first one's scene
+        cams = list(spec.cameras) or episode_cameras(catalog, RecordedEpisode(dirs[0], metas[dirs[0]]), variants)
+    created = not partial_dir.exists()
+    partial_dir.mkdir(parents=True, exist_ok=True)
     write_atomic(partial_dir / PLAN, json.dumps(plan, indent=1) + "\n")
 
-    # 2. Shards, each finished and checked before it counts; finished ones are never redone.
+    # 2. Shards, each finished and checked before it counts; finished ones are never redone. A shard reads each of
+    # its episodes once, renders the image streams missing from renders/ (resumable per frame) from that read, and
+    # writes its frames.
     shard_root = partial_dir / "shards"
-    by_dir = {s.directory: s for s in sources}
     jobs, skipped = [], 0
     for i, chunk in enumerate(_shards(dirs, max(1, spec.shard_episodes))):
         root = shard_root / f"shard-{i:04d}"
@@ -307,22 +307,38 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         if done:
             skipped += 1
             continue
-        jobs.append((root, f"{spec.repo_id}-shard-{i:04d}", [by_dir[d] for d in chunk], cams, spec, fps, variants))
+        jobs.append((root, f"{spec.repo_id}-shard-{i:04d}", [EpisodeSource(d, {}) for d in chunk], cams, spec, fps,
+                     variants, renders))
     if progress:
         progress("shards", skipped, skipped + len(jobs))
-    if workers > 1 and len(jobs) > 1:
-        from rik.assets.workers import map_ids
+    try:
+        if workers > 1 and len(jobs) > 1:
+            from rik.assets.workers import map_ids
 
-        job_of = {str(j[0]): j for j in jobs}
-        for n, _ in enumerate(map_ids(partial(_shard_by_name, job_of), catalog, list(job_of), workers=workers,
-                                      overlays=overlays)):
-            if progress:
-                progress("shards", skipped + n + 1, skipped + len(jobs))
-    else:
-        for n, job in enumerate(jobs):
-            write_shard(catalog, *job)
-            if progress:
-                progress("shards", skipped + n + 1, skipped + len(jobs))
+            job_of = {str(j[0]): j for j in jobs}
+            for n, _ in enumerate(map_ids(partial(_shard_by_name, job_of), catalog, list(job_of), workers=workers,
+                                          overlays=overlays)):
+                if progress:
+                    progress("shards", skipped + n + 1, skipped + len(jobs))
+        else:
+            saved = [0]
+            total = sum(len(j[2]) for j in jobs)
+
+            def episode_saved() -> None:
+                saved[0] += 1
+                if progress:
+                    progress("episodes", saved[0], total)
+
+            for n, job in enumerate(jobs):
+                write_shard(catalog, *job, progress=episode_saved)
+                if progress:
+                    progress("shards", skipped + n + 1, skipped + len(jobs))
+    except RikError:
+        # an episode found bad where it is read (sha256, rows, action width, scene): the partial export this call
+        # began goes with it, so bad input leaves nothing behind; an older interrupted one stays for --resume
+        if created:
+            shutil.rmtree(partial_dir, ignore_errors=True)
+        raise
 
     # 3. Merge, check, card, then publish by renaming.
     merged = partial_dir / "merged"

@@ -5,10 +5,13 @@ its card (:mod:`rik.exporters.lerobot_card`), ``rik dataset build`` and the CLI.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
 from rik.sim.observation import STREAM_SUFFIX
+
+if TYPE_CHECKING:
+    from rik.render.streams import StreamSpec
 
 STREAMS = tuple(STREAM_SUFFIX)
 """The image streams an export can hold: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
@@ -52,6 +55,13 @@ class ExportSpec:
     shard_episodes: int = 16
     outcomes: tuple[str, ...] = ("F", "P", "S")
     """Outcomes of the episodes exported (``("S",)``: the successful demonstrations only); the others are left out."""
+
+    def stream(self, kind: str) -> StreamSpec:
+        """The image stream ``kind`` (``sim`` or ``rerendered``) at this export's size and quality."""
+        from rik.render.streams import StreamSpec
+
+        return StreamSpec(kind, self.width, self.height, spp=self.spp, denoise=self.denoise,  # type: ignore[arg-type]
+                          variant=self.variant)
 
 
 OUTCOMES = ("F", "P", "S")
