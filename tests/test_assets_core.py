@@ -79,6 +79,26 @@ def test_second_build_is_a_cache_hit_and_a_corrupt_entry_is_rebuilt(catalog, tmp
     assert build_assets(catalog, ["door/base-40-right"], cache=cache)[0].status == "cached"
 
 
+def test_two_builds_of_one_asset_at_once_decompose_it_once(catalog, tmp_path):
+    """A second build of an asset being built waits for the first and loads its entry (a lock per cache key), rather
+    than generating and decomposing it again: workers of one build, or two rik runs, on one cache."""
+    import threading
+
+    cache, start, results = AssetCache(tmp_path / "assets"), threading.Barrier(2), []
+
+    def build() -> None:
+        start.wait()
+        results.append(build_asset(catalog, "door/base-40-right", cache=cache)[1])
+
+    threads = [threading.Thread(target=build) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    assert sorted(r.status for r in results) == ["built", "cached"] and results[0].key == results[1].key
+    assert sorted(p.name for p in cache.path(results[0].key).parent.iterdir()) == [results[0].key]  # no lock left
+
+
 def test_an_edited_entry_meta_is_rebuilt(catalog, tmp_path):
     cache = AssetCache(tmp_path / "assets")
     [first] = build_assets(catalog, ["door/base-40-right"], cache=cache)

@@ -224,17 +224,24 @@ def build_asset(catalog: Catalog, asset_id: str, seed: int = DEFAULT_SEED,
     except CorruptEntry as exc:
         asset, status, note = None, "rebuilt", str(exc)
     if asset is None:
-        status = "built" if status == "cached" else status
-        category, parts = generate_parts(catalog, asset_id, seed)
-        meta = {"id": asset_id, "kind": asset_kind(catalog, asset_id), "category": category, "seed": seed,
-                "build_seconds": round(time.perf_counter() - t0, 3),
-                "parts": [{"name": p.name, "role": p.role, "finish": p.finish, "method": p.method,
-                           "hulls": len(p.hulls), "collision_vertices": sum(len(v) for v, _ in p.hulls),
-                           "visual_vertices": len(p.visual.vertices), "visual_faces": len(p.visual.faces)}
-                          for p in parts]}
-        cache.put(key, _arrays(parts), meta)
-        asset = load_asset(cache, key)
-        assert asset is not None
+        from rik.locks import exclusive
+
+        # one process decomposes an asset; another that needs it at the same time (a worker of the same build, a
+        # second rik on the same cache) waits for it and loads the entry, rather than running CoACD again
+        with exclusive(cache.path(key), "rik assets build", wait=True):
+            asset = load_asset(cache, key)
+            if asset is None:
+                status = "built" if status == "cached" else status
+                category, parts = generate_parts(catalog, asset_id, seed)
+                meta = {"id": asset_id, "kind": asset_kind(catalog, asset_id), "category": category, "seed": seed,
+                        "build_seconds": round(time.perf_counter() - t0, 3),
+                        "parts": [{"name": p.name, "role": p.role, "finish": p.finish, "method": p.method,
+                                   "hulls": len(p.hulls), "collision_vertices": sum(len(v) for v, _ in p.hulls),
+                                   "visual_vertices": len(p.visual.vertices), "visual_faces": len(p.visual.faces)}
+                                  for p in parts]}
+                cache.put(key, _arrays(parts), meta)
+                asset = load_asset(cache, key)
+                assert asset is not None
     result = BuildResult(asset_id, asset.kind, key, status, time.perf_counter() - t0,
                          sum(len(p.hulls) for p in asset.parts),
                          sum(len(v) for p in asset.parts for v, _ in p.hulls), note)
