@@ -54,6 +54,7 @@ fronts:
 """
 
 
+@pytest.mark.slow  # a build, recording or render end to end: out of the everyday tier
 def test_import_base_unit_from_glb(rik, glb, tmp_path):
     (tmp_path / "parts.yaml").write_text(MAPPING)
     out = tmp_path / "cat"

@@ -8,13 +8,16 @@ import sys
 from pathlib import Path
 
 import pytest
-from lerobot.configs import FeatureType, PolicyFeature
-from lerobot.policies.act.configuration_act import ACTConfig
-from lerobot_env_rik import RikEnvConfig
+
+# lerobot (torch, datasets, pandas: ~6 s) is imported by the tests that use it, not at collection, which every
+# xdist worker of every run pays, the everyday tier's included
 
 
 def _policy(folder: Path, cameras: tuple[str, ...], size: tuple[int, int] = (72, 96)) -> Path:
     """A saved ACT config (LeRobot's own writer) that reads ``cameras`` at ``size`` (height, width) and the states."""
+    from lerobot.configs import FeatureType, PolicyFeature
+    from lerobot.policies.act.configuration_act import ACTConfig
+
     inputs = {"observation.state": PolicyFeature(type=FeatureType.STATE, shape=(11,)),
               "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(13,))}
     for camera in cameras:
@@ -27,6 +30,13 @@ def _policy(folder: Path, cameras: tuple[str, ...], size: tuple[int, int] = (72,
     return folder
 
 
+def _env_config(**fields: object):
+    """The plugin's ``RikEnvConfig(**fields)``, as lerobot-eval makes it."""
+    from lerobot_env_rik import RikEnvConfig
+
+    return RikEnvConfig(**fields)
+
+
 def _argv(monkeypatch: pytest.MonkeyPatch, *args: str) -> None:
     monkeypatch.setattr(sys, "argv", ["lerobot-eval", "--env.type=rik", *args])
 
@@ -34,7 +44,7 @@ def _argv(monkeypatch: pytest.MonkeyPatch, *args: str) -> None:
 def test_auto_cameras_follow_the_command_lines_image_policy(monkeypatch, tmp_path: Path) -> None:
     policy = _policy(tmp_path / "act", ("front", "wrist"))
     _argv(monkeypatch, f"--policy.path={policy}")
-    cfg = RikEnvConfig()
+    cfg = _env_config()
     assert cfg.cameras == "front,wrist" and cfg.streams == "sim"
     assert (cfg.observation_height, cfg.observation_width) == (72, 96)
     assert cfg.features["pixels/front"].shape == (72, 96, 3)
@@ -43,9 +53,9 @@ def test_auto_cameras_follow_the_command_lines_image_policy(monkeypatch, tmp_pat
 
 def test_auto_cameras_are_none_for_a_state_policy_or_without_one(monkeypatch, tmp_path: Path) -> None:
     _argv(monkeypatch, f"--policy.path={_policy(tmp_path / 'act', ())}")
-    assert RikEnvConfig().cameras == ""
+    assert _env_config().cameras == ""
     _argv(monkeypatch)
-    cfg = RikEnvConfig()
+    cfg = _env_config()
     assert cfg.cameras == "" and not any(k.startswith("pixels/") for k in cfg.features)
 
 
@@ -55,7 +65,7 @@ def test_cameras_that_leave_out_the_policys_image_are_refused(monkeypatch, tmp_p
     with pytest.raises(ValueError, match=r"^--env.cameras='' --env.streams='sim': the policy in .*act reads "
                                          r"observation.images.front, which they do not render; leave --env.cameras "
                                          r"out \(it then follows the policy\) or pass --env.cameras=front$"):
-        RikEnvConfig(cameras="")
+        _env_config(cameras="")
     with pytest.raises(ValueError, match=r"reads 72x96 images; pass --env.observation_height=72"):
-        RikEnvConfig(cameras="front")
-    assert RikEnvConfig(cameras="front,wrist", observation_height=72, observation_width=96).cameras == "front,wrist"
+        _env_config(cameras="front")
+    assert _env_config(cameras="front,wrist", observation_height=72, observation_width=96).cameras == "front,wrist"

@@ -321,6 +321,7 @@ def test_full_disk_in_a_command_is_one_line(tmp_path: Path) -> None:
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]
 
 
+@pytest.mark.slow  # a build, recording or render end to end: out of the everyday tier
 def test_two_renders_of_one_stream_render_it_once(episode: Path, knob_recording: Path, tmp_path: Path) -> None:
     """While one process renders a stream (holding its lock), another waits, then reuses the finished stream
     instead of rendering beside it into the same folder."""

@@ -5,12 +5,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from shared import BOW, builtin_catalog
 
 CAT = builtin_catalog()
 DRAW_ARGS = ("--types", "knob", "--presets", "smooth")
 
 
+@pytest.mark.slow  # a build, recording or render end to end: out of the everyday tier
 def test_record_split_draws_each_episode_and_writes_it_as_plain_record(rik, tmp_path: Path) -> None:
     from rik.episodes.draw import Draw
     from rik.episodes.episode import find_episodes, read_meta

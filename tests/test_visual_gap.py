@@ -374,6 +374,7 @@ def test_resnet50_random_features(folders: dict[str, Path]) -> None:
     assert feats.shape == (3, 2048) and np.all(np.isfinite(feats)) and feats.std() > 0
 
 
+@pytest.mark.slow  # a build, recording or render end to end: out of the everyday tier
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")  # torch.jit is deprecated; OpenAI's file is one
 def test_clip_vit_b_32_random_features_and_mismatched_weights(folders: dict[str, Path], tmp_path: Path) -> None:
     import torch
