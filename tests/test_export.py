@@ -218,6 +218,16 @@ def test_an_export_reads_each_episode_once_and_renders_from_that_read(work: Path
     assert sorted(reads) == episodes and sorted(scenes) == episodes  # each once, the renders included
     assert len(list((tmp_path / "renders").iterdir())) == 3
     assert ("episodes", 3, 3) in stages and stages[-1] == ("shards", 1, 1)
+    # a shard reads all its episodes before it renders or writes any: a bad last episode costs no render
+    bad = tmp_path / "bad"
+    for d in episodes[:2]:
+        shutil.copytree(d, bad / d.name)
+    states = bad / episodes[1].name / "states.parquet"
+    states.write_bytes(states.read_bytes()[:200])
+    with pytest.raises(RikError, match="truncated or corrupt"):
+        export_lerobot(CAT, [bad], tmp_path / "never", spec, renders=tmp_path / "renders-bad",
+                       variants=work / "variants")
+    assert not (tmp_path / "renders-bad").exists() and not (tmp_path / "never.partial").exists()
 
 
 @slow

@@ -152,8 +152,9 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
                 progress: Callable[[], None] | None = None) -> int:
     """Write one shard dataset at ``root`` through lerobot's writer, in its episodes' robot's layout; returns its
     frame count. Marked done only after ``finalize()`` and the frame-count check. Each episode is read once
-    (:func:`~rik.exporters.lerobot_frames.load_episode`: sha256, rows, action width); with ``renders``, its image
-    streams are rendered there from that read where missing (else the sources' finished folders are used).
+    (:func:`~rik.exporters.lerobot_frames.load_episode`: sha256, rows, action width), all of the shard's before any
+    work; with ``renders``, its image streams are rendered there from that read where missing (else the sources'
+    finished folders are used).
     ``progress()`` is called as each episode is saved."""
     from lerobot.configs import RGBEncoderConfig
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
@@ -164,6 +165,9 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     quiet_encoders()
     metas = {s.directory: read_meta(s.directory) for s in sources}
     layout = shard_layout(catalog, metas)
+    # every episode of the shard read and checked (its one read) before anything is rendered or written: bad input
+    # costs no render; the shard holds its episodes' states (shard_episodes of them) until each is saved
+    loaded: list[LoadedEpisode | None] = [load_episode(catalog, s.directory, metas[s.directory]) for s in sources]
     if root.exists():
         shutil.rmtree(root)  # an unfinished shard is redone from scratch
     root.parent.mkdir(parents=True, exist_ok=True)
@@ -184,8 +188,9 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     ds.meta.save_episode = save_episode_with_rik_columns  # the documented-in-issues way to add episode columns
     frames_total = 0
     try:
-        for source in sources:
-            episode = load_episode(catalog, source.directory, metas[source.directory])  # let go once it is saved
+        for n, source in enumerate(sources):
+            episode, loaded[n] = loaded[n], None  # let go once it is saved
+            assert episode is not None
             streams = source.streams if renders is None else render_streams(catalog, episode, spec, cameras,
                                                                             renders, variants)
             task, frames, count = episode_frames(catalog, episode, streams, cameras, fps, variants)
