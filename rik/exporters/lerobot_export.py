@@ -261,7 +261,8 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                    progress: Callable[[str, int, int], None] | None) -> ExportResult:
     """:func:`export_lerobot` once it holds the lock of ``out``."""
     from rik.episodes.episode import find_episodes, read_meta
-    from rik.render.episodes import RecordedEpisode, check_renders_outside, episode_cameras
+    from rik.render.episodes import check_renders_outside
+    from rik.sim.observation import CAMERAS
 
     _check_out_free(out, resume)  # again, now that it is ours: another export may have finished it meanwhile
     partial_dir = out.with_name(f"{out.name}.partial")
@@ -291,8 +292,9 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     cams: list[str] = []
     if spec.streams:
         check_renders_outside(renders, {d: m.id for d, m in metas.items()}, "--renders")
-        # every episode's streams hold these cameras: the ones asked for, or every camera of the first one's scene
-        cams = list(spec.cameras) or episode_cameras(catalog, RecordedEpisode(dirs[0], metas[dirs[0]]), variants)
+        # the cameras asked for, or those of rik's scenes (front, wrist), as rik dataset build takes them; each
+        # episode's render checks that its scene has them. No scene is built before the shards read the episodes.
+        cams = list(spec.cameras) or list(CAMERAS)
     created = not partial_dir.exists()
     partial_dir.mkdir(parents=True, exist_ok=True)
     write_atomic(partial_dir / PLAN, json.dumps(plan, indent=1) + "\n")

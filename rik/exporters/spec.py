@@ -43,7 +43,7 @@ class ExportSpec:
     streams: tuple[str, ...] = STREAMS
     """Image streams to export (empty: a state-only dataset, nothing rendered)."""
     cameras: tuple[str, ...] = ()
-    """Cameras to export (empty: every camera of the scenes)."""
+    """Cameras to export (empty: those of rik's scenes, :data:`rik.sim.observation.CAMERAS`)."""
     width: int = 256
     height: int = 256
     fps: int | None = None

@@ -106,11 +106,6 @@ def _episode_scene(catalog: Catalog, episode: RecordedEpisode, variants: Path) -
                        f"from {variants} or rebuild it from the catalog: {exc}") from None
 
 
-def episode_cameras(catalog: Catalog, episode: RecordedEpisode, variants: Path) -> list[str]:
-    """Every camera of the scene ``episode`` was recorded in, in model order (its states are not read)."""
-    return scene_cameras(_episode_scene(catalog, episode, variants).model, None, str(episode.directory))
-
-
 def render_episode(catalog: Catalog, episode: Path | RecordedEpisode, spec: StreamSpec, *, renders: Path,
                    variants: Path = Path("variants"), cameras: Sequence[str] | None = None,
                    progress: Callable[[int], None] | None = None) -> StreamResult:
