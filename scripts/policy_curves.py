@@ -143,7 +143,7 @@ def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[in
     ax.set_ylim(0, 105)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="center right")
-    ax.set_title("ACT, state only: success against training steps (95 % Wilson intervals)", fontsize=10)
+    ax.set_title("State-only policies: S against training steps (95 % Wilson intervals)", fontsize=10)
     for run, points in sorted((losses or {}).items()):
         loss_ax.plot([p[0] for p in points], [p[1] for p in points], label=run)
     loss_ax.set_yscale("log")
