@@ -124,11 +124,12 @@ def resample_indices(rows: int, source_fps: int, fps: int) -> np.ndarray:
 @dataclass(frozen=True)
 class EpisodeSource:
     """A recorded episode and the finished stream folders its images come from (what a shard is given: a worker
-    process takes it whole, and reads the episode itself)."""
+    process takes it whole, and reads the episode itself). ``rik export-lerobot`` gives none: its shards render
+    the streams from their own read (:func:`~rik.exporters.lerobot_export.write_shard`'s ``renders``)."""
 
     directory: Path
     streams: dict[str, Path]
-    """Stream kind -> finished stream folder (see :mod:`rik.render.streams`)."""
+    """Stream kind -> finished stream folder (see :mod:`rik.render.streams`); empty where the shard renders them."""
 
 
 @dataclass(frozen=True)
