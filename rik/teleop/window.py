@@ -53,6 +53,8 @@ class TeleopWindow:
         self.camera = "front"
         self._on_press = on_press
         self._drag: tuple[int, float, float] | None = None
+        self._unseen: set[int] = set()
+        """Keys pressed since :meth:`held` last asked for them: a tap that starts and ends between two polls."""
         glfw.set_key_callback(self.window, self._key)
         glfw.set_mouse_button_callback(self.window, self._button)
         glfw.set_cursor_pos_callback(self.window, self._cursor)
@@ -76,13 +78,17 @@ class TeleopWindow:
         import glfw
 
         if action == glfw.PRESS:
+            self._unseen.add(key)
             self._on_press(key, mods)
 
     def held(self, key: int) -> bool:
-        """Whether the GLFW key ``key`` is down now."""
+        """Whether the GLFW key ``key`` is down now, or was pressed since the last call: on a starved machine both
+        edges of a short hold can arrive in one poll of events, and the hold would otherwise be lost."""
         import glfw
 
-        return glfw.get_key(self.window, key) == glfw.PRESS
+        tapped = key in self._unseen
+        self._unseen.discard(key)
+        return tapped or glfw.get_key(self.window, key) == glfw.PRESS
 
     def _button(self, window: Any, button: int, action: int, mods: int) -> None:
         import glfw
