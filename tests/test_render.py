@@ -105,6 +105,32 @@ def test_rerender_writes_every_camera_denoised(episode: Path, variants: Path, tm
         assert 10 < img.mean() < 250 and img.std() > 5  # lit, not blank, not saturated
 
 
+def test_a_second_episode_of_the_variant_reuses_the_renderer_and_renders_the_same_frames(
+        episode: Path, variants: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Streams of one variant's episodes share one renderer per process (its traced kernels are replayed, not
+    traced again), and the frames are the ones a renderer of its own gives, byte for byte."""
+    import rik.render.renderers as renderers
+
+    second = record(CAT, BOW, "contact_rich", seed=1, out=tmp_path / "episodes", variants=variants,
+                    max_seconds=0.2)[0]
+    second_dir = tmp_path / "episodes" / second.id
+    made: list[str] = []
+    make = renderers.make_renderer
+    monkeypatch.setattr(renderers, "make_renderer", lambda *a: made.append(a[3].kind) or make(*a))
+    renderers.drop_renderers()
+    spec = StreamSpec("rerendered", 32, 24, spp=2, denoise=True, variant="llvm_ad_rgb")
+    render_episode(CAT, episode, spec, renders=tmp_path / "one", variants=variants)
+    reused = render_episode(CAT, second_dir, spec, renders=tmp_path / "one", variants=variants)
+    assert made == ["rerendered"]
+    manifest = json.loads((reused.directory / "stream.json").read_text())
+    assert 0 < manifest["render_seconds"] and manifest["frames"] == reused.frames == len(read_episode(second_dir)[1])
+    renderers.drop_renderers()
+    fresh = render_episode(CAT, second_dir, spec, renders=tmp_path / "two", variants=variants)
+    assert made == ["rerendered", "rerendered"]
+    assert _frames(fresh.directory) == _frames(reused.directory)
+    renderers.drop_renderers()
+
+
 def test_denoising_brings_a_noisy_render_closer_to_a_converged_one(episode: Path, variants: Path) -> None:
     from rik.render.renderers import MitsubaFrames
 

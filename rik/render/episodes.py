@@ -153,23 +153,19 @@ def _render_stream(catalog: Catalog, episode: Path | RecordedEpisode, spec: Stre
     todo = list(writer.missing())
     if progress and len(recorded) > len(todo):
         progress(len(recorded) - len(todo))
-    renderer = None
-    try:
-        if todo:
-            scene.restore(recorded[todo[0]])
-            from rik.render.renderers import make_renderer
+    info: dict[str, Any] = {"renderer": "resumed", "render_seconds": 0.0}
+    if todo:
+        scene.restore(recorded[todo[0]])
+        from rik.render.renderers import reused_renderer
 
-            renderer = make_renderer(scene.model, scene.data, cams, spec, catalog.finishes)
-            for k in todo:
-                scene.restore(recorded[k])
-                for cam, image in renderer.render(scene.data, k).items():
-                    writer.write(k, cam, image)
-                if progress:
-                    progress(1)
-        info: dict[str, Any] = renderer.info() if renderer else {"renderer": "resumed", "render_seconds": 0.0}
-    finally:
-        if renderer is not None:
-            renderer.close()
+        renderer = reused_renderer(scene.model, scene.data, cams, spec, catalog.finishes)
+        for k in todo:
+            scene.restore(recorded[k])
+            for cam, image in renderer.render(scene.data, k).items():
+                writer.write(k, cam, image)
+            if progress:
+                progress(1)
+        info = renderer.info()
     per_frame = info["render_seconds"] / len(todo) if todo else 0.0
     info.update(episode=meta.id, episode_variant=meta.variant, fps=meta.fps, seconds_per_frame=round(per_frame, 4))
     info["render_seconds"] = round(info["render_seconds"], 3)
