@@ -22,6 +22,11 @@ os.environ.setdefault("TQDM_DISABLE", "1")
 # workers in BLAS at once (the sysid tests) on 2 cores each call waited on a thread that could not run, and the
 # suite crawled for many minutes. Set before numpy is first imported (OpenBLAS reads it then).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# For the same reason one thread for Mesa's llvmpipe (MuJoCo's EGL renders: 0.12 CPU-s per 128 px frame against 0.14
+# with its default thread per core, measured on the demo's scene) and for torch's OpenMP pool, in this process and in
+# the commands the tests start (they inherit it). The images are the same: llvmpipe splits a frame into tiles.
+os.environ.setdefault("LP_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 
 SESSION_LIMIT = 3600
