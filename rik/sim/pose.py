@@ -41,3 +41,22 @@ def angles_of(rotation: np.ndarray) -> np.ndarray:
 
     base = Rotation.from_quat(GRIPPER_BASE_QUAT, scalar_first=False)
     return (base.inv() * Rotation.from_matrix(rotation)).as_euler("XYZ")
+
+
+def nearest_angles(angles: np.ndarray, near: np.ndarray) -> np.ndarray:
+    """The pitch, yaw, roll (rad) of the same gripper rotation as ``angles`` that lie nearest ``near``.
+
+    An arm's pose gives its angles as principal Euler angles (:func:`angles_of`: roll wraps at
+    +-pi, and past a yaw of +-pi/2 pitch and roll flip by pi), while a held key moves the target's angles on
+    without a wrap: compared as they are, a roll past pi would read as a lead of -2 pi. Every triple
+    ``(p, y, r) + 2 pi k`` and ``(p + pi, pi - y, r + pi) + 2 pi k`` is the same rotation
+    (:func:`gripper_rotation`); this picks the one nearest ``near``. The Hand-E's pose is its
+    joints' values, which lie within the lead of its target: they come back unchanged."""
+    a = np.asarray(angles, np.float64)
+    ref = np.asarray(near, np.float64)
+    best = a
+    for c in (a, a + np.array([np.pi, np.pi - 2 * a[1], np.pi])):
+        c = ref + (c - ref + np.pi) % (2 * np.pi) - np.pi
+        if np.abs(c - ref).max() < np.abs(best - ref).max() - 1e-9:
+            best = c
+    return best

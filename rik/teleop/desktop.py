@@ -12,6 +12,7 @@ Left / Right            yaw left / right
 Q / E                   roll left / right
 Shift                   hold for fine motion (x0.25)
 Space                   close / open the gripper
+M                       W / S along the front's path while holding its handle (a door's arc), or frame-fixed
 Enter                   save the episode and start the next
 Backspace               discard the episode and start again
 Esc (or close window)   quit; an unsaved episode is discarded
@@ -19,10 +20,10 @@ Esc (or close window)   quit; an unsaved episode is discarded
 F1                      hide / show the keymap (it folds once the episode records)
 ======================  ==============================================================
 
-The keymap and the live status (episode, time and time left, opening, grip, where the handle is) are drawn in the
-window; the status is also printed to the terminal about once a second. The simulation runs on real time at the
-control rate (20 Hz); a slow frame drops control steps rather than catching up in a burst, so it never turns into
-a jump.
+The keymap and the live status (episode, time and time left, opening, the grasp as contacts give it, where the
+handle is, the front's angle or travel, the motion mode) are drawn in the window; the status is also printed to the
+terminal about once a second. The simulation runs on real time at the control rate (20 Hz); a slow frame drops
+control steps rather than catching up in a burst, so it never turns into a jump.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.errors import RikError
+from rik.teleop.feedback import front_text, grasp_text, motion_text
 from rik.teleop.keys import COMMAND_KEYS, MOTION_KEYS, keymap_rows, velocity
 from rik.teleop.session import TeleopSession, check_time_limit, handle_text, time_text
 from rik.teleop.window import CAMERAS, TeleopWindow, open_display
@@ -148,6 +150,9 @@ class Controls:
         s = self.session
         if key == glfw.KEY_SPACE:
             s.toggle_grip()
+        elif key == glfw.KEY_M:
+            s.toggle_motion_mode()
+            self.say(s.message)
         elif key in (glfw.KEY_ENTER, glfw.KEY_KP_ENTER):
             result = s.save()
             if result is not None:
@@ -195,8 +200,9 @@ def overlays(session: TeleopSession, camera: str, fps: float, show_keys: bool = 
     st = session.status()
     state = st["state"] + (": Enter saves, Backspace discards" if st["state"] == "time up" else "")
     status = [("robot", st["robot"]), ("episode", st["episode"]), ("state", state), ("time", time_text(st)),
-              ("opening", f"{st['opening']:.0%} (most {st['max_opening']:.0%})"), ("grip", st["grip"]),
-              ("handle", handle_text(st)), ("gripper", gripper_angles(session))]
+              ("opening", f"{st['opening']:.0%} (most {st['max_opening']:.0%}), {front_text(st)}"),
+              ("grip", f"{st['grip']}, {grasp_text(st)}"), ("handle", handle_text(st)),
+              ("gripper", gripper_angles(session)), ("motion", motion_text(st))]
     if st["message"]:
         status.append(("", st["message"]))
     keys = [*keymap_rows(), *EXTRA_KEYS] if show_keys else [("F1", "show the keymap")]

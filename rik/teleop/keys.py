@@ -58,6 +58,7 @@ MOTION_KEYS = (
 
 COMMAND_KEYS = {
     "grip": ("Space", "SPACE", "Space", "close / open the gripper"),
+    "motion": ("KeyM", "M", "M", "W / S along the front's path while holding its handle, or frame-fixed"),
     "fine": ("ShiftLeft", "LEFT_SHIFT", "Shift", "hold for fine motion (x0.25)"),
     "save": ("Enter", "ENTER", "Enter", "save the episode and start the next"),
     "discard": ("Backspace", "BACKSPACE", "Backspace", "discard the episode and start again"),

@@ -14,6 +14,7 @@ station). Devices set a velocity command and a grip; :meth:`TeleopSession.tick` 
 
 from __future__ import annotations
 
+import math
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +22,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rik.sim.pose import nearest_angles
+from rik.teleop.feedback import BLOCKED_LEAD, GraspWatch, front_path_step, grasp_hint, grasp_text, handle_contact
 from rik.teleop.keys import ANGULAR_SPEED, LEAD, LINEAR_SPEED
 
 if TYPE_CHECKING:
@@ -32,6 +35,9 @@ DRAFTS = ".drafts"
 """Folder of draft episodes inside the episodes folder (hidden: exports and ``rik replay DIR`` skip it)."""
 MAX_FREE_SEEDS = 100_000
 """How many seeds past the requested one are searched for a free episode id."""
+MOTION_MODES = ("path", "frame")
+"""How W/S move the target: along the front's own path while the jaws hold its handle (a door's arc, a flap's, a
+drawer's slide), frame-fixed otherwise; or always frame-fixed (towards / away from the furniture)."""
 
 
 def check_time_limit(max_seconds: float | None) -> None:
@@ -71,7 +77,11 @@ class TeleopSession:
         self.last_saved: Saved | None = None
         self.message = ""
         """The last thing worth telling the operator (saved, discarded, draft kept)."""
+        self.motion_mode = MOTION_MODES[0]
+        """One of :data:`MOTION_MODES` (kept from episode to episode)."""
         self._start()
+        self.hint = grasp_hint(scene)
+        """How to grasp the operated handle (:func:`rik.teleop.feedback.grasp_hint`), shown before the first input."""
 
     # ---- episodes ---------------------------------------------------------------------------------------------
     @property
@@ -104,6 +114,11 @@ class TeleopSession:
         self.target = np.concatenate([self.scene.pose(), [0.0]])
         self.command = np.zeros(6)
         self.grip = 0.0
+        self.grasp = GraspWatch()
+        self.blocked = False
+        """The last step's target leads the gripper by more than :data:`BLOCKED_LEAD` while a motion key is held."""
+        self.on_path = False
+        """The last step moved along the front's path (:data:`MOTION_MODES`)."""
 
     @property
     def recording(self) -> bool:
@@ -160,6 +175,11 @@ class TeleopSession:
     def toggle_grip(self) -> None:
         self.grip = 0.0 if self.grip >= 0.5 else 1.0
 
+    def toggle_motion_mode(self) -> None:
+        """Switch between motion along the front's path and frame-fixed motion (:data:`MOTION_MODES`)."""
+        self.motion_mode = MOTION_MODES[1 - MOTION_MODES.index(self.motion_mode)]
+        self.message = f"motion: {self.motion_mode}"
+
     def tick(self) -> bool:
         """One control step when the operator has moved (or moves now) and the time limit is not reached: the
         target advances by the velocity command, held within :data:`LEAD` of the gripper, and the step is
@@ -172,16 +192,26 @@ class TeleopSession:
         speed = np.array([LINEAR_SPEED] * 3 + [ANGULAR_SPEED] * 3)
         pose = self.scene.pose()
         pose[3:] = nearest_angles(pose[3:], self.target[3:6])
-        target = self.target[:6] + self.command * speed * dt
+        command = self.command.copy()
+        target = self.target[:6].copy()
+        self.on_path = bool(self.motion_mode == "path" and self.grasp.state == "holding" and command[1])
+        if self.on_path:  # S opens along the front's path, W closes; the other axes stay frame-fixed
+            target = front_path_step(self.scene, target, float(command[1]) * LINEAR_SPEED * dt)
+            command[1] = 0.0
+        target += command * speed * dt
         if np.any(self.command[:3]):  # a target left behind while not moving stays: the servos pull back to it
             lead = target[:3] - pose[:3]
             norm = float(np.linalg.norm(lead))
             if norm > LEAD[0]:
                 target[:3] = pose[:3] + lead * (LEAD[0] / norm)
-        if np.any(self.command[3:]):
+        if np.any(self.command[3:]) or self.on_path:
             target[3:] = pose[3:] + np.clip(target[3:] - pose[3:], -LEAD[1], LEAD[1])
         self.target = np.concatenate([target, [self.grip]])
         self.recorder.step(self.target.copy())
+        self.grasp.update(handle_contact(self.scene), self.grip)
+        after = self.scene.pose()
+        self.blocked = bool(np.any(self.command[:3])
+                            and np.linalg.norm(self.target[:3] - after[:3]) > BLOCKED_LEAD)
         return True
 
     # ---- what the operator sees -------------------------------------------------------------------------------
@@ -208,6 +238,10 @@ class TeleopSession:
                        "up": round(float(offset[2]), 4)},
             "pose": [round(float(v), 4) for v in s.pose()],
             "contacts": int(s.contact_summary()["contacts"]), "message": self.message,
+            "grasp": self.grasp.state, "blocked": self.blocked, "hint": self.hint,
+            "motion": {"mode": self.motion_mode, "on_path": self.on_path},
+            "front_position": front_reading(s),
+            "yaw_deg": round(math.degrees(float(s.pose()[4])), 1),
             "last_saved": None if self.last_saved is None else self.last_saved.meta.id,
         }
 
@@ -215,26 +249,15 @@ class TeleopSession:
         """The status in one line for a terminal."""
         st = self.status()
         return (f"{st['episode']} | {st['state']} | {time_text(st)} | open {st['opening']:.0%} | grip {st['grip']} | "
-                f"handle {handle_text(st)}")
+                f"handle {handle_text(st)} | grasp {grasp_text(st)}")
 
 
-def nearest_angles(angles: np.ndarray, near: np.ndarray) -> np.ndarray:
-    """The pitch, yaw, roll (rad) of the same gripper rotation as ``angles`` that lie nearest ``near``.
-
-    An arm's pose gives its angles as principal Euler angles (:func:`rik.sim.pose.angles_of`: roll wraps at
-    +-pi, and past a yaw of +-pi/2 pitch and roll flip by pi), while a held key moves the target's angles on
-    without a wrap: compared as they are, a roll past pi would read as a lead of -2 pi. Every triple
-    ``(p, y, r) + 2 pi k`` and ``(p + pi, pi - y, r + pi) + 2 pi k`` is the same rotation
-    (:func:`rik.sim.pose.gripper_rotation`); this picks the one nearest ``near``. The Hand-E's pose is its
-    joints' values, which lie within the lead of its target: they come back unchanged."""
-    a = np.asarray(angles, np.float64)
-    ref = np.asarray(near, np.float64)
-    best = a
-    for c in (a, a + np.array([np.pi, np.pi - 2 * a[1], np.pi])):
-        c = ref + (c - ref + np.pi) % (2 * np.pi) - np.pi
-        if np.abs(c - ref).max() < np.abs(best - ref).max() - 1e-9:
-            best = c
-    return best
+def front_reading(scene: SimScene) -> dict[str, Any]:
+    """The operated front's position for the operator: a hinge's angle (degrees) or a slide's travel (mm)."""
+    q = scene.front_q()[0]
+    if scene.front.motion == "slide":
+        return {"kind": scene.front.kind, "travel_mm": round(q * 1000.0, 1)}
+    return {"kind": scene.front.kind, "angle_deg": round(math.degrees(q), 1)}
 
 
 def time_text(status: dict[str, Any]) -> str:

@@ -276,11 +276,12 @@ class Station:
                     self.grip = grip
                 self.seq = seq
                 self.input_time = time.monotonic()
-            elif kind == "command" and msg.get("name") in ("save", "discard", "toggle_grip", "replay", "continue"):
+            elif kind == "command" and msg.get("name") in ("save", "discard", "toggle_grip", "toggle_motion", "replay",
+                                                          "continue"):
                 self.commands.append((client, str(msg["name"])))
             else:
                 client.notice = (f"ignored message type {kind!r}: use input, command (save, discard, toggle_grip, "
-                                 "replay, continue, take_control) or size")
+                                 "toggle_motion, replay, continue, take_control) or size")
 
     # ---- the station thread -----------------------------------------------------------------------------------
     def _build(self) -> None:
@@ -398,6 +399,8 @@ class Station:
         self.message = ""
         if name == "toggle_grip" and not self.paused:
             session.toggle_grip()
+        elif name == "toggle_motion":
+            session.toggle_motion_mode()
         elif name == "save":
             try:
                 session.save()

@@ -38,7 +38,8 @@ over 64 KiB closes the connection with code 1009):
 - ``{"type": "input", "seq": n, "axes": [6 numbers in -1..1: x (left), y (away), z (up), pitch, yaw, roll],
   "grip": 0..1 or null (null: keep the grip), "fine": bool}``; an input older than 0.5 s without a newer one
   commands no motion (a tab that lost focus);
-- ``{"type": "command", "name": "save" | "discard" | "toggle_grip" | "replay" | "continue" | "take_control"}``;
+- ``{"type": "command", "name": "save" | "discard" | "toggle_grip" | "toggle_motion" | "replay" | "continue" |
+  "take_control"}``;
 - ``{"type": "size", "width": 320|640, "height": 240|480}``.
 
 Frames and status go to every tab through a latest-frame slot per tab (a slow tab skips frames). One tab controls

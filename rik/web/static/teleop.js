@@ -149,6 +149,22 @@
       $("st-opening").textContent = pct(s.opening) + " (max " + pct(s.max_opening) + ")";
       $("opening-bar").style.width = Math.max(0, Math.min(100, 100 * s.opening)).toFixed(1) + "%";
       $("st-grip").textContent = s.grip + " (" + s.grip_command.toFixed(2) + ")";
+      d.grasp = s.grasp; d.blocked = String(s.blocked); d.motion = s.motion.on_path ? "path" : "frame";
+      d.motionMode = s.motion.mode;
+      const grasp = $("st-grasp");
+      grasp.textContent = s.grasp === "slipped" ? "slipped: open (Space) and grasp again" : s.grasp;
+      grasp.className = "grasp " + s.grasp;
+      $("st-blocked").hidden = !s.blocked;
+      const f = s.front_position;
+      d.frontAngle = f.angle_deg === undefined ? "" : f.angle_deg;
+      $("st-front").textContent = f.angle_deg === undefined ? f.kind + " out " + f.travel_mm.toFixed(0) + " mm" :
+        f.kind + " at " + f.angle_deg.toFixed(0) + " deg";
+      $("st-yaw").textContent = s.yaw_deg.toFixed(0) + " deg";
+      $("st-motion").textContent = s.motion.mode === "frame" ? "frame-fixed" : s.motion.on_path ||
+        s.grasp === "holding" ? "along the front's path (W / S)" : "frame-fixed until the handle is held";
+      const hint = $("hint");
+      hint.hidden = !s.hint || s.steps > 0;
+      hint.textContent = s.hint ? "How to grasp this handle: " + s.hint : "";
       const h = s.handle;
       $("st-handle").textContent = h.ahead.toFixed(3) + " m ahead, " + h.left.toFixed(3) + " m left, " +
         h.up.toFixed(3) + " m up";
@@ -191,7 +207,8 @@
   }
 
   // ---- keyboard -----------------------------------------------------------------------------------------------
-  const COMMAND_CODES = {Space: "toggle_grip", Enter: "save", NumpadEnter: "save", Backspace: "discard"};
+  const COMMAND_CODES = {Space: "toggle_grip", KeyM: "toggle_motion", Enter: "save", NumpadEnter: "save",
+    Backspace: "discard"};
   function handled(code) {
     return code in COMMAND_CODES || code.startsWith("Arrow") || code.startsWith("Shift") ||
       (keymap && keymap.motion.some((b) => b.code === code));

@@ -1,0 +1,144 @@
+"""What a teleoperation session tells the operator and how W/S move along a front's path: the grasp from contacts
+(holding, touching, slipped), "blocked", the hint per handle, and a door that opens with one held key in path
+motion where frame-fixed motion loses the knob (rik.teleop.feedback, rik.teleop.session)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from shared import BOW, builtin_catalog
+
+from rik.episodes.record import variant_dir
+from rik.sim.build import build_scene
+from rik.sim.grasp import pinch_fits, pinch_plan
+from rik.sim.pose import base_for_tcp
+from rik.sim.robots.gripper import HAND_E
+from rik.teleop.feedback import BLOCKED_LEAD, GRASP_STATES, front_path_step
+from rik.teleop.keys import COMMAND_KEYS
+from rik.teleop.session import TeleopSession
+
+CAT = builtin_catalog()
+DOOR = "door-base-60-left__knob-mushroom-30__normal"
+HOLD_S = np.array([0.0, 1.0, 0.0, 0.0, 0.0, 0.0])
+"""The command of a held S (away from the furniture: opens)."""
+
+
+@pytest.fixture(scope="module")
+def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("variants")
+    for vid in (DOOR, BOW):
+        variant_dir(CAT, vid, out)
+    return out
+
+
+def _session(variants: Path, vid: str, tmp_path: Path) -> TeleopSession:
+    return TeleopSession(build_scene(variants / vid, None, HAND_E, 20), tmp_path / "episodes")
+
+
+def _hold(session: TeleopSession, steps: int) -> list[dict]:
+    """Hold the session's current input for ``steps`` control steps; the status after each."""
+    out = []
+    for _ in range(steps):
+        session.tick()
+        out.append(session.status())
+    return out
+
+
+def _grasp_the_handle(session: TeleopSession) -> None:
+    """Put the jaws round the handle as the scripted pinch would (from the handle's own geometry) and close them,
+    driving the session's target there as held keys would, until the contacts read ``holding``."""
+    scene = session.scene
+    plan = pinch_plan(scene, pinch_fits(scene, "visual"), "visual")
+    for tcp, steps in ((plan.tcp + 0.05 * plan.approach, 30), (plan.tcp, 30)):
+        session.target[:6] = base_for_tcp(scene.gripper, tcp, plan.angles)
+        for _ in range(steps):
+            session.recorder.step(session.target.copy())
+    session.set_input(np.zeros(6), grip=1.0)
+    states = [s["grasp"] for s in _hold(session, 15)]
+    assert states[-1] == "holding", states
+
+
+def test_a_held_s_opens_a_door_along_its_arc_where_frame_motion_loses_the_knob(variants: Path,
+                                                                              tmp_path: Path) -> None:
+    path = _session(variants, DOOR, tmp_path)
+    assert path.motion_mode == "path"
+    _grasp_the_handle(path)
+    path.set_input(HOLD_S)
+    statuses = _hold(path, 200)  # 10 s of one held key
+    opened = [s for s in statuses if s["grasp"] == "holding"]
+    assert all(s["motion"]["on_path"] for s in opened)
+    assert opened[-1]["opening"] > 0.9, opened[-1]["front_position"]  # the knob stays in the jaws past 90 %
+    assert statuses[-1]["front_position"]["angle_deg"] > 95
+
+    frame = _session(variants, DOOR, tmp_path / "frame")
+    frame.toggle_motion_mode()
+    assert frame.motion_mode == "frame" and frame.message == "motion: frame"
+    _grasp_the_handle(frame)
+    frame.set_input(HOLD_S)
+    statuses = _hold(frame, 200)
+    assert not any(s["motion"]["on_path"] for s in statuses)
+    assert statuses[-1]["opening"] < 0.5  # straight back, the knob leaves the jaws on the arc...
+    assert statuses[-1]["grasp"] == "slipped"  # ...and the page says so while the grip is still closed
+    frame.set_input(np.zeros(6), grip=0.0)
+    assert _hold(frame, 1)[-1]["grasp"] in ("touching", "free")  # opening the grip fully ends "slipped"
+
+
+def test_loosening_the_grip_mid_pull_reads_slipped(variants: Path, tmp_path: Path) -> None:
+    session = _session(variants, DOOR, tmp_path)
+    _grasp_the_handle(session)
+    session.set_input(HOLD_S)
+    assert {s["grasp"] for s in _hold(session, 20)} == {"holding"}
+    session.set_input(HOLD_S, grip=0.05)  # the jaws open most of the way (a trigger let go): the knob leaves them
+    states = [s["grasp"] for s in _hold(session, 20)]
+    assert states[-1] == "slipped" and "slipped" in session.status_line()
+    assert set(states) <= set(GRASP_STATES)
+
+
+def test_blocked_reads_when_the_target_leads_a_gripper_pushed_into_the_front(variants: Path,
+                                                                            tmp_path: Path) -> None:
+    session = _session(variants, BOW, tmp_path)
+    session.set_input(np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0]))  # A: left, in free space
+    free = _hold(session, 20)
+    assert not any(s["blocked"] for s in free)
+    session.set_input(np.array([0.0, -1.0, 0.0, 0.0, 0.0, 0.0]))  # W: into the furniture, until it stops
+    pushed = _hold(session, 80)
+    assert pushed[-1]["blocked"] and "blocked" in session.status_line()
+    lead = np.linalg.norm(session.target[:3] - session.scene.pose()[:3])
+    assert lead > BLOCKED_LEAD
+    session.set_input(np.zeros(6))
+    assert not _hold(session, 1)[-1]["blocked"]  # no key held: nothing is blocked
+
+
+def test_the_hint_says_which_roll_each_handle_needs(variants: Path, tmp_path: Path) -> None:
+    bar = _session(variants, BOW, tmp_path).status()
+    assert bar["steps"] == 0 and "140 mm wide, 12 mm tall" in bar["hint"] and "roll 90 deg" in bar["hint"]
+    assert "pull the drawer out" in bar["hint"]
+    knob = _session(variants, DOOR, tmp_path / "door").status()
+    assert "30 mm wide" in knob["hint"] and "follows the front's arc" in knob["hint"]
+    assert knob["front_position"] == {"kind": "door", "angle_deg": 0.0}
+    assert bar["front_position"] == {"kind": "drawer", "travel_mm": 0.0}
+
+
+def test_a_path_step_keeps_the_pose_on_the_hinges_circle_and_its_angle_to_the_door(variants: Path) -> None:
+    scene = build_scene(variants / DOOR, None, HAND_E, 20)
+    d, joint = scene.data, scene.front.joint
+    pose = scene.pose()
+    moved = pose
+    for _ in range(50):
+        moved = front_path_step(scene, moved, 0.01)
+    anchor, axis = d.xanchor[joint], d.xaxis[joint]
+
+    def radius(p: np.ndarray) -> float:
+        arm = p[:3] - anchor
+        return float(np.linalg.norm(arm - (arm @ axis) * axis))
+
+    assert radius(moved) == pytest.approx(radius(pose), abs=1e-9)
+    turned = 0.5 / radius(pose)  # 50 steps of 10 mm along the arc, rad
+    assert abs(abs(moved[4] - pose[4]) - turned) < 1e-6  # a vertical hinge turns the gripper's yaw with the door
+    assert np.allclose(front_path_step(scene, moved, -0.5)[:3], pose[:3], atol=1e-6)  # W goes back the same way
+
+
+def test_m_switches_the_motion_in_the_keymap() -> None:
+    assert COMMAND_KEYS["motion"][:3] == ("KeyM", "M", "M")
