@@ -140,5 +140,38 @@ def test_a_path_step_keeps_the_pose_on_the_hinges_circle_and_its_angle_to_the_do
     assert np.allclose(front_path_step(scene, moved, -0.5)[:3], pose[:3], atol=1e-6)  # W goes back the same way
 
 
+def _seen(scene, camera) -> set[str]:
+    """Which of the gripper, the handle and the front a 64 x 48 render through ``camera`` shows (MuJoCo's
+    segmentation: the geoms drawn in each pixel)."""
+    import mujoco
+
+    with mujoco.Renderer(scene.model, 48, 64) as r:
+        r.enable_segmentation_rendering()
+        r.update_scene(scene.data, camera=camera)
+        geoms = {int(g) for g in np.unique(r.render()[..., 0]) if g >= 0}
+    bodies = {int(scene.model.geom_bodyid[g]) for g in geoms}
+    return ({"gripper"} if geoms & scene.gripper_geoms else set()) | \
+        ({"handle"} if scene.front.handle_body in bodies else set()) | \
+        ({"front"} if scene.front.body in bodies else set())
+
+
+def test_the_follow_view_keeps_gripper_handle_and_door_in_frame_where_the_fixed_camera_loses_them(
+        variants: Path, tmp_path: Path) -> None:
+    from rik.teleop.view import FOLLOWED, FollowView
+
+    session = _session(variants, DOOR, tmp_path)
+    view = FollowView(session.scene)
+    assert _seen(session.scene, view.at(session.scene.data)) == {"gripper", "handle", "front"}  # closed: all three
+    _grasp_the_handle(session)
+    session.set_input(HOLD_S)
+    for _ in range(200):
+        session.tick()
+        if session.scene.opening() >= 0.8:
+            break
+    assert 0.8 <= session.scene.opening() < 0.85
+    assert _seen(session.scene, view.at(session.scene.data)) == {"gripper", "handle", "front"}
+    assert "gripper" not in _seen(session.scene, FOLLOWED)  # the scene's fixed camera: the work left its picture
+
+
 def test_m_switches_the_motion_in_the_keymap() -> None:
     assert COMMAND_KEYS["motion"][:3] == ("KeyM", "M", "M")

@@ -25,6 +25,7 @@ import numpy as np
 from rik.errors import RikError, os_error_text
 from rik.teleop.keys import FINE_FACTOR
 from rik.teleop.session import TeleopSession, check_time_limit
+from rik.teleop.view import FOLLOWED, FollowView
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -195,6 +196,8 @@ class Station:
         self.draft: str | None = None
         self.message = BUILDING
         self.replay: dict[str, Any] | None = None
+        self._view: FollowView | None = None
+        """The front view that follows the work (made with the renderers, on the station thread)."""
         self.fps = 0.0
         self.session: TeleopSession | None = None
         self.last_seen = time.monotonic()
@@ -459,10 +462,12 @@ class Station:
             r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
             renderers[size] = r
         renderer = renderers[size]
+        if self._view is None or self._view.scene is not session.scene:
+            self._view = FollowView(session.scene)
         out = []
         step = session.recorder.steps if self.replay is None else self.replay["row"]
-        for cam in CAMERAS:
-            renderer.update_scene(data, camera=cam)
+        for cam in CAMERAS:  # the page's front view follows the work; the wrist camera is the scene's
+            renderer.update_scene(data, camera=self._view.at(data) if cam == FOLLOWED else cam)
             jpeg = encode_jpeg(renderer.render())
             header = {"camera": cam, "step": step, "seq": self.applied_seq, "t": round(float(data.time), 4),
                       "sent": time.time(), "width": size[0], "height": size[1], "replay": self.replay is not None}

@@ -1,0 +1,55 @@
+"""The operator's view of the front: a camera that keeps the gripper, the handle and the front in frame while the
+front opens (a door swings out of the fixed front camera's picture from about half open). Only what the operator
+sees: episodes store states, and every stream rendered from them uses the scene's own fixed cameras."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    import mujoco
+
+    from rik.sim.scene import SimScene
+
+FOLLOWED = "front"
+"""The scene camera whose direction and framing the follow view keeps."""
+
+
+class FollowView:
+    """A MuJoCo free camera looking the way the scene's :data:`FOLLOWED` camera looks, from the distance at which it
+    frames the closed front, at the mean of the pads' centre, the handle's grasp point and the front's body: as the
+    front opens, the camera moves with what is being operated."""
+
+    def __init__(self, scene: SimScene) -> None:
+        import mujoco
+
+        m = scene.model
+        self.scene = scene
+        start = mujoco.MjData(m)
+        mujoco.mj_forward(m, start)
+        start_target = self.target(start)
+        cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, FOLLOWED)
+        forward = -start.cam_xmat[cid].reshape(3, 3)[:, 2]
+        along = float(np.dot(start_target - start.cam_xpos[cid], forward))
+        # a free camera's field of view is the model's global one: keep the fixed camera's framing
+        fixed, free = math.radians(float(m.cam_fovy[cid])), math.radians(float(m.vis.global_.fovy))
+        scale = math.tan(fixed / 2) / math.tan(free / 2)
+        self.camera = mujoco.MjvCamera()
+        self.camera.type = mujoco.mjtCamera.mjCAMERA_FREE
+        self.camera.azimuth = math.degrees(math.atan2(forward[1], forward[0]))
+        self.camera.elevation = math.degrees(math.asin(float(np.clip(forward[2], -1.0, 1.0))))
+        self.camera.distance = max(along, 0.1) * scale
+
+    def target(self, data: mujoco.MjData) -> np.ndarray:
+        """The point the view looks at in ``data``: the mean of the pads' centre, the grasp point and the front's body
+        origin, m (world)."""
+        s = self.scene
+        return (data.site_xpos[s.tcp_site] + data.site_xpos[s.front.grasp_site] + data.xpos[s.front.body]) / 3.0
+
+    def at(self, data: mujoco.MjData) -> mujoco.MjvCamera:
+        """The camera for the state in ``data`` (after ``mj_forward``)."""
+        self.camera.lookat[:] = self.target(data)
+        return self.camera
