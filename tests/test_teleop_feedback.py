@@ -173,5 +173,29 @@ def test_the_follow_view_keeps_gripper_handle_and_door_in_frame_where_the_fixed_
     assert "gripper" not in _seen(session.scene, FOLLOWED)  # the scene's fixed camera: the work left its picture
 
 
+def test_the_operators_view_paints_jaws_and_handle_in_colours_of_their_own(variants: Path, tmp_path: Path) -> None:
+    """The demo's white bow handle on its white drawer: painted, the view shows the jaws' orange and the handle's
+    blue; the scene's own materials (what recorded streams use) are untouched."""
+    import mujoco
+
+    from rik.teleop.view import HANDLE_RGBA, JAWS_RGBA, FollowView, paint_for_contrast
+
+    session = _session(variants, BOW, tmp_path)
+    scene = session.scene
+    materials = scene.model.mat_rgba.copy()
+
+    def pixels_near(image: np.ndarray, rgba: tuple[float, ...]) -> int:
+        return int((np.abs(image.astype(int) - np.array(rgba[:3]) * 255).max(axis=-1) < 60).sum())
+
+    with mujoco.Renderer(scene.model, 120, 160) as r:
+        r.update_scene(scene.data, camera=FollowView(scene).at(scene.data))
+        plain = r.render().copy()
+        paint_for_contrast(r.scene, scene)
+        painted = r.render()
+    assert pixels_near(painted, JAWS_RGBA) > pixels_near(plain, JAWS_RGBA) + 20
+    assert pixels_near(painted, HANDLE_RGBA) > pixels_near(plain, HANDLE_RGBA) + 5
+    assert np.array_equal(scene.model.mat_rgba, materials)
+
+
 def test_m_switches_the_motion_in_the_keymap() -> None:
     assert COMMAND_KEYS["motion"][:3] == ("KeyM", "M", "M")

@@ -128,7 +128,8 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
             return
         page.click("#btn-replay")  # the saved episode plays back in the stream, then the stream is live again
         drive.wait("d.replaying === 'true'")
-        drive.wait("d.replaying === 'false'")
+        drive.wait("d.replaying === 'true' && Number(d.shownOpening) >= 0.5 && Number(d.opening) < 0.05")  # the
+        drive.wait("d.replaying === 'false'")  # replayed drawer's opening is shown, not the live one (closed again)
         assert f"replayed {saved}; back to live" in page.inner_text("#banner")
         page.select_option("#size", "640x480")
         page.wait_for_function("document.getElementById('cam-front').naturalWidth === 640", timeout=WAIT_MS, polling=100)

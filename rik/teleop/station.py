@@ -25,7 +25,7 @@ import numpy as np
 from rik.errors import RikError, os_error_text
 from rik.teleop.keys import FINE_FACTOR
 from rik.teleop.session import TeleopSession, check_time_limit
-from rik.teleop.view import FOLLOWED, FollowView
+from rik.teleop.view import FOLLOWED, FollowView, paint_for_contrast
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -435,7 +435,8 @@ class Station:
             self.message = "nothing saved in this session yet: save an episode to replay it"
             return
         _, table = read_episode(session.last_saved.path)
-        self.replay = {"episode": session.last_saved.meta.id, "states": states(table), "row": 0}
+        self.replay = {"episode": session.last_saved.meta.id, "states": states(table), "row": 0,
+                       "openings": table.column("opening").to_numpy()}
 
     def _replay_row(self, data: Any) -> None:
         import mujoco
@@ -468,6 +469,7 @@ class Station:
         step = session.recorder.steps if self.replay is None else self.replay["row"]
         for cam in CAMERAS:  # the page's front view follows the work; the wrist camera is the scene's
             renderer.update_scene(data, camera=self._view.at(data) if cam == FOLLOWED else cam)
+            paint_for_contrast(renderer.scene, session.scene)
             jpeg = encode_jpeg(renderer.render())
             header = {"camera": cam, "step": step, "seq": self.applied_seq, "t": round(float(data.time), 4),
                       "sent": time.time(), "width": size[0], "height": size[1], "replay": self.replay is not None}
@@ -483,8 +485,10 @@ class Station:
                               "fps": round(self.fps, 1), "controlled": self.controller is not None,
                               "replay": None, "session": None, "message": self.message}
         if self.replay is not None:
+            row = min(max(self.replay["row"] - 1, 0), len(self.replay["states"]) - 1)  # the row now shown
             st["replay"] = {"episode": self.replay["episode"], "row": self.replay["row"],
-                            "rows": len(self.replay["states"])}
+                            "rows": len(self.replay["states"]),
+                            "opening": round(float(self.replay["openings"][row]), 4)}
         if s is not None and self.ready:
             st["session"] = s.status()
             st["session"]["roll_deg"] = round(math.degrees(st["session"]["pose"][5]), 1)

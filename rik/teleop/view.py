@@ -53,3 +53,30 @@ class FollowView:
         """The camera for the state in ``data`` (after ``mj_forward``)."""
         self.camera.lookat[:] = self.target(data)
         return self.camera
+
+
+JAWS_RGBA = (0.95, 0.45, 0.05, 1.0)
+"""The gripper's colour in the operator's view (orange), RGBA."""
+HANDLE_RGBA = (0.10, 0.45, 0.95, 1.0)
+"""The operated handle's colour in the operator's view (blue): a white handle on a white front stands out, RGBA."""
+
+
+def paint_for_contrast(view: mujoco.MjvScene, scene: SimScene) -> None:
+    """Colour the gripper :data:`JAWS_RGBA` and the operated handle :data:`HANDLE_RGBA` in a view made by
+    ``update_scene`` (textures dropped): depth is easier to read when jaws, handle and front differ. The operator's
+    view only: the scene's materials, and every recorded stream, stay as they are."""
+    import mujoco
+
+    bodies = scene.model.geom_bodyid
+    for i in range(view.ngeom):
+        g = view.geoms[i]
+        if g.objtype != mujoco.mjtObj.mjOBJ_GEOM:
+            continue
+        if g.objid in scene.gripper_geoms:
+            rgba = JAWS_RGBA
+        elif int(bodies[g.objid]) == scene.front.handle_body:
+            rgba = HANDLE_RGBA
+        else:
+            continue
+        g.rgba[:] = rgba
+        g.matid = -1

@@ -21,13 +21,15 @@ Server -> browser, binary (a camera frame)::
     N bytes: JSON header {"camera": "front"|"wrist", "step": recorded steps (or replayed row), "seq": the last
              input seq applied to the simulation when this frame was rendered, "t": simulated time (s),
              "sent": server wall clock at render (s since the epoch), "width", "height", "replay": bool}
-    rest:    the JPEG image (no shadows or reflections; quality 80)
+    rest:    the JPEG image (no shadows or reflections; quality 80). The "front" image is the operator's follow
+             view (rik.teleop.view: it keeps the gripper, handle and front in frame), jaws and handle painted in
+             colours of their own; recorded streams use the scene's fixed cameras and materials.
 
 Server -> browser, text: JSON status {"type": "status", "variant", "robot", "ready" (variant built and session up),
 "error" (why it cannot run, or null), "role" ("controller" | "watcher"), "notice" (a message for this tab),
 "message" (the station's last message), "controlled" (whether a tab controls), "paused" and "draft" (a draft
 kept after the controlling tab's connection was lost: the page offers Continue / Save / Discard), "replay"
-(null or {episode, row, rows}), "seq", "fps" (frames rendered per second), "size" ([w, h] of this tab's frames),
+(null or {episode, row, rows, opening: the replayed row's}), "seq", "fps" (frames rendered per second), "size" ([w, h] of this tab's frames),
 "session": :meth:`rik.teleop.session.TeleopSession.status` (with "pose": gripper base x, y, z m, pitch, yaw,
 roll rad) plus "roll_deg"}.
 

@@ -146,8 +146,11 @@
         st.replay.rows + ")" : st.paused ? "paused (draft kept)" : s.state;
       $("st-time").textContent = s.time.toFixed(1);
       $("st-time-left").textContent = s.time_left === null ? "no limit" : s.time_left.toFixed(1) + " s left";
-      $("st-opening").textContent = pct(s.opening) + " (max " + pct(s.max_opening) + ")";
-      $("opening-bar").style.width = Math.max(0, Math.min(100, 100 * s.opening)).toFixed(1) + "%";
+      const opening = st.replay ? st.replay.opening : s.opening;  // a replay shows the replayed episode's opening
+      d.shownOpening = opening;
+      $("st-opening").textContent = st.replay ? pct(opening) + " (replayed)" :
+        pct(s.opening) + " (max " + pct(s.max_opening) + ")";
+      $("opening-bar").style.width = Math.max(0, Math.min(100, 100 * opening)).toFixed(1) + "%";
       $("st-grip").textContent = s.grip + " (" + s.grip_command.toFixed(2) + ")";
       d.grasp = s.grasp; d.blocked = String(s.blocked); d.motion = s.motion.on_path ? "path" : "frame";
       d.motionMode = s.motion.mode;
