@@ -67,6 +67,28 @@ def test_a_person_opens_the_drawer_and_the_episode_replays_exactly(variants: Pat
     assert s.status()["state"] == "waiting for input" and s.seed == 1  # the next episode is ready
 
 
+def test_a_saved_episode_ends_half_a_second_after_the_last_input_and_replays_exactly(variants: Path,
+                                                                                   tmp_path: Path) -> None:
+    """The idle time before Enter is not recorded: 10 steps of a held key, 40 idle, saved as 10 + 10 (0.5 s kept for
+    what still moves); the scene is set back to the kept end, so the episode replays bit for bit. With
+    ``trim_idle=False`` every step is kept."""
+    from rik.teleop.session import IDLE_KEPT_S
+
+    kept = round(IDLE_KEPT_S * 20)
+    for trim, steps in ((True, 10 + kept), (False, 50)):
+        s = _session(variants, tmp_path / str(trim), trim_idle=trim)
+        s.set_input([1, 0, 0, 0, 0, 0])
+        for _ in range(10):
+            s.tick()
+        s.set_input(np.zeros(6))
+        for _ in range(40):
+            s.tick()
+        saved = s.save()
+        assert saved is not None and saved.meta.steps == steps, saved
+        assert ("idle after the last input trimmed" in s.message) is trim
+        assert verify_episode(CAT, saved.path, variants).exact
+
+
 def test_a_held_key_moves_the_target_at_most_its_speed_and_never_far_ahead(variants: Path, tmp_path: Path) -> None:
     """A slow frame never turns into a jump: the target moves per control step, and a gripper blocked by the front
     does not let the target run away (reversing would take as long as the push)."""

@@ -139,6 +139,16 @@ class EpisodeRecorder:
     def steps(self) -> int:
         return len(self.rows["step"])
 
+    def truncate(self, steps: int) -> None:
+        """Keep the first ``steps`` steps: the scene goes back to the state after the last kept one (recorded as the
+        next row's state), so the episode ends there and replays exactly."""
+        if not 0 < steps < self.steps:
+            return
+        self.scene.restore(self.rows["state"][steps])
+        for rows in self.rows.values():
+            del rows[steps:]
+        self.max_opening = max(max(self.rows["opening"]), self.scene.opening())
+
     def table(self) -> pa.Table:
         """The rows so far plus the final state, as a pyarrow table."""
         import pyarrow as pa

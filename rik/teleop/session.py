@@ -9,7 +9,9 @@ station). Devices set a velocity command and a grip; :meth:`TeleopSession.tick` 
 - every episode gets its own id: the seed advances to the next one with no episode (nor draft) in ``out``, so
   nothing is ever overwritten; saving writes ``out/<id>``, discarding writes nothing, and a draft (a connection
   lost mid-episode) goes to ``out/.drafts/<id>``, which ``rik export-lerobot`` and ``rik replay out/`` skip;
-- an optional time limit (simulated s) stops the episode, which the operator then saves or discards.
+- an optional time limit (simulated s) stops the episode, which the operator then saves or discards;
+- a saved episode ends :data:`IDLE_KEPT_S` after the last input (``trim_idle``): the idle time before the save
+  (reaching for Enter) is not recorded, nor replayed, nor learned from.
 """
 
 from __future__ import annotations
@@ -35,6 +37,9 @@ DRAFTS = ".drafts"
 """Folder of draft episodes inside the episodes folder (hidden: exports and ``rik replay DIR`` skip it)."""
 MAX_FREE_SEEDS = 100_000
 """How many seeds past the requested one are searched for a free episode id."""
+IDLE_KEPT_S = 0.5
+"""Simulated seconds kept after the operator's last input when an episode is saved (a front still moving, jaws
+still closing); the idle rest (the person reaching for Enter) is trimmed."""
 MOTION_MODES = ("path", "frame")
 """How W/S move the target: along the front's own path while the jaws hold its handle (a door's arc, a flap's, a
 drawer's slide), frame-fixed otherwise; or always frame-fixed (towards / away from the furniture)."""
@@ -60,7 +65,7 @@ class TeleopSession:
     """One operator on one variant's scene, episode after episode (see the module docstring)."""
 
     def __init__(self, scene: SimScene, out: Path, *, operator: str = "keyboard", seed: int = 0,
-                 max_seconds: float | None = None) -> None:
+                 max_seconds: float | None = None, trim_idle: bool = True) -> None:
         from rik.episodes.record import check_seeds
 
         check_seeds(seed, 1)
@@ -70,6 +75,8 @@ class TeleopSession:
         self.operator = operator
         self.max_seconds = max_seconds
         self.seed = seed
+        self.trim_idle = trim_idle
+        """Save an episode up to :data:`IDLE_KEPT_S` after its last input (else up to the save)."""
         self.command: np.ndarray = np.zeros(6)
         """Velocity command in [-1, 1] per axis (x, y, z, pitch, yaw, roll)."""
         self.grip = 0.0
@@ -119,6 +126,8 @@ class TeleopSession:
         """The last step's target leads the gripper by more than :data:`BLOCKED_LEAD` while a motion key is held."""
         self.on_path = False
         """The last step moved along the front's path (:data:`MOTION_MODES`)."""
+        self.last_input_step = 0
+        """Recorded steps up to and including the last one with an input (a motion command or a grip change)."""
 
     @property
     def recording(self) -> bool:
@@ -129,18 +138,25 @@ class TeleopSession:
         return self.max_seconds is not None and self.recorder.steps >= round(self.max_seconds * self.scene.control_fps)
 
     def save(self) -> Saved | None:
-        """Write the episode to ``out/<id>`` and start the next one; None (and nothing written) when nothing was
-        recorded yet."""
+        """Write the episode to ``out/<id>`` (up to :data:`IDLE_KEPT_S` after its last input, with ``trim_idle``)
+        and start the next one; None (and nothing written) when nothing was recorded yet."""
         from rik.episodes.episode import write_episode
 
         if not self.recording:
             self.message = "nothing recorded yet: move first"
             return None
+        trimmed = 0
+        if self.trim_idle:
+            keep = self.last_input_step + round(IDLE_KEPT_S * self.scene.control_fps)
+            trimmed = max(0, self.recorder.steps - keep)
+            self.recorder.truncate(keep)
         meta = write_episode(self.recorder, self.out, episode=self.episode, operator=self.operator,
                              operator_kind="device", seed=self.seed)
         shutil.rmtree(self.out / DRAFTS / meta.id, ignore_errors=True)
         self.last_saved = Saved(self.out / meta.id, meta)
         self.message = f"saved {meta.id}: {meta.outcome}, opened {meta.final_opening:.0%}, {meta.steps} steps"
+        if trimmed:
+            self.message += f" ({trimmed / self.scene.control_fps:.1f} s idle after the last input trimmed)"
         self.seed += 1
         self._start()
         return self.last_saved
@@ -206,6 +222,8 @@ class TeleopSession:
                 target[:3] = pose[:3] + lead * (LEAD[0] / norm)
         if np.any(self.command[3:]) or self.on_path:
             target[3:] = pose[3:] + np.clip(target[3:] - pose[3:], -LEAD[1], LEAD[1])
+        if np.any(self.command) or self.grip != self.target[6]:
+            self.last_input_step = self.recorder.steps + 1
         self.target = np.concatenate([target, [self.grip]])
         self.recorder.step(self.target.copy())
         self.grasp.update(handle_contact(self.scene), self.grip)
