@@ -29,9 +29,9 @@ Server -> browser, text: JSON status {"type": "status", "variant", "robot", "rea
 "error" (why it cannot run, or null), "role" ("controller" | "watcher"), "notice" (a message for this tab),
 "message" (the station's last message), "controlled" (whether a tab controls), "paused" and "draft" (a draft
 kept after the controlling tab's connection was lost: the page offers Continue / Save / Discard), "replay"
-(null or {episode, row, rows, opening: the replayed row's}), "seq", "fps" (frames rendered per second), "size" ([w, h] of this tab's frames),
-"session": :meth:`rik.teleop.session.TeleopSession.status` (with "pose": gripper base x, y, z m, pitch, yaw,
-roll rad) plus "roll_deg"}.
+(null or {episode, row, rows, opening: the replayed row's}), "seq", "fps" (frames rendered per second), "size"
+([w, h] of this tab's frames), "session": :meth:`rik.teleop.session.TeleopSession.status` (with "pose": gripper
+base x, y, z m, pitch, yaw, roll rad) plus "roll_deg"}.
 
 Browser -> server, text JSON (anything else: a binary frame, text that is not JSON or holds ``NaN``/``Infinity``,
 an unknown type or field of the wrong type, gets a notice in this tab's next status and changes nothing; a message
