@@ -149,8 +149,10 @@ def _seen(scene, camera) -> set[str]:
         r.enable_segmentation_rendering()
         r.update_scene(scene.data, camera=camera)
         geoms = {int(g) for g in np.unique(r.render()[..., 0]) if g >= 0}
+    from rik.teleop.view import gripper_bodies
+
     bodies = {int(scene.model.geom_bodyid[g]) for g in geoms}
-    return ({"gripper"} if geoms & scene.gripper_geoms else set()) | \
+    return ({"gripper"} if bodies & gripper_bodies(scene) else set()) | \
         ({"handle"} if scene.front.handle_body in bodies else set()) | \
         ({"front"} if scene.front.body in bodies else set())
 
@@ -171,6 +173,16 @@ def test_the_follow_view_keeps_gripper_handle_and_door_in_frame_where_the_fixed_
     assert 0.8 <= session.scene.opening() < 0.85
     assert _seen(session.scene, view.at(session.scene.data)) == {"gripper", "handle", "front"}
     assert "gripper" not in _seen(session.scene, FOLLOWED)  # the scene's fixed camera: the work left its picture
+
+
+@pytest.mark.parametrize("robot", ["panda-2f85", "so100"])
+def test_with_an_arm_the_follow_view_shows_its_gripper_at_the_start(variants: Path, tmp_path: Path,
+                                                                      robot: str) -> None:
+    from rik.teleop.view import FollowView
+
+    scene = build_scene(variants / DOOR, None, HAND_E, 20, robot=CAT.robot(robot).as_arm)
+    TeleopSession(scene, tmp_path / "episodes")  # at the start pose, in front of the handle
+    assert _seen(scene, FollowView(scene).at(scene.data)) == {"gripper", "handle", "front"}
 
 
 def test_the_operators_view_paints_jaws_and_handle_in_colours_of_their_own(variants: Path, tmp_path: Path) -> None:

@@ -20,20 +20,21 @@ FOLLOWED = "front"
 
 class FollowView:
     """A MuJoCo free camera looking the way the scene's :data:`FOLLOWED` camera looks, from the distance at which it
-    frames the closed front, at the mean of the pads' centre, the handle's grasp point and the front's body: as the
-    front opens, the camera moves with what is being operated."""
+    frames the closed front (measured to the middle of its handle and its body, whatever the robot), at the mean of
+    the pads' centre, the handle's grasp point and the front's body: as the front opens, the camera moves with what
+    is being operated."""
 
     def __init__(self, scene: SimScene) -> None:
         import mujoco
 
         m = scene.model
         self.scene = scene
-        start = mujoco.MjData(m)
+        start = mujoco.MjData(m)  # the model's initial state: the front closed (the robot wherever its zeros put it)
         mujoco.mj_forward(m, start)
-        start_target = self.target(start)
+        closed_front = (start.site_xpos[scene.front.grasp_site] + start.xpos[scene.front.body]) / 2.0
         cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, FOLLOWED)
         forward = -start.cam_xmat[cid].reshape(3, 3)[:, 2]
-        along = float(np.dot(start_target - start.cam_xpos[cid], forward))
+        along = float(np.dot(closed_front - start.cam_xpos[cid], forward))
         # a free camera's field of view is the model's global one: keep the fixed camera's framing
         fixed, free = math.radians(float(m.cam_fovy[cid])), math.radians(float(m.vis.global_.fovy))
         scale = math.tan(fixed / 2) / math.tan(free / 2)
@@ -68,11 +69,12 @@ def paint_for_contrast(view: mujoco.MjvScene, scene: SimScene) -> None:
     import mujoco
 
     bodies = scene.model.geom_bodyid
+    hand = gripper_bodies(scene)
     for i in range(view.ngeom):
         g = view.geoms[i]
         if g.objtype != mujoco.mjtObj.mjOBJ_GEOM:
             continue
-        if g.objid in scene.gripper_geoms:
+        if int(bodies[g.objid]) in hand:
             rgba = JAWS_RGBA
         elif int(bodies[g.objid]) == scene.front.handle_body:
             rgba = HANDLE_RGBA
@@ -80,3 +82,9 @@ def paint_for_contrast(view: mujoco.MjvScene, scene: SimScene) -> None:
             continue
         g.rgba[:] = rgba
         g.matid = -1
+
+
+def gripper_bodies(scene: SimScene) -> frozenset[int]:
+    """The bodies of the gripper's geoms: an arm's gripper geoms are its collision shapes, and the meshes drawn for
+    its hand and fingers hang on the same bodies."""
+    return frozenset(int(scene.model.geom_bodyid[g]) for g in scene.gripper_geoms)
