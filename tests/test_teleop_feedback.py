@@ -209,5 +209,21 @@ def test_the_operators_view_paints_jaws_and_handle_in_colours_of_their_own(varia
     assert np.array_equal(scene.model.mat_rgba, materials)
 
 
+@pytest.mark.parametrize("msg", [{"azimuth": "left"}, {"azimuth": float("nan")}, {"elevation": True},
+                                 {"azimuth": 1e9}, {"azimuth": [1]}, {"reset": "yes", "azimuth": None}])
+def test_a_bad_view_message_is_refused_with_a_notice(msg: dict) -> None:
+    from rik.teleop.station import BAD_VIEW, parse_view
+
+    assert parse_view(msg) == BAD_VIEW
+
+
+def test_a_view_message_turns_and_reset_puts_back() -> None:
+    from rik.teleop.station import parse_view
+
+    assert parse_view({"type": "view", "azimuth": -12.5, "elevation": 4}) == (-12.5, 4.0)
+    assert parse_view({"type": "view", "azimuth": 3}) == (3.0, 0.0)
+    assert parse_view({"type": "view", "reset": True}) is None
+
+
 def test_m_switches_the_motion_in_the_keymap() -> None:
     assert COMMAND_KEYS["motion"][:3] == ("KeyM", "M", "M")

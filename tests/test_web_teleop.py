@@ -136,6 +136,28 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
     _check_saved(rik, episodes / saved, variants, drive, stick, simulated, shot)
 
 
+def test_dragging_the_front_view_orbits_it_and_a_double_click_puts_it_back(variants: Path, tmp_path: Path) -> None:
+    """The page's front view turns with a mouse drag (the station renders the turned view and reports the turn) and
+    a double-click resets it; nothing is recorded by looking around."""
+    with served(config(variants, tmp_path / "episodes")) as url, browser() as b:
+        page = open_station(b, url)
+        drive = Driver(page)
+        box = page.locator("#cam-front").bounding_box(timeout=WAIT_MS)
+        assert box is not None
+        x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+        before = page.evaluate("document.getElementById('cam-front').src")
+        page.mouse.move(x, y)
+        page.mouse.down()
+        page.mouse.move(x + 100, y + 30, steps=10)
+        page.mouse.up()
+        drive.wait("Number(d.viewAzimuth) < -20 && Number(d.viewElevation) < -5")
+        page.wait_for_function(f"document.getElementById('cam-front').src !== {before!r}", timeout=WAIT_MS,
+                               polling=100)  # a new frame of the turned view, with nothing moving
+        assert page.evaluate(f"{STATION}.steps") == "0"
+        page.dblclick("#cam-front", timeout=WAIT_MS)
+        drive.wait("Number(d.viewAzimuth) === 0 && Number(d.viewElevation) === 0")
+
+
 FRONTS = {
     "a left door with a knob": "door-base-60-left__knob-mushroom-30__normal",
     "a right door with a bar": "door-base-40-right__two_point-bow-128__normal",

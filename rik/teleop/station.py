@@ -44,6 +44,7 @@ LEFT = "the controlling tab left; press Take control to drive"
 BUILDING = "building the variant..."
 KEPT_IN_MEMORY = "the episode is kept in memory: free some space and press Save again"
 PAUSED = "a draft was kept: Continue, Save or Discard first"
+BAD_VIEW = "ignored a view message: give azimuth and elevation in degrees (each within +-360), or reset: true"
 
 
 DEFAULT_MAX_STATIONS = 4
@@ -154,6 +155,25 @@ def parse_input(msg: dict[str, Any]) -> tuple[np.ndarray, float | None, int] | s
     return np.clip(axes, -1.0, 1.0), (None if grip is None else min(max(grip, 0.0), 1.0)), seq
 
 
+MAX_VIEW_TURN = 360.0
+"""Largest azimuth or elevation change one ``view`` message may ask for, degrees."""
+
+
+def parse_view(msg: dict[str, Any]) -> tuple[float, float] | None | str:
+    """A ``view`` message's turn of the front view (azimuth, elevation degrees), None for ``reset``, or the notice
+    saying why it is ignored."""
+    if msg.get("reset") is True:
+        return None
+    try:
+        turn = (float(msg.get("azimuth", 0.0)), float(msg.get("elevation", 0.0)))
+    except (TypeError, ValueError, OverflowError):
+        return BAD_VIEW
+    if isinstance(msg.get("azimuth"), bool) or isinstance(msg.get("elevation"), bool) or \
+            not all(math.isfinite(t) and abs(t) <= MAX_VIEW_TURN for t in turn):
+        return BAD_VIEW
+    return turn
+
+
 def build_station_scene(config: StationConfig, variant: str, robot: str) -> SimScene:
     """The scene of a station: ``variant`` (built into ``config.variants`` when needed) operated by the catalog
     robot ``robot``; an arm that cannot reach the operated handle is refused (one line naming the handle)."""
@@ -198,6 +218,8 @@ class Station:
         self.replay: dict[str, Any] | None = None
         self._view: FollowView | None = None
         """The front view that follows the work (made with the renderers, on the station thread)."""
+        self.view_turn = (0.0, 0.0)
+        """How far the controlling tab turned the front view: azimuth, elevation, degrees (``view`` messages)."""
         self.fps = 0.0
         self.session: TeleopSession | None = None
         self.last_seen = time.monotonic()
@@ -279,12 +301,19 @@ class Station:
                     self.grip = grip
                 self.seq = seq
                 self.input_time = time.monotonic()
+            elif kind == "view":
+                turn = parse_view(msg)
+                if isinstance(turn, str):
+                    client.notice = turn
+                    return
+                self.view_turn = (0.0, 0.0) if turn is None else (self.view_turn[0] + turn[0],
+                                                                   self.view_turn[1] + turn[1])
             elif kind == "command" and msg.get("name") in ("save", "discard", "toggle_grip", "toggle_motion", "replay",
                                                           "continue"):
                 self.commands.append((client, str(msg["name"])))
             else:
                 client.notice = (f"ignored message type {kind!r}: use input, command (save, discard, toggle_grip, "
-                                 "toggle_motion, replay, continue, take_control) or size")
+                                 "toggle_motion, replay, continue, take_control), view or size")
 
     # ---- the station thread -----------------------------------------------------------------------------------
     def _build(self) -> None:
@@ -328,7 +357,8 @@ class Station:
                     sizes = [(c, c.size) for c in self.clients]
                     clients = [c for c, _ in sizes]
                 data = replay_data if self.replay is not None else session.scene.data
-                key = (session.episode, session.recorder.steps, float(data.time), self.replay and self.replay["row"])
+                key = (session.episode, session.recorder.steps, float(data.time), self.replay and self.replay["row"],
+                       self.view_turn)
                 for size in {size for _, size in sizes}:
                     if size not in frames or frames[size][0] != key:
                         frames[size] = (key, self._render(renderers, size, data, session))
@@ -468,7 +498,7 @@ class Station:
         out = []
         step = session.recorder.steps if self.replay is None else self.replay["row"]
         for cam in CAMERAS:  # the page's front view follows the work; the wrist camera is the scene's
-            renderer.update_scene(data, camera=self._view.at(data) if cam == FOLLOWED else cam)
+            renderer.update_scene(data, camera=self._view.at(data, self.view_turn) if cam == FOLLOWED else cam)
             paint_for_contrast(renderer.scene, session.scene)
             jpeg = encode_jpeg(renderer.render())
             header = {"camera": cam, "step": step, "seq": self.applied_seq, "t": round(float(data.time), 4),
@@ -483,7 +513,9 @@ class Station:
                               "error": self.error,
                               "paused": self.paused, "draft": self.draft, "seq": self.applied_seq,
                               "fps": round(self.fps, 1), "controlled": self.controller is not None,
-                              "replay": None, "session": None, "message": self.message}
+                              "replay": None, "session": None, "message": self.message,
+                              "view": {"azimuth": round(self.view_turn[0], 1),
+                                       "elevation": round(self.view_turn[1], 1)}}
         if self.replay is not None:
             row = min(max(self.replay["row"] - 1, 0), len(self.replay["states"]) - 1)  # the row now shown
             st["replay"] = {"episode": self.replay["episode"], "row": self.replay["row"],

@@ -40,8 +40,9 @@ class FollowView:
         scale = math.tan(fixed / 2) / math.tan(free / 2)
         self.camera = mujoco.MjvCamera()
         self.camera.type = mujoco.mjtCamera.mjCAMERA_FREE
-        self.camera.azimuth = math.degrees(math.atan2(forward[1], forward[0]))
-        self.camera.elevation = math.degrees(math.asin(float(np.clip(forward[2], -1.0, 1.0))))
+        self.azimuth = math.degrees(math.atan2(forward[1], forward[0]))
+        self.elevation = math.degrees(math.asin(float(np.clip(forward[2], -1.0, 1.0))))
+        self.camera.azimuth, self.camera.elevation = self.azimuth, self.elevation
         self.camera.distance = max(along, 0.1) * scale
 
     def target(self, data: mujoco.MjData) -> np.ndarray:
@@ -50,9 +51,12 @@ class FollowView:
         s = self.scene
         return (data.site_xpos[s.tcp_site] + data.site_xpos[s.front.grasp_site] + data.xpos[s.front.body]) / 3.0
 
-    def at(self, data: mujoco.MjData) -> mujoco.MjvCamera:
-        """The camera for the state in ``data`` (after ``mj_forward``)."""
+    def at(self, data: mujoco.MjData, turn: tuple[float, float] = (0.0, 0.0)) -> mujoco.MjvCamera:
+        """The camera for the state in ``data`` (after ``mj_forward``), orbited by ``turn`` (azimuth, elevation
+        degrees, as the operator dragged it; the elevation stays within +-85 degrees)."""
         self.camera.lookat[:] = self.target(data)
+        self.camera.azimuth = self.azimuth + turn[0]
+        self.camera.elevation = float(np.clip(self.elevation + turn[1], -85.0, 85.0))
         return self.camera
 
 

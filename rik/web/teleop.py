@@ -30,7 +30,8 @@ Server -> browser, text: JSON status {"type": "status", "variant", "robot", "rea
 "message" (the station's last message), "controlled" (whether a tab controls), "paused" and "draft" (a draft
 kept after the controlling tab's connection was lost: the page offers Continue / Save / Discard), "replay"
 (null or {episode, row, rows, opening: the replayed row's}), "seq", "fps" (frames rendered per second), "size"
-([w, h] of this tab's frames), "session": :meth:`rik.teleop.session.TeleopSession.status` (with "pose": gripper
+([w, h] of this tab's frames), "view" ({azimuth, elevation}: the front view's turn,
+degrees), "session": :meth:`rik.teleop.session.TeleopSession.status` (with "pose": gripper
 base x, y, z m, pitch, yaw, roll rad) plus "roll_deg"}.
 
 Browser -> server, text JSON (anything else: a binary frame, text that is not JSON or holds ``NaN``/``Infinity``,
@@ -42,6 +43,8 @@ over 64 KiB closes the connection with code 1009):
   commands no motion (a tab that lost focus);
 - ``{"type": "command", "name": "save" | "discard" | "toggle_grip" | "toggle_motion" | "replay" | "continue" |
   "take_control"}``;
+- ``{"type": "view", "azimuth": degrees, "elevation": degrees}`` turns the front view by that much (each within
+  +-360), ``{"type": "view", "reset": true}`` puts it back; from the controlling tab (the view is the station's);
 - ``{"type": "size", "width": 320|640, "height": 240|480}``.
 
 Frames and status go to every tab through a latest-frame slot per tab (a slow tab skips frames). One tab controls

@@ -131,6 +131,7 @@
     d.draft = st.draft || "";
     d.seq = st.seq;
     d.replaying = String(!!st.replay);
+    if (st.view) { d.viewAzimuth = st.view.azimuth; d.viewElevation = st.view.elevation; }
     if (st.robot) { d.robot = st.robot; $("robot").textContent = "with " + st.robot; $("st-robot").textContent = st.robot; }
     const role = $("role");
     role.textContent = st.role === "controller" ? "you control this session" : st.role === "watcher" ? "watching" : "";
@@ -208,6 +209,24 @@
   for (const btn of document.querySelectorAll("button[data-command]")) {
     btn.addEventListener("click", () => { command(btn.dataset.command); btn.blur(); });
   }
+
+  // ---- the front view: drag to orbit it, double-click to put it back ----------------------------------------------
+  const frontView = $("cam-front");
+  let drag = null;
+  frontView.addEventListener("pointerdown", (e) => {
+    drag = {x: e.clientX, y: e.clientY};
+    frontView.setPointerCapture(e.pointerId);
+    e.preventDefault();
+  });
+  frontView.addEventListener("pointermove", (e) => {
+    if (!drag) return;
+    const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
+    if (Math.abs(dx) + Math.abs(dy) < 2) return;
+    drag = {x: e.clientX, y: e.clientY};
+    send({type: "view", azimuth: -0.4 * dx, elevation: -0.4 * dy});
+  });
+  for (const ev of ["pointerup", "pointercancel"]) frontView.addEventListener(ev, () => { drag = null; });
+  frontView.addEventListener("dblclick", () => send({type: "view", reset: true}));
 
   // ---- keyboard -----------------------------------------------------------------------------------------------
   const COMMAND_CODES = {Space: "toggle_grip", KeyM: "toggle_motion", Enter: "save", NumpadEnter: "save",
