@@ -10,6 +10,7 @@ they leave no trace in the state, so replays stay exact.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -196,6 +197,18 @@ class SimScene:
         n = np.linalg.norm(v)
         return v / n if n > 0 else np.array([0.0, 1.0, 0.0])
 
+    def front_contacts(self) -> Iterator[tuple[int, int, int]]:
+        """The contacts between the gripper and the operated front (its panel and handle): (contact index, the
+        gripper's geom, the front's geom) for each."""
+        d, m = self.data, self.model
+        for i in range(d.ncon):
+            g1, g2 = int(d.contact.geom1[i]), int(d.contact.geom2[i])
+            if (g1 in self.gripper_geoms) == (g2 in self.gripper_geoms):
+                continue
+            ours, other = (g1, g2) if g1 in self.gripper_geoms else (g2, g1)
+            if int(m.geom_bodyid[other]) in self.front_bodies:
+                yield i, ours, other
+
     def contact_summary(self) -> dict[str, float]:
         """Contacts between the gripper and the operated front (its panel and handle): how many, and the total
         normal and tangential force they carry, N."""
@@ -204,12 +217,7 @@ class SimScene:
         count, normal, tangential = 0, 0.0, 0.0
         wrench = np.zeros(6)
         d, m = self.data, self.model
-        for i in range(d.ncon):
-            g1, g2 = int(d.contact.geom1[i]), int(d.contact.geom2[i])
-            ours = (g1 in self.gripper_geoms) != (g2 in self.gripper_geoms)
-            other = g2 if g1 in self.gripper_geoms else g1
-            if not ours or int(m.geom_bodyid[other]) not in self.front_bodies:
-                continue
+        for i, _, _ in self.front_contacts():
             mujoco.mj_contactForce(m, d, i, wrench)
             count += 1
             normal += abs(float(wrench[0]))

@@ -44,16 +44,9 @@ def handle_contact(scene: SimScene) -> HandleContact:
     m, d = scene.model, scene.data
     front, force, bodies = 0, 0.0, set()
     wrench = np.zeros(6)
-    for i in range(d.ncon):
-        g1, g2 = int(d.contact.geom1[i]), int(d.contact.geom2[i])
-        if (g1 in scene.gripper_geoms) == (g2 in scene.gripper_geoms):
-            continue
-        ours, other = (g1, g2) if g1 in scene.gripper_geoms else (g2, g1)
-        body = int(m.geom_bodyid[other])
-        if body not in scene.front_bodies:
-            continue
+    for i, ours, other in scene.front_contacts():
         front += 1
-        if body == scene.front.handle_body:
+        if int(m.geom_bodyid[other]) == scene.front.handle_body:
             mujoco.mj_contactForce(m, d, i, wrench)
             force += abs(float(wrench[0]))
             bodies.add(int(m.geom_bodyid[ours]))
@@ -89,6 +82,8 @@ def front_path_step(scene: SimScene, pose: np.ndarray, distance: float) -> np.nd
     positive opens. A drawer's slide moves it along the slide's axis; a hinge (door, flap) turns it about the hinge's
     axis by ``distance`` over the pose's distance from the axis, its orientation with it, so that a grip on the handle
     keeps its angle to the front."""
+    from scipy.spatial.transform import Rotation
+
     from rik.sim.pose import angles_of, gripper_rotation, nearest_angles
 
     d, joint = scene.data, scene.front.joint
@@ -100,17 +95,10 @@ def front_path_step(scene: SimScene, pose: np.ndarray, distance: float) -> np.nd
     anchor = d.xanchor[joint]
     arm = out[:3] - anchor
     radius = float(np.linalg.norm(arm - (arm @ axis) * axis))
-    turn = _axis_rotation(axis, distance / max(radius, MIN_ARC_RADIUS))
+    turn = Rotation.from_rotvec(axis * (distance / max(radius, MIN_ARC_RADIUS))).as_matrix()
     out[:3] = anchor + turn @ arm
     out[3:] = nearest_angles(angles_of(turn @ gripper_rotation(out[3:])), out[3:])
     return out
-
-
-def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation matrix of ``angle`` (rad) about the unit ``axis`` (right-handed)."""
-    x, y, z = axis
-    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
 
 
 def grasp_text(status: dict[str, Any]) -> str:

@@ -236,13 +236,15 @@ class TeleopSession:
     def status(self) -> dict[str, Any]:
         """The live status: episode id, robot (catalog id), state, time (s) and time left, opening (fraction), grip,
         where the handle is from the pads' centre (m: ahead, left, up as the operator faces the front), the gripper
-        base's pose (x, y, z m; pitch, yaw, roll rad)."""
+        base's pose (x, y, z m; pitch, yaw, roll rad; yaw and roll also in degrees), the grasp, the motion, the front's
+        angle or travel and the hint."""
         from rik.sim.outcome import classify
 
         s = self.scene
         fps = s.control_fps
         elapsed = self.recorder.steps / fps
         offset = s.grasp_point() - s.tcp()
+        pose = s.pose()
         state = "time up" if self.time_up else "recording" if self.recording else "waiting for input"
         return {
             "episode": self.episode, "variant": s.info["id"], "front": s.front.id, "robot": s.robot_id,
@@ -254,12 +256,12 @@ class TeleopSession:
             "grip_command": round(self.grip, 3),
             "handle": {"ahead": round(float(-offset[1]), 4), "left": round(float(offset[0]), 4),
                        "up": round(float(offset[2]), 4)},
-            "pose": [round(float(v), 4) for v in s.pose()],
+            "pose": [round(float(v), 4) for v in pose],
             "contacts": int(s.contact_summary()["contacts"]), "message": self.message,
             "grasp": self.grasp.state, "blocked": self.blocked, "hint": self.hint,
             "motion": {"mode": self.motion_mode, "on_path": self.on_path},
             "front_position": front_reading(s),
-            "yaw_deg": round(math.degrees(float(s.pose()[4])), 1),
+            "yaw_deg": round(math.degrees(float(pose[4])), 1), "roll_deg": round(math.degrees(float(pose[5])), 1),
             "last_saved": None if self.last_saved is None else self.last_saved.meta.id,
         }
 

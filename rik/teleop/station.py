@@ -523,7 +523,6 @@ class Station:
                             "opening": round(float(self.replay["openings"][row]), 4)}
         if s is not None and self.ready:
             st["session"] = s.status()
-            st["session"]["roll_deg"] = round(math.degrees(st["session"]["pose"][5]), 1)
         return st
 
     def _push_status(self, clients: list[Client] | None = None) -> None:

@@ -32,7 +32,7 @@ kept after the controlling tab's connection was lost: the page offers Continue /
 (null or {episode, row, rows, opening: the replayed row's}), "seq", "fps" (frames rendered per second), "size"
 ([w, h] of this tab's frames), "view" ({azimuth, elevation}: the front view's turn,
 degrees), "session": :meth:`rik.teleop.session.TeleopSession.status` (with "pose": gripper
-base x, y, z m, pitch, yaw, roll rad) plus "roll_deg"}.
+base x, y, z m, pitch, yaw, roll rad, and "yaw_deg", "roll_deg")}.
 
 Browser -> server, text JSON (anything else: a binary frame, text that is not JSON or holds ``NaN``/``Infinity``,
 an unknown type or field of the wrong type, gets a notice in this tab's next status and changes nothing; a message
