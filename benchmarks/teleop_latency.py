@@ -13,15 +13,24 @@ time for the same frame (the floor: the station cannot stream faster than it ren
   one input with a new sequence number and measures the time until the first frame whose header says that input
   was applied and whose step advanced (input-to-frame latency, ms: median and 90th percentile).
 
-Target: at least 15 frames/s at 320x240 on this machine's 2 CPU cores (MuJoCo on llvmpipe through EGL).
+- **where a step's time goes** (``profile``): the station's own pipeline in this process, with the robot's scene as
+  the station builds it: for ``--profile-steps`` control steps with an input held, the ms of the IK (the arm drive's
+  command), the physics (the control step's ``mj_step`` calls), the rest of a recorded step (recording, grasp
+  watch), each camera's render (``rik.teleop.frames.StationFrames``: the follow view and the wrist camera, painted
+  as the page shows them) and its JPEG; the station's ``send`` (a frame's header ``sent`` stamp until the client
+  holds it) and **real time** (simulated seconds per wall second while the input is held, from the frames' ``t``)
+  come from the station run.
+
+Target: at least 15 frames/s and real time at 320x240 on this machine's 2 CPU cores (MuJoCo on llvmpipe through
+EGL).
 
 ``--robot panda-2f85`` (or ``so100``) measures the station with that arm (``rik teleop --web --robot``): its
 scene renders the arm's links too, and each control step runs one IK step.
 
-Run: ``uv run python benchmarks/teleop_latency.py [--seconds 8] [--taps 15] [--robot ID]`` (about 2 minutes with
-the variant built; building it first takes up to a minute). ``--floor-only --model FILE.mjb`` measures the floor
-alone from a saved model with only mujoco, numpy and Pillow installed (how the GPU figures in docs/benchmarks.md
-were taken on a machine without rik).
+Run: ``uv run python benchmarks/teleop_latency.py [--seconds 8] [--taps 15] [--robot ID] [--sizes 320x240]``
+(about 2 minutes with the variant built; building it first takes up to a minute). ``--floor-only --model
+FILE.mjb`` measures the floor alone from a saved model with only mujoco, numpy and Pillow installed (how the GPU
+figures in docs/benchmarks.md were taken on a machine without rik).
 """
 
 from __future__ import annotations
@@ -90,6 +99,68 @@ def floor(model_path: Path | None, sizes: tuple[tuple[int, int], ...], frames: i
     return rows
 
 
+def profile(robot: str, size: tuple[int, int], steps: int = 60) -> dict[str, float]:
+    """Median ms per control step of the station's phases (IK, physics, the rest of a recorded step, each camera's
+    render and JPEG) with an input held, in this process, the scene built as the station builds it."""
+    import numpy as np
+
+    from rik.teleop.frames import StationFrames
+    from rik.teleop.session import TeleopSession
+    from rik.teleop.station import CAMERAS, encode_jpeg
+
+    scene = demo_scene_object(robot)
+    times: dict[str, list[float]] = {k: [] for k in ("ik", "physics", "tick")}
+    drive_command, run = scene.robot_drive.command, scene._run
+
+    def timed(name: str, fn):  # noqa: ANN001, ANN202 -- a stopwatch around the scene's own call
+        def call(*args):  # noqa: ANN002, ANN202
+            t0 = time.perf_counter()
+            try:
+                return fn(*args)
+            finally:
+                times[name].append(time.perf_counter() - t0)
+        return call
+
+    scene.robot_drive.command = timed("ik", drive_command)  # type: ignore[method-assign]
+    scene._run = timed("physics", run)  # type: ignore[method-assign]
+    frames = StationFrames(scene)
+    with tempfile.TemporaryDirectory() as tmp:
+        session = TeleopSession(scene, Path(tmp), operator="bench")
+        session.set_input(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.3]))  # roll slowly, as the station run does
+        for cam in CAMERAS:
+            times[f"render {cam}"], times[f"JPEG {cam}"] = [], []
+        warm = 5
+        for i in range(steps + warm):
+            t0 = time.perf_counter()
+            session.tick()
+            times["tick"].append(time.perf_counter() - t0)
+            for cam in CAMERAS:
+                t1 = time.perf_counter()
+                rgb = frames.render(scene.data, cam, size)
+                t2 = time.perf_counter()
+                encode_jpeg(rgb)
+                times[f"render {cam}"].append(t2 - t1)
+                times[f"JPEG {cam}"].append(time.perf_counter() - t2)
+            if i < warm:
+                for v in times.values():
+                    v.clear()
+    frames.close()
+    out = {k: 1e3 * statistics.median(v) for k, v in times.items()}
+    out["rest of step"] = out.pop("tick") - out["ik"] - out["physics"]
+    out["total"] = sum(out.values())
+    return out
+
+
+def demo_scene_object(robot: str = "hand-e"):
+    """The demo variant's :class:`rik.sim.scene.SimScene` with ``robot`` (built into ``$RIK_BENCH_VARIANTS`` or
+    ``variants`` if needed), as the station builds it."""
+    from rik.registry import load_catalog
+    from rik.teleop.station import StationConfig, build_station_scene
+
+    config = StationConfig(load_catalog(), variants=Path(os.environ.get("RIK_BENCH_VARIANTS", "variants")))
+    return build_station_scene(config, VARIANT, robot)
+
+
 def demo_scene(robot: str = "hand-e"):
     """The demo variant's scene with ``robot`` (built into ``$RIK_BENCH_VARIANTS`` or ``variants`` if needed), as
     the station builds it."""
@@ -112,9 +183,12 @@ def frame_header(message: bytes) -> dict:
 
 def station(url: str, size: tuple[int, int], seconds: float, taps: int) -> dict[str, float]:
     """Streamed fps of the ``front`` camera while an input is held, and input-to-frame latency (ms)."""
+    from urllib.parse import urlsplit
+
     from websockets.sync.client import connect
 
-    ws_url = url.replace("http://", "ws://").rstrip("/") + "/ws"
+    parts = urlsplit(url)  # the printed address carries the launch token (?token=...): the websocket shows it too
+    ws_url = f"ws://{parts.netloc}{parts.path.rstrip('/')}/ws" + (f"?{parts.query}" if parts.query else "")
     with connect(ws_url, max_size=None, open_timeout=120) as ws:
         ws.send(json.dumps({"type": "size", "width": size[0], "height": size[1]}))
         seq = 0
@@ -138,17 +212,24 @@ def station(url: str, size: tuple[int, int], seconds: float, taps: int) -> dict[
 
         # settle: wait until frames at the asked size arrive
         list(front_frames(time.perf_counter() + 3.0))
-        # streamed fps while an input is held (re-sent at 30 Hz as the page does)
+        # streamed fps while an input is held (re-sent at 30 Hz as the page does); simulated time per wall second
         count, start, direction = 0, time.perf_counter(), 1.0
+        seen: list[tuple[float, float]] = []  # (wall s, simulated s) of each front frame
+        sends: list[float] = []  # ms from a frame's "sent" stamp until this client holds it
         end = start + seconds
         next_send = start
         while time.perf_counter() < end:
             if time.perf_counter() >= next_send:
                 send([0.0, 0.0, 0.0, 0.0, 0.0, 0.3 * direction])  # roll slowly: stays clear of the furniture
                 next_send += 1 / 30
-            for _ in front_frames(min(end, next_send)):
+            for t, header in front_frames(min(end, next_send)):
                 count += 1
+                seen.append((t, header["t"]))
+                sends.append(1e3 * (time.time() - header["sent"]))
         fps = count / seconds
+        moving = [(w, t) for (w, t), (_, t0) in zip(seen[1:], seen, strict=False) if t > t0]  # after the first step
+        realtime = ((moving[-1][1] - moving[0][1]) / (moving[-1][0] - moving[0][0])
+                    if len(moving) > 1 and moving[-1][0] > moving[0][0] else float("nan"))
         # latency: still, then one input; first front frame that applied it and stepped
         latencies = []
         for k in range(taps):
@@ -167,7 +248,8 @@ def station(url: str, size: tuple[int, int], seconds: float, taps: int) -> dict[
         ws.send(json.dumps({"type": "command", "name": "discard"}))  # leave no draft for the next size's run
         list(front_frames(time.perf_counter() + 0.5))
     latencies.sort()
-    return {"fps": fps, "latency_median_ms": statistics.median(latencies) if latencies else float("nan"),
+    return {"fps": fps, "realtime": realtime, "send_ms": statistics.median(sends) if sends else float("nan"),
+            "latency_median_ms": statistics.median(latencies) if latencies else float("nan"),
             "latency_p90_ms": latencies[int(0.9 * (len(latencies) - 1))] if latencies else float("nan"),
             "taps": len(latencies)}
 
@@ -199,15 +281,22 @@ def main() -> None:
     parser.add_argument("--floor-only", action="store_true", help="measure the render floor alone")
     parser.add_argument("--model", type=Path, help="with --floor-only: a saved model (.mjb) instead of the demo")
     parser.add_argument("--robot", default="hand-e", help="the robot of the scene and the station (a catalog id)")
+    parser.add_argument("--sizes", default="320x240,640x480", help="stream sizes, comma-separated WxH")
+    parser.add_argument("--profile-steps", type=int, default=60, help="control steps timed phase by phase")
     args = parser.parse_args()
+    sizes = tuple((int(w), int(h)) for w, h in (s.split("x") for s in args.sizes.split(",")))
     print(f"machine: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}, "
           f"MUJOCO_GL={os.environ.get('MUJOCO_GL', '(unset)')}; robot {args.robot}")
-    floors = floor(args.model, SIZES, robot=args.robot)
+    floors = floor(args.model, sizes, robot=args.robot)
     if args.floor_only:
         for f in floors:
             print(f"{f['width']}x{f['height']}: render {f['render_ms']:.1f} ms ({f['floor_fps']:.0f} fps floor), "
                   f"JPEG {f['encode_ms']:.1f} ms; with shadows and reflections {f['shadows_ms']:.1f} ms")
         return
+    for w, h in sizes:
+        phases = profile(args.robot, (w, h), args.profile_steps)
+        print(f"where a step's time goes at {w}x{h} (median ms over {args.profile_steps} steps, this process): "
+              + ", ".join(f"{k} {v:.1f}" for k, v in phases.items()))
     with tempfile.TemporaryDirectory() as tmp:
         proc, url = start_station(Path(tmp), args.robot)
         try:
@@ -216,13 +305,15 @@ def main() -> None:
             proc.terminate()
             proc.wait(timeout=60)
     print(f"{'size':>8} {'render ms':>10} {'floor fps':>10} {'JPEG ms':>8} {'streamed fps':>13} "
-          f"{'fps/floor':>10} {'latency ms (median, p90)':>26}")
+          f"{'fps/floor':>10} {'real time':>10} {'send ms':>8} {'latency ms (median, p90)':>26}")
     for f, s in rows:
         print(f"{f['width']}x{f['height']:<4} {f['render_ms']:>10.1f} {f['floor_fps']:>10.1f} {f['encode_ms']:>8.1f} "
-              f"{s['fps']:>13.1f} {s['fps'] / f['floor_fps']:>10.2f} "
+              f"{s['fps']:>13.1f} {s['fps'] / f['floor_fps']:>10.2f} {s['realtime']:>9.2f}x {s['send_ms']:>8.1f} "
               f"{s['latency_median_ms']:>12.0f}, {s['latency_p90_ms']:.0f} ({s['taps']} taps)")
-    ok = rows[0][1]["fps"] >= 15.0
-    print(f"target: >= 15 frames/s at 320x240: {'met' if ok else 'NOT met'} ({rows[0][1]['fps']:.1f}); "
+    first = rows[0][1]
+    ok = first["fps"] >= 15.0 and first["realtime"] >= 0.95
+    print(f"target: >= 15 frames/s and real time at {rows[0][0]['width']}x{rows[0][0]['height']}: "
+          f"{'met' if ok else 'NOT met'} ({first['fps']:.1f} fps, {first['realtime']:.2f}x real time); "
           f"load average now {os.getloadavg()[0]:.2f}")
 
 

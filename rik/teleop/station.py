@@ -25,11 +25,11 @@ import numpy as np
 from rik.errors import RikError, os_error_text
 from rik.teleop.keys import FINE_FACTOR
 from rik.teleop.session import TeleopSession, check_time_limit
-from rik.teleop.view import FOLLOWED, FollowView, paint_for_contrast
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.sim.scene import SimScene
+    from rik.teleop.frames import StationFrames
 
 OPERATOR = "browser"
 """Operator name of episodes recorded in the browser."""
@@ -216,8 +216,6 @@ class Station:
         self.draft: str | None = None
         self.message = BUILDING
         self.replay: dict[str, Any] | None = None
-        self._view: FollowView | None = None
-        """The front view that follows the work (made with the renderers, on the station thread)."""
         self.view_turn = (0.0, 0.0)
         """How far the controlling tab turned the front view: azimuth, elevation, degrees (``view`` messages)."""
         self.fps = 0.0
@@ -342,9 +340,11 @@ class Station:
             return
         import mujoco
 
+        from rik.teleop.frames import StationFrames
+
         session = self.session
         assert session is not None
-        renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        renderers = StationFrames(session.scene)  # the follow view and a renderer per size, on this thread
         frames: dict[tuple[int, int], tuple[object, list[bytes]]] = {}
         replay_data = mujoco.MjData(session.scene.model)
         dt = 1.0 / session.scene.control_fps
@@ -384,8 +384,7 @@ class Station:
             while not self.stop.wait(0.2):
                 self._push_status()
         finally:
-            for r in renderers.values():
-                r.close()
+            renderers.close()
 
     def _step(self, replay_data: Any) -> None:
         """Apply commands and input, then advance one control step (or one replayed row)."""
@@ -482,25 +481,12 @@ class Station:
         mujoco.mj_forward(model, data)
         r["row"] += 1
 
-    def _render(self, renderers: dict[tuple[int, int], Any], size: tuple[int, int], data: Any,
+    def _render(self, renderers: StationFrames, size: tuple[int, int], data: Any,
                 session: TeleopSession) -> list[bytes]:
-        import mujoco
-
-
-        if size not in renderers:
-            r = mujoco.Renderer(session.scene.model, size[1], size[0])
-            r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
-            r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
-            renderers[size] = r
-        renderer = renderers[size]
-        if self._view is None or self._view.scene is not session.scene:
-            self._view = FollowView(session.scene)
         out = []
         step = session.recorder.steps if self.replay is None else self.replay["row"]
         for cam in CAMERAS:  # the page's front view follows the work; the wrist camera is the scene's
-            renderer.update_scene(data, camera=self._view.at(data, self.view_turn) if cam == FOLLOWED else cam)
-            paint_for_contrast(renderer.scene, session.scene)
-            jpeg = encode_jpeg(renderer.render())
+            jpeg = encode_jpeg(renderers.render(data, cam, size, self.view_turn))
             header = {"camera": cam, "step": step, "seq": self.applied_seq, "t": round(float(data.time), 4),
                       "sent": time.time(), "width": size[0], "height": size[1], "replay": self.replay is not None}
             out.append(frame_message(header, jpeg))

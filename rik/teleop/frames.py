@@ -1,0 +1,52 @@
+"""The browser station's camera images: the operator's follow view (``front``, :mod:`rik.teleop.view`) and the
+wrist camera, rendered offscreen per stream size with shadows and reflections off, jaws and handle painted.
+
+Only what the operator sees: every recorded stream is rendered later from the episode's states with the scene's
+fixed cameras and materials."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from rik.teleop.view import FOLLOWED, FollowView, paint_for_contrast
+
+if TYPE_CHECKING:
+    import mujoco
+    import numpy as np
+
+    from rik.sim.scene import SimScene
+
+
+class StationFrames:
+    """Offscreen renderers of a station's scene, one per stream size (width, height px), made on first use. Use it
+    from one thread only (a MuJoCo GL context belongs to the thread that made it)."""
+
+    def __init__(self, scene: SimScene) -> None:
+        self.scene = scene
+        self.follow = FollowView(scene)
+        self._renderers: dict[tuple[int, int], Any] = {}
+
+    def renderer(self, size: tuple[int, int]) -> mujoco.Renderer:
+        """The renderer of ``size`` (width, height px), shadows and reflections off."""
+        import mujoco
+
+        if size not in self._renderers:
+            r = mujoco.Renderer(self.scene.model, size[1], size[0])
+            r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+            r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+            self._renderers[size] = r
+        return self._renderers[size]
+
+    def render(self, data: mujoco.MjData, camera: str, size: tuple[int, int],
+               turn: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
+        """The image (height x width x 3 RGB) of ``camera`` in the state ``data`` (after ``mj_forward``): the follow
+        view for :data:`FOLLOWED` (orbited by ``turn``: azimuth, elevation degrees), else the scene's camera."""
+        renderer = self.renderer(size)
+        renderer.update_scene(data, camera=self.follow.at(data, turn) if camera == FOLLOWED else camera)
+        paint_for_contrast(renderer.scene, self.scene)
+        return renderer.render()
+
+    def close(self) -> None:
+        for r in self._renderers.values():
+            r.close()
+        self._renderers = {}
