@@ -123,13 +123,16 @@ def test_foreign_origin_host_or_no_token_is_refused_by_a_real_client(variants: P
 
 
 def test_a_get_of_a_station_page_starts_nothing(variants: Path, tmp_path: Path) -> None:
-    """Six GETs of station pages (what an <img> on any page in the browser would send, cookie included) build no
-    variant and start no station; the token in the address gives a cookie and a redirect that drops it."""
+    """Six GETs of station pages and two of variants' 3D models (what an <img> on any page in the browser would
+    send, cookie included) build no variant and start no station; the token in the address gives a cookie and a redirect that drops it."""
     fresh = tmp_path / "variants"
     with app_client(AppConfig(CAT, variants=fresh, episodes=tmp_path / "ep")) as client:
         for robot in ("hand-e", "panda-2f85", "so100"):
             for variant in (BOW, KNOB):
                 assert client.get(f"/teleop/{variant}?robot={robot}").status_code == 200
+        for url in (f"/catalog/variant/{BOW}/visual.glb", f"/catalog/variant/{KNOB}/visual.glb"):  # 3D views
+            answer = client.get(url)
+            assert answer.status_code == 404 and "is not built" in answer.json()["detail"]
         assert not client.app.state.stations.stations and not fresh.exists()
         client.cookies.clear()
         assert client.get(f"/teleop/{BOW}").status_code == 403

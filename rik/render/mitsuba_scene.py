@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rik.render.geoms import drawn_geoms, geom_triangles, rigid
 from rik.render.materials import finish_bsdf, lighting, plastic_bsdf
 from rik.schemas.finishes import Finish
 
@@ -24,8 +25,6 @@ if TYPE_CHECKING:
     import mitsuba as mi
     import mujoco
 
-VISIBLE_GROUPS = (0, 1, 2)
-"""Geom groups MuJoCo's renderer shows by default (``mjvOption.geomgroup``)."""
 FLOOR_HALF_SIZE_M = 5.0
 """Half-size of the rectangle that stands in for an infinite MuJoCo plane, m."""
 MAX_DEPTH = 6
@@ -55,86 +54,6 @@ class PosedScene:
     """MuJoCo camera name -> Mitsuba id of its sensor (the key of its parameters)."""
 
 
-def _rigid(pos: np.ndarray, mat: np.ndarray) -> np.ndarray:
-    m = np.eye(4)
-    m[:3, :3] = np.asarray(mat).reshape(3, 3)
-    m[:3, 3] = pos
-    return m
-
-
-def _box(half: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
-    """A box of half-sizes ``half``: 4 vertices per face (flat shading), texture coordinates in metres with u
-    along the box's longest side wherever that lies in the face (the grain of a board), else the longer side."""
-    longest = int(np.argmax(half))
-    verts: list[np.ndarray] = []
-    faces: list[tuple[int, int, int]] = []
-    uvs: list[tuple[float, float]] = []
-    for axis in range(3):
-        others = [a for a in range(3) if a != axis]
-        u_ax = longest if longest in others else max(others, key=lambda a: half[a])
-        v_ax = others[0] if others[1] == u_ax else others[1]
-        for sign in (1.0, -1.0):
-            base = len(verts)
-            corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
-            for cu, cv in corners:
-                p = np.zeros(3)
-                p[axis] = sign * half[axis]
-                p[u_ax] = cu * half[u_ax]
-                p[v_ax] = cv * half[v_ax]
-                verts.append(p)
-                uvs.append((p[u_ax], p[v_ax]))
-            # Counter-clockwise seen from outside: the face normal points along sign * axis.
-            n = np.zeros(3)
-            n[axis] = sign
-            e1 = verts[base + 1] - verts[base]
-            e2 = verts[base + 2] - verts[base]
-            tri = [(0, 1, 2), (0, 2, 3)] if np.dot(np.cross(e1, e2), n) > 0 else [(0, 2, 1), (0, 3, 2)]
-            faces += [(base + a, base + b, base + c) for a, b, c in tri]
-    return np.array(verts), np.array(faces), None, np.array(uvs)
-
-
-def _planar_uv(v: np.ndarray) -> np.ndarray:
-    """Texture coordinates in metres: u along the part's longest extent, v along the second."""
-    order = np.argsort(np.ptp(v, axis=0))[::-1]
-    return v[:, order[:2]]
-
-
-def _mesh_geom(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
-    """A mesh geom's triangles in its geom frame, one vertex per face corner with MuJoCo's normals."""
-    m = int(model.geom_dataid[g])
-    va, fa, fn = int(model.mesh_vertadr[m]), int(model.mesh_faceadr[m]), int(model.mesh_facenum[m])
-    faces = model.mesh_face[fa:fa + fn]
-    verts = model.mesh_vert[va + faces].reshape(-1, 3).astype(np.float64)
-    na = int(model.mesh_normaladr[m])
-    normals = model.mesh_normal[na + model.mesh_facenormal[fa:fa + fn]].reshape(-1, 3).astype(np.float64)
-    return verts, np.arange(3 * fn).reshape(fn, 3), normals, _planar_uv(verts)
-
-
-def _primitive(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
-    import mujoco
-    import trimesh
-
-    kind, size = int(model.geom_type[g]), np.asarray(model.geom_size[g], np.float64)
-    t = mujoco.mjtGeom
-    if kind == t.mjGEOM_BOX:
-        return _box(size)
-    if kind == t.mjGEOM_SPHERE:
-        mesh = trimesh.creation.icosphere(subdivisions=3, radius=size[0])
-    elif kind == t.mjGEOM_ELLIPSOID:
-        mesh = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
-        mesh.apply_scale(size)
-    elif kind == t.mjGEOM_CAPSULE:
-        mesh = trimesh.creation.capsule(height=2 * size[1], radius=size[0], count=[24, 24])
-    elif kind == t.mjGEOM_CYLINDER:
-        mesh = trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=48)
-        v = np.asarray(mesh.vertices)
-        return v, np.asarray(mesh.faces), None, _planar_uv(v)
-    else:
-        raise ValueError(f"geom type {kind} is not drawn by rik's Mitsuba scene")
-    v = np.asarray(mesh.vertices)
-    return v, np.asarray(mesh.faces), np.asarray(mesh.vertex_normals), _planar_uv(v)
-
-
 def _mi_mesh(name: str, v: np.ndarray, f: np.ndarray, n: np.ndarray | None, uv: np.ndarray,
              bsdf: mi.BSDF) -> mi.Mesh:
     import mitsuba as mi
@@ -154,17 +73,6 @@ def _mi_mesh(name: str, v: np.ndarray, f: np.ndarray, n: np.ndarray | None, uv: 
         put("vertex_normals", n, np.float32)
     p.update()
     return mesh
-
-
-def drawn_geoms(model: mujoco.MjModel) -> list[int]:
-    """Ids of the geoms MuJoCo's renderer draws by default: groups 0-2, not fully transparent."""
-    out = []
-    for g in range(model.ngeom):
-        mat = int(model.geom_matid[g])
-        alpha = float(model.mat_rgba[mat][3]) if mat >= 0 else float(model.geom_rgba[g][3])
-        if int(model.geom_group[g]) in VISIBLE_GROUPS and alpha > 0.0:
-            out.append(g)
-    return out
 
 
 def geom_bsdf(model: mujoco.MjModel, g: int, finishes: Mapping[str, Finish]) -> dict[str, object]:
@@ -235,13 +143,12 @@ def build_posed_scene(model: mujoco.MjModel, data: mujoco.MjData, finishes: Mapp
             if not floor:
                 continue
             half = [float(s) if s > 0 else FLOOR_HALF_SIZE_M for s in model.geom_size[g][:2]]
-            pose = _rigid(data.geom_xpos[g], data.geom_xmat[g]) @ np.diag([*half, 1.0, 1.0])
+            pose = rigid(data.geom_xpos[g], data.geom_xmat[g]) @ np.diag([*half, 1.0, 1.0])
             scene[name] = {"type": "rectangle", "to_world": mi.ScalarTransform4f(pose.tolist()), "bsdf": bsdf}
             continue
-        build = _mesh_geom if int(model.geom_type[g]) == mujoco.mjtGeom.mjGEOM_MESH else _primitive
-        v, f, n, uv = build(model, g)
+        v, f, n, uv = geom_triangles(model, g)
         if static:
-            pose = _rigid(data.geom_xpos[g], data.geom_xmat[g])
+            pose = rigid(data.geom_xpos[g], data.geom_xmat[g])
             v = v @ pose[:3, :3].T + pose[:3, 3]
             n = None if n is None else n @ pose[:3, :3].T
             scene[name] = _mi_mesh(name, v, f, n, uv, bsdf)
@@ -273,11 +180,11 @@ def pose_scene(posed: PosedScene, model: mujoco.MjModel, data: mujoco.MjData) ->
         params[f"g{g}.to_world"] = _rigid_transform(data.geom_xpos[g], data.geom_xmat[g])
     for cam in posed.cameras:
         cid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, cam)
-        params[f"{posed.sensor_ids[cam]}.to_world"] = _camera_to_world(_rigid(data.cam_xpos[cid], data.cam_xmat[cid]))
+        params[f"{posed.sensor_ids[cam]}.to_world"] = _camera_to_world(rigid(data.cam_xpos[cid], data.cam_xmat[cid]))
     params.update()
 
 
 def _rigid_transform(pos: np.ndarray, mat: np.ndarray) -> mi.ScalarTransform4f:
     import mitsuba as mi
 
-    return mi.ScalarTransform4f(_rigid(pos, mat).tolist())
+    return mi.ScalarTransform4f(rigid(pos, mat).tolist())

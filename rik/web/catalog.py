@@ -6,6 +6,11 @@ entry). Pictures: ``/catalog/img/<id>/thumbnail.png`` and ``fidelity.png`` (a ha
 a placeholder drawing where it has none) and ``/catalog/img/<id>/front.svg`` (a base unit's front view). JSON:
 ``/api/catalog/handles[/<id>]``, ``/api/catalog/bases[/<id>]``, ``/api/catalog/presets``. An unknown id is a 404
 whose ``detail`` is one line with close matches.
+
+3D models for the page's viewer (binary glTF, :mod:`rik.web.meshes`): ``/catalog/model/<handle id>/visual.glb`` (a
+handle's visual mesh, made from its generator, no CoACD) and ``/catalog/variant/<variant id>/visual.glb`` (a variant
+already built and current in the app's variants folder; otherwise a 404 naming the command that builds it: a GET
+builds nothing). Both are memoised per app.
 """
 
 from __future__ import annotations
@@ -15,8 +20,9 @@ from typing import Any
 from fastapi import APIRouter, HTTPException, Request
 from fastapi.responses import FileResponse, Response
 
-from rik.errors import UnknownIdError
+from rik.errors import RikError, UnknownIdError
 from rik.web.catalog_view import PICTURES, CatalogView, base_unit_svg, build_view, placeholder_svg
+from rik.web.meshes import GLB_MEDIA_TYPE, Memo, built_variant, handle_glb, variant_glb
 from rik.web.pages import STATIC
 
 router = APIRouter()
@@ -81,6 +87,40 @@ def picture(entry_id: str, name: str, request: Request) -> Response:
     if path is None:
         return Response(placeholder_svg(entry_id, stem), media_type=SVG, headers={"X-Rik-Placeholder": "1"})
     return FileResponse(path, media_type="image/png")
+
+
+def _memo(request: Request) -> Memo:
+    state = request.app.state
+    memo = getattr(state, "glb_memo", None)
+    if memo is None:
+        memo = state.glb_memo = Memo()
+    return memo
+
+
+def _glb(data: bytes) -> Response:
+    return Response(data, media_type=GLB_MEDIA_TYPE, headers={"Cache-Control": "no-store"})
+
+
+@router.get("/catalog/model/{handle_id:path}/visual.glb", include_in_schema=False)
+def handle_model(handle_id: str, request: Request) -> Response:
+    """A handle's visual mesh as GLB (m, mount frame, its finish's material)."""
+    _known(catalog_view(request), "handles", handle_id)
+    catalog = request.app.state.config.catalog
+    return _glb(_memo(request).get(("handle", handle_id), lambda: handle_glb(catalog, handle_id)))
+
+
+@router.get("/catalog/variant/{variant}/visual.glb", include_in_schema=False)
+def variant_model(variant: str, request: Request) -> Response:
+    """A built, current variant's visual geoms as GLB (posed closed, m, z up); a 404 with one line when the id is
+    unknown or the variant is not built (nothing is built here)."""
+    config = request.app.state.config
+    try:
+        vid, directory, digest = built_variant(config.catalog, config.variants, variant)
+    except RikError as exc:
+        raise HTTPException(404, str(exc)) from None
+    report = (directory / "report.json").stat()
+    key = ("variant", vid, digest, report.st_mtime_ns, report.st_size)
+    return _glb(_memo(request).get(key, lambda: variant_glb(directory / "model.xml", config.catalog.finishes)))
 
 
 @router.get("/api/catalog/handles")

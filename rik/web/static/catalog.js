@@ -127,6 +127,12 @@ function picker(pairings, noun, grouped) {
   robot.value = pickedRobot || state.robots.default;
   const link = el("a", {id: "teleop-link", class: "go"}, "Build and teleoperate");
   const shownId = el("code", {id: "variant-id"});
+  // the chosen variant in 3D, when it is built (the server answers one line naming the command otherwise)
+  const viewer = el("div", {id: "viewer-variant", class: "viewer3d", hidden: ""});
+  const show3d = el("button", {type: "button", id: "variant-3d", onclick: () => {
+    viewer.hidden = false;
+    view3d(viewer, `/catalog/variant/${encodeURIComponent(shownId.textContent)}/visual.glb`, VARIANT_VIEW);
+  }}, "3D view (built variants)");
   const update = () => {
     const variants = pairings[other.value].variants;
     const chosen = preset.value in variants ? preset.value : Object.keys(variants)[0];
@@ -138,14 +144,27 @@ function picker(pairings, noun, grouped) {
     link.href = `/teleop/${encodeURIComponent(variants[chosen])}${query}`;
     shownId.textContent = variants[chosen];
   };
-  other.addEventListener("change", update);
-  preset.addEventListener("change", update);
+  const changed = () => { update(); if (!viewer.hidden) show3d.click(); };
+  other.addEventListener("change", changed);
+  preset.addEventListener("change", changed);
   robot.addEventListener("change", update);
   update();
   return el("div", {class: "pairing"}, el("label", {}, `${noun} `, other), el("label", {}, "preset ", preset),
-            state.robots.robots.length ? el("label", {}, "robot ", robot) : null, link, shownId);
+            state.robots.robots.length ? el("label", {}, "robot ", robot) : null, link, show3d, shownId, viewer);
 }
 let pickedRobot = null; // the robot last picked, kept from one entry to the next
+
+// ---- 3D view ----------------------------------------------------------------------------------------------
+// three.js is loaded only when a panel shows a model (a module import from this classic script).
+const HANDLE_VIEW = {up: [0, 1, 0], view: [0.6, 0.5, 1]}; // mount frame: +z out of the front, y up
+const VARIANT_VIEW = {up: [0, 0, 1], view: [-0.6, 1.2, 0.7]}; // MuJoCo's frame: z up, the fronts face +y
+function view3d(element, url, options) {
+  element.dataset.ready = "0";
+  import("/static/viewer3d.js").then((m) => m.mount(element, url, options)).catch((err) => {
+    element.textContent = `rik: the 3D view failed: ${err.message}`;
+    element.dataset.ready = "error";
+  });
+}
 
 // ---- detail panel -----------------------------------------------------------------------------------------
 function showDetail(...children) {
@@ -193,7 +212,8 @@ async function openHandle(id, push) {
     el("p", {}, `${h.design_name} · ${TYPE_LABEL[h.type]} · `, el("span", {class: "badge"}, `split ${h.split}`),
        h.origin === "overlay" ? el("span", {class: "badge"}, "user catalog") : null),
     el("div", {class: "pictures"},
-       el("img", {class: "thumb", src: `/catalog/img/${path(h.id)}/thumbnail.png`, alt: `thumbnail of ${h.id}`})),
+       el("img", {class: "thumb", src: `/catalog/img/${path(h.id)}/thumbnail.png`, alt: `thumbnail of ${h.id}`}),
+       el("div", {id: "viewer-handle", class: "viewer3d", title: "drag to turn, wheel to zoom"})),
     el("h3", {}, "Dimensions"), el("div", {id: "dimensions"}, table(dims)),
     el("h3", {}, "Build and teleoperate"),
     el("p", {class: "note"}, `Fits ${h.pairings.length} of ${state.bases.length} base units.`),
@@ -203,6 +223,7 @@ async function openHandle(id, push) {
                alt: `collision-error heatmaps of ${h.id}`}),
     el("div", {id: "fidelity"}, fidelity),
     el("h3", {}, "Mesh statistics"), el("div", {id: "mesh-stats"}, mesh));
+  view3d($("#viewer-handle"), `/catalog/model/${path(h.id)}/visual.glb`, HANDLE_VIEW);
 }
 
 async function openBase(id, push) {
