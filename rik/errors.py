@@ -27,13 +27,21 @@ class CatalogError(RikError):
         super().__init__(", ".join(parts) + f": {problem}")
 
 
+LISTED_KINDS = frozenset({"robot"})
+"""Kinds of entry a catalog holds a handful of: a miss names them all, not only the closest."""
+
+
 class UnknownIdError(RikError, LookupError):
-    """An id asked for is not in the catalog; the message suggests the closest ids."""
+    """An id asked for is not in the catalog; the message suggests the closest ids (and, for a kind of
+    :data:`LISTED_KINDS`, names every one)."""
 
     def __init__(self, kind: str, wanted: str, known: Iterable[str]):
         self.kind, self.wanted = kind, wanted
-        close = difflib.get_close_matches(wanted, list(known), n=3, cutoff=0.8)
+        known = list(known)
+        close = difflib.get_close_matches(wanted, known, n=3, cutoff=0.8)
         hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+        if kind in LISTED_KINDS and known:
+            hint += f" (the catalog's {kind}s: {', '.join(known)})"
         super().__init__(f"no {kind} '{wanted}' in the catalog{hint}")
 
 

@@ -248,7 +248,7 @@ BAD_SPECS = {
     "selects_nothing": (BASE + "variants: {handles: [knob/mushroom-30], handle_types: [two_point]}\n",
                         ["bad.yaml, field 'variants': the selection keeps no variant"]),
     "unknown_robot": (BASE + "robot: so10\n",
-                      ["bad.yaml, field 'robot': no robot 'so10' in the catalog; did you mean 'so100'?"]),
+                      ["bad.yaml, field 'robot': no robot 'so10' in the catalog; did you mean 'so101' or 'so100'? (the catalog's robots: hand-e, panda-2f85, so100, so101)"]),
 }
 
 

@@ -124,7 +124,7 @@ def test_pose_actions_drive_an_arm_and_joint_actions_are_refused_for_the_hand_e(
         gym.make("rik/OpenFront-v0", variant=VARIANT, variants_dir=str(variants), action_mode="joints")
     assert str(err.value) == ("action_mode 'joints': robot hand-e takes a target pose (action_mode 'delta' or "
                               "'absolute'); joint actions are for arms (panda-2f85, so100)")
-    with pytest.raises(RikError, match=r"^no robot 'so10' in the catalog; did you mean 'so100'\?$"):
+    with pytest.raises(RikError, match=r"^no robot 'so10' in the catalog; did you mean 'so101' or 'so100'\? \(the catalog's robots: hand-e, panda-2f85, so100, so101\)$"):
         gym.make("rik/OpenFront-v0", variant=VARIANT, variants_dir=str(variants), robot="so10")
 
 
@@ -278,5 +278,5 @@ def test_eval_refuses_a_policy_whose_state_is_another_robots(so100_policy: dict,
         "[8] (a policy trained on another robot's export runs with --robot and that robot; the Hand-E's with "
         "--robot hand-e)")
     r = rik("eval", str(copy), "--robot", "so10", "--out", str(tmp_path / "o"))
-    assert r.code == 2 and r.err.strip() == "rik: error: no robot 'so10' in the catalog; did you mean 'so100'?"
+    assert r.code == 2 and r.err.strip() == "rik: error: no robot 'so10' in the catalog; did you mean 'so101' or 'so100'? (the catalog's robots: hand-e, panda-2f85, so100, so101)"
     assert not (tmp_path / "o").exists()

@@ -315,7 +315,8 @@ def test_an_episode_whose_robot_the_catalog_lacks_is_named(rik, panda: Path, var
 
     src = find_episodes([panda / "episodes"])[0]
     for field, value, expected in (
-            ("robot", "panda-2f58", "field 'robot': no robot 'panda-2f58' in the catalog; did you mean 'panda-2f85'? "
+            ("robot", "panda-2f58", "field 'robot': no robot 'panda-2f58' in the catalog; did you mean 'panda-2f85'? (the catalog's robots: "
+                                    "hand-e, panda-2f85, so100, so101) "
                                     "(give the catalog it was recorded with, --catalog)"),
             ("robot_joints", ["joint1", "gripper"], "field 'robot_joints': the episode recorded joints joint1, "
                                                     "gripper, but robot 'panda-2f85' of the catalog has joint1, "

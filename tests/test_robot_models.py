@@ -47,14 +47,20 @@ def test_robot_scene_compiles_and_holds_still(robot_id: str, variant: Path, offl
     cameras = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_CAMERA, i) for i in range(m.ncam)}
     assert {"front", "wrist"} <= cameras, cameras
     start, tcp = scene.pose(), scene.tcp()
-    for _ in range(STEPS):
+    for k in range(STEPS):
         scene.step(np.array([*start, 0.0]))
+        if k == STEPS // 2 - 1:
+            halfway = scene.tcp()
     assert d.time == pytest.approx(STEPS / scene.control_fps)
     warnings = {mujoco.mjtWarning(i).name: d.warning[i].number for i in range(int(mujoco.mjtWarning.mjNWARNING))}
     assert not any(warnings.values()), warnings
     for name in ("qpos", "qvel", "qacc", "ctrl", "act", "qfrc_constraint"):
         assert np.isfinite(getattr(d, name)).all(), name
-    assert np.linalg.norm(scene.tcp() - tcp) < 0.005, "the gripper frame drifts from the held start pose"
+    # an arm whose servos do not compensate gravity sags on their stiffness (the SO-100 4.2 mm, the SO-101 5.7 mm
+    # here): within 1 cm, and settled over the second half second
+    sag = 0.005 if robot.joints is None or robot.joints.gravity_compensation else 0.010
+    assert np.linalg.norm(scene.tcp() - tcp) < sag, "the gripper frame drifts from the held start pose"
+    assert np.linalg.norm(scene.tcp() - halfway) < 0.0005, "the gripper frame still moves after 0.5 s"
     assert scene.opening() == pytest.approx(0.0, abs=1e-3)
 
 

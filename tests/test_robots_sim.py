@@ -22,7 +22,7 @@ from rik.sim.robots.checks import reach_profile, run_checks
 from rik.sim.robots.reach import reachable_opening
 
 CAT = builtin_catalog()
-ARMS = ("panda-2f85", "so100")
+ARMS = ("panda-2f85", "so100", "so101")
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +65,8 @@ def _closed_grip(variants: Path, robot: str) -> tuple[object, dict[str, float]]:
 
 @pytest.mark.parametrize("robot, jaws", [("hand-e", ("gripper/left", "gripper/right")),
                                          ("panda-2f85", ("robot/left_pad", "robot/right_pad")),
-                                         ("so100", ("robot/so_arm100_left/Moving_Jaw",))])
+                                         ("so100", ("robot/so_arm100_left/Moving_Jaw",)),
+                                         ("so101", ("robot/moving_jaw_so101_v1",))])
 def test_grip_force_is_what_the_catalog_says(variants: Path, robot: str, jaws: tuple[str, ...]) -> None:
     """The catalog's grip forces of the arms are marked as measured here: the pressing jaws push the held bar with
     that force (within 20 %: a swinging jaw's force depends on where along it the bar sits). A parallel gripper's squeeze is the mean of its jaws' normal forces (a sideways load
@@ -119,7 +120,7 @@ def test_arm_takes_the_hand_es_target_pose(variants: Path, robot: str) -> None:
     entry = CAT.robot(robot)
     scene = build_scene(variants / BOW, None, robot=entry)
     start = scene.pose()
-    # the SO-100's five joints keep its fingers in the plane of its base: move it in that plane
+    # the SO arms' five joints keep their fingers in the plane of their base: move them in that plane
     step = [0.03, -0.05, 0.02, 0.0, 0.0, 0.3] if robot == "panda-2f85" else [0.0, -0.05, 0.02, 0.0, 0.0, 0.3]
     target = start + np.array(step)
     for _ in range(40):
@@ -168,10 +169,13 @@ def test_a_handle_out_of_reach_is_refused_before_recording(rik, variants: Path, 
 
 @pytest.mark.parametrize("command", [("record", BOW, "-s", "grasp_vertical"), ("robot-check", BOW),
                                      ("bench", "-n", "1")])
-def test_unknown_robot_is_one_line(rik, variants: Path, command: tuple[str, ...]) -> None:
-    r = rik(*command, "--robot", "so10", "--variants", str(variants))
+@pytest.mark.parametrize("wanted", ["so10", "so102"])
+def test_unknown_robot_is_one_line(rik, variants: Path, command: tuple[str, ...], wanted: str) -> None:
+    """An unknown robot: one line with the closest ids and every robot of the catalog, exit 2."""
+    r = rik(*command, "--robot", wanted, "--variants", str(variants))
     assert r.code == 2
-    assert r.err == "rik: error: no robot 'so10' in the catalog; did you mean 'so100'?\n"
+    assert r.err == (f"rik: error: no robot '{wanted}' in the catalog; did you mean 'so101' or 'so100'? (the "
+                     "catalog's robots: hand-e, panda-2f85, so100, so101)\n")
 
 
 def test_robot_check_cli(rik, variants: Path) -> None:

@@ -96,7 +96,7 @@ def test_rik_serve_answers_and_stops_on_ctrl_c(tmp_path: Path) -> None:
 def test_an_unknown_robot_is_one_line_before_any_port_or_window(rik, tmp_path: Path) -> None:
     """``--robot so10`` for the station, the app and the viewer window: the catalog's one line with its close match,
     exit 2, before anything is built, bound or opened (a port taken meanwhile is never reported)."""
-    wanted = "rik: error: no robot 'so10' in the catalog; did you mean 'so100'?"
+    wanted = "rik: error: no robot 'so10' in the catalog; did you mean 'so101' or 'so100'? (the catalog's robots: hand-e, panda-2f85, so100, so101)"
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen(1)

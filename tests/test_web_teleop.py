@@ -342,7 +342,7 @@ def test_the_panda_opens_the_demo_drawer_from_the_keyboard_and_its_episode_repla
         saved = page.evaluate(f"{STATION}.lastSaved")
         response = page.goto(url.split("/teleop/")[0] + f"/teleop/{BOW}?robot=so10")
         assert response is not None and response.status == 404
-        assert page.inner_text("#error") == "rik: error: no robot 'so10' in the catalog; did you mean 'so100'?"
+        assert page.inner_text("#error") == "rik: error: no robot 'so10' in the catalog; did you mean 'so101' or 'so100'? (the catalog's robots: hand-e, panda-2f85, so100, so101)"
     episode = episodes / saved
     meta = read_meta(episode)
     assert saved == f"{BOW}__drawer-1__browser.panda-2f85__s0000" and meta.robot == "panda-2f85"

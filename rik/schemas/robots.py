@@ -103,6 +103,8 @@ class RobotJoint(Frozen):
     """Dry friction of the joint, N·m; None keeps the model's."""
     armature: NonNeg | None = None
     """Reflected rotor inertia, kg·m²; None keeps the model's."""
+    joint_damping: NonNeg | None = None
+    """Viscous damping of the joint itself (beside the servo's ``damping``), N·m·s/rad; None keeps the model's."""
 
     @field_validator("range")
     @classmethod
@@ -169,6 +171,8 @@ class GripperActuation(Frozen):
     """Force cap of the servo rik adds, in its joint's unit (N·m for a hinge)."""
     friction: NonNeg | None = None
     """Dry friction of the servo's joint (N·m for a hinge); None keeps the model's."""
+    joint_damping: NonNeg | None = None
+    """Viscous damping of the servo's joint (N·m·s/rad for a hinge); None keeps the model's."""
     ctrl_open: Real
     """Actuator control for an open gripper (command 0)."""
     ctrl_closed: Real

