@@ -140,7 +140,7 @@ def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
         page.click(f"#handle-grid .card[data-id='{DEMO_HANDLE}']")
         page.wait_for_selector("#detail-title", state="visible")
         assert page.text_content("#detail-title") == DEMO_HANDLE
-        assert page.url.endswith(f"/catalog/handle/{DEMO_HANDLE}")
+        assert page.url.endswith(f"/catalog/handle/{DEMO_HANDLE}?finish={finish.replace('/', '%2F')}&q=bow-128")
         dimensions = page.text_content("#dimensions")
         assert "length mm140" in dimensions and "clearance mm (depth x width)20 x 116" in dimensions
         page.wait_for_function("() => document.querySelector('#fidelity-img').naturalWidth > 0", timeout=10_000, polling=100)
@@ -169,4 +169,83 @@ def test_catalog_page_in_chromium(catalog, tmp_path: Path) -> None:
         page.goto(f"{url}/catalog/handle/knob/ball-25")  # an entry's own address opens its panel
         page.wait_for_function("() => document.querySelector('#detail-title')?.textContent === 'knob/ball-25'",
                                timeout=10_000, polling=100)
+        assert errors == []
+
+
+@pytest.mark.browser
+def test_split_base_scale_presets_and_filters_in_the_address_in_chromium(catalog) -> None:
+    """The split and fits-base filters show exactly the handles the server says; the filters go into the address
+    and come back on reload and on back after opening a handle; common scale draws thumbnails in proportion to the
+    handles' largest dimensions; the presets tab and the pairing picker show each preset's joint numbers with units."""
+    from rik.web.catalog_view import build_view
+
+    view = build_view(catalog)
+    total = len(view.handles)
+    val = {h for h, row in view.handles.items() if row["split"] == "val"}
+    fits = {h for h, bases in view.fits.items() if DEMO_BASE in bases}
+    small_base = min(view.bases, key=lambda b: view.bases[b]["fits"])
+    both = {h for h in val if small_base in view.fits[h]}
+    extents = {h: row["extent_mm"] for h, row in view.handles.items()}
+
+    def shown(page) -> set[str]:
+        page.wait_for_function("() => !document.querySelector('#count').textContent.startsWith('loading')",
+                               timeout=10_000, polling=100)
+        cards = page.locator("#handle-grid .card:visible")
+        return {cards.nth(i).get_attribute("data-id") for i in range(cards.count())}
+
+    with served(AppConfig(catalog)) as url, browser() as chromium:
+        page = chromium.new_page(viewport={"width": 1400, "height": 900})
+        errors: list[str] = []
+        page.on("pageerror", lambda exc: errors.append(str(exc)))
+        page.goto(signed(f"{url}/catalog"))
+        page.wait_for_selector("body[data-ready='1']")
+        assert len(shown(page)) == total
+        page.select_option("#f-split", "val")
+        assert shown(page) == val and 0 < len(val) < total
+        assert page.url == f"{url}/catalog?split=val"
+        page.select_option("#f-split", "")
+        page.select_option("#f-base", DEMO_BASE)
+        assert shown(page) == fits
+        page.select_option("#f-base", small_base)
+        page.select_option("#f-split", "val")
+        assert shown(page) == both
+        page.check("#f-scale")
+        address = page.url
+        assert "split=val" in address and f"base={small_base.replace('/', '%2F')}" in address and "scale=common" in address
+
+        page.reload()  # the address restores every filter
+        page.wait_for_selector("body[data-ready='1']")
+        assert shown(page) == both and page.input_value("#f-split") == "val" and page.is_checked("#f-scale")
+        page.uncheck("#f-scale")
+        page.select_option("#f-base", "")
+        page.click(f"#handle-grid .card[data-id='{sorted(val)[0]}']")
+        page.wait_for_selector("#detail-title", state="visible")
+        assert page.url.endswith("?split=val")
+        page.go_back()  # back to the grid, its filters kept
+        page.wait_for_function("() => document.querySelector('#detail').hidden", timeout=10_000, polling=100)
+        assert shown(page) == val and page.url == f"{url}/catalog?split=val"
+        page.go_forward()  # the handle again, the filters still in its address
+        page.wait_for_selector("#detail-title", state="visible")
+        assert page.url.endswith("?split=val") and shown(page) == val
+
+        page.goto(f"{url}/catalog?scale=common")  # common scale: widths in proportion to the largest dimensions
+        page.wait_for_selector("body[data-ready='1']")
+        widths = page.evaluate("() => Object.fromEntries([...document.querySelectorAll('#handle-grid .card')]"
+                               ".map(c => [c.dataset.id, c.querySelector('img').getBoundingClientRect().width]))")
+        largest = max(extents.values())
+        for handle, width in widths.items():
+            assert width == pytest.approx(max(120 * extents[handle] / largest, 4), abs=0.6), handle
+        assert min(widths.values()) < 40 and max(widths.values()) == pytest.approx(120, abs=0.6)
+        assert "mm per pixel" in page.text_content("#scale-note")
+
+        page.click("#tabs button[data-tab=presets]")
+        normal = catalog.presets["normal"]
+        row = page.text_content("#presets tr[data-id='normal']")
+        assert f"damping {normal.slide.damping:g} N·s/m" in row and f"friction {normal.slide.frictionloss:g} N" in row
+        assert f"damping {float(f'{normal.hinge.damping:.3g}'):g} N·m·s/rad" in row
+        assert page.locator("#presets tbody tr").count() == len(catalog.presets)
+        page.goto(f"{url}/catalog/handle/{DEMO_HANDLE}")
+        page.wait_for_selector("#preset-numbers")
+        page.select_option("#pair-preset", "normal")
+        assert page.text_content("#preset-numbers").startswith(f"normal: slide damping {normal.slide.damping:g} N·s/m")
         assert errors == []

@@ -110,6 +110,8 @@ def handle_row(entry: Row, designs: dict[str, Row], finishes: dict[str, Row], fi
             "hull": {k: float(fidelity[f"hull_{k}"]) for k in FIDELITY_FIELDS}},
         "pictures": {p: view.picture(entry["id"], p) is not None for p in PICTURES},
         "fits": len(view.fits[entry["id"]]),
+        "fit_bases": view.fits[entry["id"]],
+        "extent_mm": _mm(max(g["length"], g["width"], g["projection"])),
     }
 
 

@@ -1,10 +1,13 @@
 // The catalog pages of rik serve: handle and base-unit cards from /api/catalog/*, filters (type, size, finish,
-// text) applied in the page, a side panel with one entry, and a pairing picker that links to /teleop/<variant id>
+// split, the base unit a handle fits, text) applied in the page and kept in the address's query (reload and
+// back/forward restore them), thumbnails at their own or at one common scale, a side panel with one entry (and its
+// 3D view, viewer3d.js), the resistance presets' numbers, and a pairing picker that links to /teleop/<variant id>
 // (the variant ids come from the server, made by rik.registry.ids). Plain JavaScript, no build step.
 "use strict";
 
 const TYPE_LABEL = {knob: "Knob", two_point: "Two-point", finger_pull: "Finger pull"};
-const state = {handles: [], bases: [], byId: {}, baseById: {}, robots: {default: "hand-e", robots: []}};
+const state = {handles: [], bases: [], presets: {}, robots: {default: "hand-e", robots: []}};
+const TABS = ["handles", "bases", "presets"];
 const $ = (selector) => document.querySelector(selector);
 const path = (id) => id.split("/").map(encodeURIComponent).join("/");
 
@@ -35,6 +38,10 @@ function fmt(value, digits = 2) {
   return Number.isInteger(value) ? String(value) : value.toFixed(digits);
 }
 
+function num(value) { // a measured number to 3 significant digits, without trailing zeros
+  return value === null || value === undefined ? "–" : String(Number(value.toPrecision(3)));
+}
+
 function table(rows, headers = null) {
   const head = headers ? el("thead", {}, el("tr", {}, headers.map((h, i) => el("th", {class: i ? "num" : ""}, h))))
     : null;
@@ -46,8 +53,9 @@ function table(rows, headers = null) {
 function handleCard(h) {
   const card = el("a", {class: "card handle", href: `/catalog/handle/${path(h.id)}`, "data-id": h.id,
                         onclick: (e) => { e.preventDefault(); openHandle(h.id, true).catch(fail); }},
-    el("img", {class: "thumb", src: `/catalog/img/${path(h.id)}/thumbnail.png`, alt: `thumbnail of ${h.id}`,
-               width: 120, height: 120}),
+    el("div", {class: "thumb-box"},
+       el("img", {class: "thumb", src: `/catalog/img/${path(h.id)}/thumbnail.png`, alt: `thumbnail of ${h.id}`,
+                  width: 120, height: 120})),
     el("div", {class: "title"}, h.id),
     el("div", {class: "meta"}, `${TYPE_LABEL[h.type]} · ${fmt(h.dimensions_mm.length, 0)} mm`),
     el("div", {class: "meta"}, el("span", {class: "swatch", style: `background:${h.finish_color}`}), h.finish_name));
@@ -61,9 +69,46 @@ function sizeFilter() {
   return [Number.isNaN(min) ? -Infinity : min, Number.isNaN(max) ? Infinity : max];
 }
 
+// ---- filters in the address: /catalog?type=knob&split=val&base=...&scale=common ------------------------------
+const FILTERS = {type: "#f-type", size: "#f-size", min: "#f-min", max: "#f-max", finish: "#f-finish",
+                 split: "#f-split", base: "#f-base", q: "#f-text"};
+
+function filterQuery() {
+  const query = new URLSearchParams();
+  for (const [key, selector] of Object.entries(FILTERS)) if ($(selector).value) query.set(key, $(selector).value);
+  if ($("#f-scale").checked) query.set("scale", "common");
+  const text = query.toString();
+  return text ? `?${text}` : "";
+}
+
+function restoreFilters() {
+  const query = new URLSearchParams(location.search);
+  for (const [key, selector] of Object.entries(FILTERS)) {
+    $(selector).value = query.get(key) || "";
+    if ($(selector).tagName === "SELECT" && $(selector).selectedIndex < 0) $(selector).value = ""; // not an option
+  }
+  $("#f-scale").checked = query.get("scale") === "common";
+}
+
+// Common scale: a thumbnail frames its handle's bounding box (its largest dimension fills the picture), so drawing
+// each at (largest dimension / the catalog's largest) of the box puts every handle at about one mm per pixel.
+function applyScale() {
+  const common = $("#f-scale").checked;
+  const largest = Math.max(...state.handles.map((h) => h.extent_mm));
+  for (const card of document.querySelectorAll("#handle-grid .card")) {
+    const side = common ? Math.max(120 * card.handle.extent_mm / largest, 4) : 120;
+    card.querySelector("img").style.width = card.querySelector("img").style.height = `${side.toFixed(1)}px`;
+  }
+  $("#scale-note").hidden = !common;
+  $("#scale-note").textContent = `Common scale: each thumbnail is drawn in proportion to its handle's largest `
+    + `dimension, the largest (${fmt(largest, 0)} mm) filling 120 px: about ${fmt(largest / 120, 1)} mm per pixel.`;
+}
+
 function applyFilters() {
   const type = $("#f-type").value;
   const finish = $("#f-finish").value;
+  const split = $("#f-split").value;
+  const base = $("#f-base").value;
   const [min, max] = sizeFilter();
   const words = $("#f-text").value.toLowerCase().split(/\s+/).filter(Boolean);
   let shown = 0;
@@ -72,12 +117,15 @@ function applyFilters() {
     const text = [h.id, h.design_name, h.finish, h.finish_name, h.type, TYPE_LABEL[h.type], h.split,
                   h.display.mount].join(" ").toLowerCase();
     const length = h.dimensions_mm.length;
-    const visible = (!type || h.type === type) && (!finish || h.finish === finish)
-      && length >= min && length <= max && words.every((w) => text.includes(w));
+    const visible = (!type || h.type === type) && (!finish || h.finish === finish) && (!split || h.split === split)
+      && (!base || h.fit_bases.includes(base)) && length >= min && length <= max && words.every((w) => text.includes(w));
     card.hidden = !visible;
     shown += visible;
   }
   $("#count").textContent = `${shown} of ${state.handles.length} handles`;
+  applyScale();
+  const address = location.pathname + filterQuery() + location.hash;
+  if (address !== location.pathname + location.search + location.hash) history.replaceState(history.state, "", address);
 }
 
 function setupFilters(finishes) {
@@ -91,13 +139,18 @@ function setupFilters(finishes) {
     const n = state.handles.filter((h) => h.finish === f.id).length;
     $("#f-finish").append(el("option", {value: f.id}, `${f.name} (${n})`));
   }
+  for (const split of ["train", "val", "test"]) {
+    const n = state.handles.filter((h) => h.split === split).length;
+    if (n) $("#f-split").append(el("option", {value: split}, `${split} (${n})`));
+  }
+  for (const b of state.bases) $("#f-base").append(el("option", {value: b.id}, `${b.id} (${b.fits})`));
   $("#f-size").addEventListener("change", () => {
     const [lo, hi] = $("#f-size").value.split("-");
     $("#f-min").value = lo || "";
     $("#f-max").value = hi || "";
     applyFilters();
   });
-  for (const id of ["#f-type", "#f-finish"]) $(id).addEventListener("change", applyFilters);
+  for (const id of ["#f-type", "#f-finish", "#f-split", "#f-base", "#f-scale"]) $(id).addEventListener("change", applyFilters);
   for (const id of ["#f-min", "#f-max", "#f-text"]) $(id).addEventListener("input", () => {
     if (id !== "#f-text") $("#f-size").value = "";
     applyFilters();
@@ -127,6 +180,7 @@ function picker(pairings, noun, grouped) {
   robot.value = pickedRobot || state.robots.default;
   const link = el("a", {id: "teleop-link", class: "go"}, "Build and teleoperate");
   const shownId = el("code", {id: "variant-id"});
+  const numbers = el("p", {id: "preset-numbers", class: "note"});
   // the chosen variant in 3D, when it is built (the server answers one line naming the command otherwise)
   const viewer = el("div", {id: "viewer-variant", class: "viewer3d", hidden: ""});
   const show3d = el("button", {type: "button", id: "variant-3d", onclick: () => {
@@ -143,6 +197,7 @@ function picker(pairings, noun, grouped) {
       : "";
     link.href = `/teleop/${encodeURIComponent(variants[chosen])}${query}`;
     shownId.textContent = variants[chosen];
+    numbers.textContent = presetSummary(state.presets[chosen]);
   };
   const changed = () => { update(); if (!viewer.hidden) show3d.click(); };
   other.addEventListener("change", changed);
@@ -150,9 +205,52 @@ function picker(pairings, noun, grouped) {
   robot.addEventListener("change", update);
   update();
   return el("div", {class: "pairing"}, el("label", {}, `${noun} `, other), el("label", {}, "preset ", preset),
-            state.robots.robots.length ? el("label", {}, "robot ", robot) : null, link, show3d, shownId, viewer);
+            state.robots.robots.length ? el("label", {}, "robot ", robot) : null, numbers, link, show3d, shownId, viewer);
 }
 let pickedRobot = null; // the robot last picked, kept from one entry to the next
+
+// ---- presets: the numbers behind each --------------------------------------------------------------------------
+const UNITS = {slide: {damping: "N·s/m", frictionloss: "N", armature: "kg", spring: "N/m", length: "m"},
+               hinge: {damping: "N·m·s/rad", frictionloss: "N·m", armature: "kg·m²", spring: "N·m/rad",
+                       length: "rad"}};
+// the units of the effects' fields (rik/schemas/joints.py), slide then hinge
+const EFFECT_UNITS = {breakaway: ["N", "N·m"], stribeck_velocity: ["m/s", "rad/s"], zone: ["m", "rad"],
+                      damping: ["N·s/m", "N·m·s/rad"], stiffness: ["N/m", "N·m/rad"], force: ["N", "N·m"],
+                      decay: ["m", "rad"], sine: ["N", "N·m"], extra: ["N", "N·m"],
+                      coefficient: ["N·s²/m²", "N·m·s²/rad²"], per_extension: ["N/m", "N·m/rad"]};
+
+function jointNumbers(joint, kind) {
+  if (!joint) return "–";
+  const u = UNITS[kind];
+  const parts = [`damping ${num(joint.damping)} ${u.damping}`, `friction ${num(joint.frictionloss)} ${u.frictionloss}`];
+  if (joint.armature) parts.push(`armature ${num(joint.armature)} ${u.armature}`);
+  if (joint.spring) {
+    parts.push(`spring ${num(joint.spring.stiffness)} ${u.spring} (rest at ${num(joint.spring.reference)} ${u.length})`);
+  }
+  for (const effect of joint.effects || []) { // effects identified by rik sysid: their fields as the schema names them
+    const unit = (k) => (EFFECT_UNITS[k] ? ` ${EFFECT_UNITS[k][kind === "slide" ? 0 : 1]}` : "");
+    const fields = Object.entries(effect).filter(([k]) => k !== "kind").map(([k, v]) => `${k.replaceAll("_", " ")} `
+      + (typeof v === "number" ? `${num(v)}${unit(k)}` : String(v)));
+    parts.push(`${effect.kind.replaceAll("_", " ")} (${fields.join(", ")})`);
+  }
+  return parts.join(", ");
+}
+
+function presetSummary(p) {
+  return p ? `${p.id}: slide ${jointNumbers(p.slide, "slide")}; hinge ${jointNumbers(p.hinge, "hinge")}` : "";
+}
+
+function presetTable() {
+  const rows = Object.values(state.presets);
+  return el("table", {id: "presets"},
+    el("thead", {}, el("tr", {}, ["preset", "slide (drawers)", "hinge (doors, flaps)", "source"].map(
+      (h) => el("th", {}, h)))),
+    el("tbody", {}, rows.map((p) => el("tr", {"data-id": p.id},
+      el("th", {}, p.id, el("br"), el("span", {class: "note"}, p.name), p.in_default_set
+        ? el("span", {class: "badge"}, "default") : null),
+      el("td", {}, jointNumbers(p.slide, "slide")), el("td", {}, jointNumbers(p.hinge, "hinge")),
+      el("td", {class: "note"}, `${p.source.kind}: ${p.source.reference || ""}`)))));
+}
 
 // ---- 3D view ----------------------------------------------------------------------------------------------
 // three.js is loaded only when a panel shows a model (a module import from this classic script).
@@ -178,7 +276,7 @@ function closeDetail(push) {
   $("#detail").hidden = true;
   document.body.classList.remove("with-detail");
   for (const c of document.querySelectorAll(".card.selected")) c.classList.remove("selected");
-  if (push) history.pushState({}, "", "/catalog" + (activeTab() === "bases" ? "#bases" : ""));
+  if (push) history.pushState({}, "", "/catalog" + location.search + (activeTab() === "handles" ? "" : `#${activeTab()}`));
 }
 
 function select(card) {
@@ -188,7 +286,7 @@ function select(card) {
 
 async function openHandle(id, push) {
   const h = await getJSON(`/api/catalog/handles/${path(id)}`);
-  if (push) history.pushState({}, "", `/catalog/handle/${path(id)}`);
+  if (push) history.pushState({}, "", `/catalog/handle/${path(id)}${location.search}`);
   showTab("handles");
   select(document.querySelector(`#handle-grid .card[data-id="${CSS.escape(id)}"]`));
   const dims = Object.entries(h.display).filter(([k]) => !["id", "type"].includes(k));
@@ -228,7 +326,7 @@ async function openHandle(id, push) {
 
 async function openBase(id, push) {
   const b = await getJSON(`/api/catalog/bases/${path(id)}`);
-  if (push) history.pushState({}, "", `/catalog/base/${path(id)}`);
+  if (push) history.pushState({}, "", `/catalog/base/${path(id)}${location.search}`);
   showTab("bases");
   select(document.querySelector(`#base-grid .card[data-id="${CSS.escape(id)}"]`));
   const dims = Object.entries(b.display).filter(([k]) => k !== "id");
@@ -248,21 +346,22 @@ async function openBase(id, push) {
 }
 
 // ---- tabs, routes, start ----------------------------------------------------------------------------------
-function activeTab() { return $("#bases-tab").hidden ? "handles" : "bases"; }
+function activeTab() { return TABS.find((tab) => !$(`#${tab}-tab`).hidden) || "handles"; }
 
 function showTab(tab) {
-  $("#handles-tab").hidden = tab !== "handles";
-  $("#bases-tab").hidden = tab !== "bases";
+  for (const t of TABS) $(`#${t}-tab`).hidden = tab !== t;
   for (const b of document.querySelectorAll("#tabs button")) b.classList.toggle("active", b.dataset.tab === tab);
 }
 
 async function route() {
   const match = location.pathname.match(/^\/catalog\/(handle|base)\/(.+)$/);
+  restoreFilters();
+  applyFilters();
   try {
     if (!match) {
       $("#detail").hidden = true;
       document.body.classList.remove("with-detail");
-      showTab(location.hash === "#bases" ? "bases" : "handles");
+      showTab(TABS.includes(location.hash.slice(1)) ? location.hash.slice(1) : "handles");
     } else {
       const id = match[2].split("/").map(decodeURIComponent).join("/");
       await (match[1] === "handle" ? openHandle(id, false) : openBase(id, false));
@@ -278,9 +377,12 @@ function fail(err) {
 }
 
 async function start() {
-  const [h, b, r] = await Promise.all([getJSON("/api/catalog/handles"), getJSON("/api/catalog/bases"),
-                                       getJSON("/teleop/robots.json")]);
+  const [h, b, r, p] = await Promise.all([getJSON("/api/catalog/handles"), getJSON("/api/catalog/bases"),
+                                          getJSON("/teleop/robots.json"), getJSON("/api/catalog/presets")]);
   state.robots = r;
+  state.presets = Object.fromEntries(p.presets.map((preset) => [preset.id, preset]));
+  $("#n-presets").textContent = `(${p.count})`;
+  $("#preset-table").replaceChildren(presetTable());
   state.handles = h.handles;
   state.bases = b.bases;
   $("#n-handles").textContent = `(${h.count})`;
@@ -298,7 +400,6 @@ async function start() {
   $("#bases-count").textContent = `${b.count} base units; each pairs with the handles that fit every one of its `
     + "fronts.";
   setupFilters(h.finishes);
-  applyFilters();
   for (const button of document.querySelectorAll("#tabs button")) {
     button.addEventListener("click", () => { showTab(button.dataset.tab); closeDetail(true); });
   }
