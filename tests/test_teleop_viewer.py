@@ -274,10 +274,27 @@ def test_a_display_without_an_x_server_is_one_line(rik, monkeypatch: pytest.Monk
 def test_a_late_frame_drops_steps_instead_of_jumping() -> None:
     """The loop's pacing: steps due on time run; after a late frame at most CATCH_UP run and the rest are dropped,
     so the next frame is on time again (no burst)."""
-    from rik.teleop.desktop import CATCH_UP, due_steps
+    from rik.teleop.pacing import CATCH_UP, due_steps
 
     assert due_steps(now=10.0, next_tick=10.01, dt=0.05) == (0, 10.01)
     assert due_steps(now=10.0, next_tick=9.96, dt=0.05) == (1, pytest.approx(10.01))
     steps, next_tick = due_steps(now=10.0, next_tick=8.0, dt=0.05)  # a frame 2 s late
     assert steps == CATCH_UP <= 2 and next_tick == 10.0
     assert due_steps(now=10.02, next_tick=next_tick, dt=0.05)[0] == 1
+
+
+def test_the_station_keeps_real_time_when_its_renders_are_slower_than_a_control_period() -> None:
+    """The browser station's pacing (up to MAX_CATCH_UP steps per render): with renders of 80 ms against 50 ms
+    control steps, the 25 renders of 2 s (at 0, 0.08 .. 1.92 s) run the 39 control steps due by then (at 0, 0.05
+    .. 1.90 s: none dropped), never more than the cap at once; a 1 s stall runs the cap and the clock starts again from then (no burst)."""
+    from rik.teleop.pacing import due_steps
+    from rik.teleop.station import MAX_CATCH_UP
+
+    now, next_tick, total, renders = 0.0, 0.0, 0, 0
+    while now < 2.0 - 1e-9:
+        steps, next_tick = due_steps(now, next_tick, 0.05, MAX_CATCH_UP)
+        assert 1 <= steps <= MAX_CATCH_UP
+        total, renders, now = total + steps, renders + 1, now + 0.08
+    assert (total, renders) == (39, 25)
+    steps, next_tick = due_steps(now + 1.0, next_tick, 0.05, MAX_CATCH_UP)
+    assert steps == MAX_CATCH_UP and next_tick == now + 1.0

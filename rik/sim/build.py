@@ -182,6 +182,7 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
                          finger_qpos, gripper_geoms, front_bodies,
                          name2id(mujoco.mjtObj.mjOBJ_SITE, GRIPPER_PREFIX + "tcp"), arm_ctrl, jaw_ctrl, effects,
                          FloatingDrive(base_qpos, finger_qpos, arm_ctrl, jaw_ctrl))
+    scene.spec = spec
     scene.reset()
     return scene
 

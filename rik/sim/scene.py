@@ -126,6 +126,9 @@ class SimScene:
     """How the robot takes the target pose (:mod:`rik.sim.robots.drive`); set by :func:`build_scene`."""
     robot: Robot | None = None
     """The catalog entry of an arm (None: the Hand-E of :attr:`gripper`)."""
+    spec: mujoco.MjSpec | None = None
+    """The spec :attr:`model` was compiled from (set by :func:`rik.sim.build.build_scene`): a view of the scene
+    (the teleop station's decimated view model) is compiled from a copy of it; the physics never reads it."""
 
     @property
     def robot_id(self) -> str:

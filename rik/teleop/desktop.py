@@ -42,6 +42,7 @@ import numpy as np
 from rik.errors import RikError
 from rik.teleop.feedback import front_text, grasp_text, motion_text
 from rik.teleop.keys import COMMAND_KEYS, MOTION_KEYS, keymap_rows, velocity
+from rik.teleop.pacing import due_steps
 from rik.teleop.session import TeleopSession, check_time_limit, handle_text, time_text
 from rik.teleop.window import CAMERAS, TeleopWindow, open_display
 
@@ -50,8 +51,6 @@ if TYPE_CHECKING:
     from rik.schemas.episodes import EpisodeMeta
     from rik.schemas.robots import Robot
 
-CATCH_UP = 2
-"""Control steps at most per frame when the loop has fallen behind real time; older missed steps are dropped."""
 MAX_FPS = 60.0
 """Frames per second the window is drawn at most (no vsync under a virtual display)."""
 STATUS_PERIOD = 1.0
@@ -264,17 +263,6 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
         say(f"quit without saving: episode {session.episode} ({session.recorder.steps / scene.control_fps:.1f} s) "
             "discarded")
     return controls.saved
-
-
-def due_steps(now: float, next_tick: float, dt: float) -> tuple[int, float]:
-    """How many control steps are due at ``now`` (s, a monotonic clock) when the next was due at ``next_tick`` and
-    they come every ``dt``, and when the next one is due after them: at most :data:`CATCH_UP`; steps missed
-    beyond those are dropped, so a late frame never turns into a burst of steps (a jump)."""
-    steps = 0
-    while next_tick <= now and steps < CATCH_UP:
-        steps += 1
-        next_tick += dt
-    return steps, max(next_tick, now)
 
 
 def _loop(session: TeleopSession, controls: Controls, window: TeleopWindow) -> None:

@@ -3,6 +3,12 @@ control rate (20 Hz) that owns the :class:`rik.teleop.session.TeleopSession` and
 pushes camera frames and status to every connected browser through a latest-frame slot per client (a slow client
 skips frames, never queues them). The wire protocol is described in :mod:`rik.web.teleop`, which serves the stations.
 
+The simulated world keeps its own clock (:func:`rik.teleop.pacing.due_steps`): when the two cameras' renders
+take longer than a control period (an arm's scene on a CPU rasteriser), the thread runs every control step that
+came due before it renders again, so frames drop and simulated time keeps pace with the wall clock (up to
+:data:`MAX_CATCH_UP` steps per render). Each is a whole control step with the input held at its time, recorded as
+at one step per render; replay is unchanged. The cameras render the scene's view model (:mod:`rik.teleop.frames`).
+
 Threads: websocket handlers (the event loop) only hand inputs and commands to the station under its lock; the
 station thread does all simulation and rendering (a MuJoCo GL context belongs to the thread that made it).
 """
@@ -24,6 +30,7 @@ import numpy as np
 
 from rik.errors import RikError, os_error_text
 from rik.teleop.keys import FINE_FACTOR
+from rik.teleop.pacing import due_steps
 from rik.teleop.session import TeleopSession, check_time_limit
 
 if TYPE_CHECKING:
@@ -45,6 +52,12 @@ BUILDING = "building the variant..."
 KEPT_IN_MEMORY = "the episode is kept in memory: free some space and press Save again"
 PAUSED = "a draft was kept: Continue, Save or Discard first"
 BAD_VIEW = "ignored a view message: give azimuth and elevation in degrees (each within +-360), or reset: true"
+
+
+MAX_EPISODE_ID = 255
+"""Longest episode id a replay command may name (a file name's limit)."""
+MAX_REPLAY_BYTES = 256 * 2**20
+"""Largest states file a station replays from its episodes folder, bytes (an hour at 20 Hz is a few MB)."""
 
 
 DEFAULT_MAX_STATIONS = 4
@@ -172,6 +185,10 @@ def parse_view(msg: dict[str, Any]) -> tuple[float, float] | None | str:
             not all(math.isfinite(t) and abs(t) <= MAX_VIEW_TURN for t in turn):
         return BAD_VIEW
     return turn
+
+
+MAX_CATCH_UP = 4
+"""Control steps a station runs at most between two renders (0.2 s simulated at 20 Hz)."""
 
 
 def build_station_scene(config: StationConfig, variant: str, robot: str) -> SimScene:
@@ -306,6 +323,12 @@ class Station:
                     return
                 self.view_turn = (0.0, 0.0) if turn is None else (self.view_turn[0] + turn[0],
                                                                    self.view_turn[1] + turn[1])
+            elif kind == "command" and msg.get("name") == "replay" and "episode" in msg:
+                episode = msg["episode"]
+                if not isinstance(episode, str) or not 0 < len(episode) <= MAX_EPISODE_ID:
+                    client.notice = "ignored a replay command: its episode must be an episode id (text)"
+                    return
+                self.commands.append((client, f"replay:{episode}"))
             elif kind == "command" and msg.get("name") in ("save", "discard", "toggle_grip", "toggle_motion", "replay",
                                                           "continue"):
                 self.commands.append((client, str(msg["name"])))
@@ -352,7 +375,9 @@ class Station:
         sent: deque[float] = deque(maxlen=20)
         try:
             while not self.stop.is_set():
-                self._step(replay_data)
+                steps, next_tick = due_steps(time.monotonic(), next_tick, dt, MAX_CATCH_UP)
+                for _ in range(steps):  # the world keeps its own clock: a slow render drops frames, not time
+                    self._step(replay_data)
                 with self.lock:  # each tab's size as it is now: a tab may ask for another while this renders
                     sizes = [(c, c.size) for c in self.clients]
                     clients = [c for c, _ in sizes]
@@ -372,12 +397,9 @@ class Station:
                 if len(sent) > 1:
                     span = sent[-1] - sent[0]
                     self.fps = (len(sent) - 1) / span if span > 0 and time.monotonic() - sent[-1] < 1.0 else 0.0
-                next_tick += dt
                 delay = next_tick - time.monotonic()
                 if delay > 0:
                     self.stop.wait(delay)
-                else:
-                    next_tick = time.monotonic()  # behind: no catching up in a burst
         except Exception as exc:  # noqa: BLE001 -- shown on the page instead of a station that says nothing
             self.error = f"the station stopped: {type(exc).__name__}: {exc}"
             self.ready = False
@@ -402,7 +424,7 @@ class Station:
             try:
                 self._command(name, replay_data)
             except (RikError, OSError) as exc:  # a saved episode removed before its replay...: said, never fatal
-                self.message = f"{name.lstrip('_')} failed: {exc}"
+                self.message = f"{name.lstrip('_').split(':')[0]} failed: {exc}"
         if self.replay is not None:
             self._replay_row(replay_data)
             return
@@ -425,7 +447,7 @@ class Station:
                 else:
                     self.draft = None if path is None else str(path)
             return
-        if self.replay is not None and name != "replay":
+        if self.replay is not None and not name.startswith("replay"):
             self.message = "replaying the last saved episode: wait until it ends"
             return
         self.message = ""
@@ -446,12 +468,14 @@ class Station:
         elif name == "continue":
             self.draft, self.paused = None, False
             session.message = "continuing the episode"
-        elif name == "replay":
-            self._start_replay()
+        elif name.startswith("replay"):
+            self._start_replay(name.partition(":")[2] or None)
         elif self.paused:
             self.message = PAUSED
 
-    def _start_replay(self) -> None:
+    def _start_replay(self, episode: str | None = None) -> None:
+        """Replay the last episode saved here, or ``episode``: one saved in this station's episodes folder for its
+        variant and robot (the episodes page's replay link), read whole and checked first."""
         from rik.episodes.episode import read_episode, states
 
         session = self.session
@@ -460,12 +484,41 @@ class Station:
             self.replay = None
             self.message = "replay stopped"
             return
-        if session.last_saved is None:
+        if episode is not None:
+            path = self._saved_episode(episode)
+        elif session.last_saved is None:
             self.message = "nothing saved in this session yet: save an episode to replay it"
             return
-        _, table = read_episode(session.last_saved.path)
-        self.replay = {"episode": session.last_saved.meta.id, "states": states(table), "row": 0,
+        else:
+            path = session.last_saved.path
+        meta, table = read_episode(path)
+        self.replay = {"episode": meta.id, "states": states(table), "row": 0,
                        "openings": table.column("opening").to_numpy()}
+
+    def _saved_episode(self, episode: str) -> Path:
+        """The folder of ``episode`` in the episodes folder, when it is this station's variant's and robot's and
+        its states file is at most :data:`MAX_REPLAY_BYTES`; else a one-line RikError."""
+        import mujoco
+
+        from rik.episodes.episode import STATES, read_meta
+        from rik.paths import inside
+
+        assert self.session is not None
+        path = inside(self.config.episodes, episode, what="episode id")
+        if episode.startswith(".") or not (path / "meta.json").is_file():
+            raise RikError(f"no episode {episode!r} in {self.config.episodes}")
+        meta = read_meta(path)
+        if (meta.variant, meta.robot) != (self.variant, self.robot):
+            raise RikError(f"episode {episode} is of variant {meta.variant} with robot {meta.robot}, not this "
+                           f"station's ({self.variant} with {self.robot}): open its own replay link")
+        model = self.session.scene.model
+        if meta.state_size != mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_INTEGRATION):
+            raise RikError(f"episode {episode}: its states ({meta.state_size} numbers) do not fit this station's model")
+        size = (path / STATES).stat().st_size
+        if size > MAX_REPLAY_BYTES:
+            raise RikError(f"episode {episode}: {path / STATES} is {size / 2**20:.0f} MiB, more than a station "
+                           f"replays ({MAX_REPLAY_BYTES / 2**20:.0f} MiB)")
+        return path
 
     def _replay_row(self, data: Any) -> None:
         import mujoco
