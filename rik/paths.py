@@ -15,6 +15,7 @@ if TYPE_CHECKING:
 
     import numpy as np
     from matplotlib.figure import Figure
+    from pydantic import BaseModel
 
 
 def cache_dir() -> Path:
@@ -258,3 +259,27 @@ def save_figure(fig: Figure, path: Path, dpi: int = 120) -> Path:
     finally:
         pyplot().close(fig)
     return path
+
+
+def read_meta_file(path: Path, model: type[BaseModel]) -> dict[str, Any]:
+    """The JSON object in ``path``, checked against ``model`` (which says what rik reads of it); a file that cannot
+    be read or is damaged raises a :class:`RikError` line naming the file and the field."""
+    from pydantic import ValidationError
+
+    from rik.errors import RikError
+
+    try:
+        data = read_json(path)
+    except OSError as exc:
+        raise RikError(f"{path}: cannot read it ({exc.strerror})") from None
+    except ValueError as exc:  # too large, not UTF-8, not JSON, nested too deeply
+        raise RikError(f"{path}: damaged: not the JSON rik wrote ({str(exc).splitlines()[0]})") from None
+    if not isinstance(data, dict):
+        raise RikError(f"{path}: damaged: holds a JSON {type(data).__name__}, not the object rik wrote")
+    try:
+        model.model_validate(data)
+    except ValidationError as exc:
+        first = exc.errors(include_url=False)[0]
+        where = ".".join(str(p) for p in first["loc"])
+        raise RikError(f"{path}, field '{where}': damaged: {first['msg'][0].lower()}{first['msg'][1:]}") from None
+    return data

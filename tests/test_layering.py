@@ -45,8 +45,8 @@ FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
                        "preset.")),
     (("rik.envs", "The gymnasium environment rik/OpenFront-v0 that LeRobot and `rik eval` run policies in."),
      ("rik.exporters", "LeRobot v3.0 export: frames, features, the card, the check of a finished export."),
-     ("rik.web", "The web app (`rik serve`): the catalog pages and the teleop station behind a launch-token "
-                 "gate.")),
+     ("rik.web", "The web app (`rik serve`): the catalog pages (with a 3D view), the teleop station and the page "
+                 "of episodes and datasets, behind a launch-token gate.")),
     (("rik.evaluation", "Policies on the benchmark (`rik eval`): a saved LeRobot policy checked, loaded and run."),),
     (("rik.dataset", "`rik dataset build`: a spec planned into units, run locally or on Ray, merged, verified."),),
     (("rik.cli", "The `rik` command (typer + rich): parses and prints, the library does the work."),),

@@ -18,6 +18,8 @@ def serve(port: Annotated[int, typer.Option("--port", help="Port to listen on (0
           = Path("episodes"),
           variants: Annotated[Path, typer.Option("--variants", help="Directory of built variants.")]
           = Path("variants"),
+          datasets: Annotated[Path, typer.Option("--datasets", help="Directory of built datasets (each subfolder "
+                                                 "one) that the episodes page lists.")] = Path("datasets"),
           max_seconds: Annotated[float | None, typer.Option("--max-seconds", help="Time limit of a teleoperated "
                                                             "episode, simulated s (default: none).")] = None,
           max_stations: Annotated[int, typer.Option("--max-stations", help="Teleop stations alive at once (each "
@@ -32,7 +34,8 @@ def serve(port: Annotated[int, typer.Option("--port", help="Port to listen on (0
           robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
     """Serve the web app: browse the catalog (thumbnails, filters, fidelity) and teleoperate any pairing in the
     browser (keyboard, gamepad) with any robot of the catalog (--robot: the stations' default; a station page
-    takes ?robot=), recording episodes into --out. The printed address carries a token made for this launch:
+    takes ?robot=), recording episodes into --out; /episodes lists them (each with a link that replays it) and the
+    datasets in --datasets. The printed address carries a token made for this launch:
     other pages in the same browser cannot use the app (docs/reliability.md)."""
     from rik.registry.load import load_catalog
     from rik.web.app import AppConfig
@@ -41,7 +44,8 @@ def serve(port: Annotated[int, typer.Option("--port", help="Port to listen on (0
     con = console()
     config = AppConfig(load_catalog(overlays(catalog)), variants=variants, episodes=out,
                        overlays=tuple(overlays(catalog)), max_seconds=max_seconds, robot=robot,
-                       max_stations=max_stations, idle_release=idle_release, allowed_hosts=tuple(allow_host or ()))
+                       max_stations=max_stations, idle_release=idle_release, allowed_hosts=tuple(allow_host or ()),
+                       datasets=datasets)
 
     def ready(url: str) -> None:
         p = url.rsplit(":", 1)[1].split("/")[0]

@@ -4,12 +4,11 @@ turns a damaged file into one line naming the file and the field."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from rik.errors import RikError
+from rik.paths import read_meta_file
 
-if TYPE_CHECKING:
-    from pydantic import BaseModel
+__all__ = ["BUILD_META", "DATASET_META", "read_dataset_meta", "read_meta_file"]
 
 DATASET_META = "rik_dataset.json"
 """``meta/rik_dataset.json``: the spec, its hash, versions, variant hashes, counts, outcomes and file checksums;
@@ -29,27 +28,3 @@ def read_dataset_meta(root: Path) -> dict[str, Any] | None:
     if not path.is_file():
         return None
     return read_meta_file(path, DatasetRecord)
-
-
-def read_meta_file(path: Path, model: type[BaseModel]) -> dict[str, Any]:
-    """The JSON object in ``path``, checked against ``model`` (which says what rik reads of it); a file that cannot
-    be read or is damaged raises a :class:`RikError` line naming the file and the field."""
-    from pydantic import ValidationError
-
-    from rik.paths import read_json
-
-    try:
-        data = read_json(path)
-    except OSError as exc:
-        raise RikError(f"{path}: cannot read it ({exc.strerror})") from None
-    except ValueError as exc:  # too large, not UTF-8, not JSON, nested too deeply
-        raise RikError(f"{path}: damaged: not the JSON rik wrote ({str(exc).splitlines()[0]})") from None
-    if not isinstance(data, dict):
-        raise RikError(f"{path}: damaged: holds a JSON {type(data).__name__}, not the object rik wrote")
-    try:
-        model.model_validate(data)
-    except ValidationError as exc:
-        first = exc.errors(include_url=False)[0]
-        where = ".".join(str(p) for p in first["loc"])
-        raise RikError(f"{path}, field '{where}': damaged: {first['msg'][0].lower()}{first['msg'][1:]}") from None
-    return data

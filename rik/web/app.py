@@ -1,11 +1,13 @@
-"""The web app: one FastAPI application with the catalog (``/catalog``) and the teleop station (``/teleop``),
-served by uvicorn on a socket bound before anything else starts, so that a port in use fails at once."""
+"""The web app: one FastAPI application with the catalog (``/catalog``), the teleop station (``/teleop``) and the
+page of recorded episodes and built datasets (``/episodes``), served by uvicorn on a socket bound before anything
+else starts, so that a port in use fails at once."""
 
 from __future__ import annotations
 
 import errno
 import socket
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
@@ -30,6 +32,8 @@ class AppConfig(StationConfig):
     """The launch token every request must show (:mod:`rik.web.guard`): in the printed address, then a cookie."""
     allowed_hosts: tuple[str, ...] = ()
     """Host names the app answers to besides localhost's, the ``--host`` it listens on and IP literals."""
+    datasets: Path = Path("datasets")
+    """Folder of built datasets (each subfolder one, from ``rik dataset build``) that ``/episodes`` lists."""
 
     def check(self) -> None:
         """Settings a user gave that cannot work fail here, before the server starts."""
@@ -85,6 +89,7 @@ def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = No
 
     from rik import __version__
     from rik.web import catalog as catalog_routes
+    from rik.web import episodes as episode_routes
     from rik.web import teleop as teleop_routes
 
     app = FastAPI(title="rik", version=__version__, docs_url="/api/docs", redoc_url=None)
@@ -92,6 +97,7 @@ def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = No
     app.state.config = config
     app.include_router(catalog_routes.router)
     app.include_router(teleop_routes.router)
+    app.include_router(episode_routes.router)
     teleop_routes.install(app, scenes)
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
 

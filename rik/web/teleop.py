@@ -43,6 +43,10 @@ over 64 KiB closes the connection with code 1009):
   commands no motion (a tab that lost focus);
 - ``{"type": "command", "name": "save" | "discard" | "toggle_grip" | "toggle_motion" | "replay" | "continue" |
   "take_control"}``;
+- ``{"type": "command", "name": "replay", "episode": "<episode id>"}`` replays an episode saved in the app's episodes
+  folder (the episodes page's link, ``/teleop/<variant>?robot=<id>&replay=<episode id>``, sends it once this tab
+  controls the ready station): only one of this station's variant and robot, its states file at most 256 MiB;
+  otherwise the station's message says why in one line;
 - ``{"type": "view", "azimuth": degrees, "elevation": degrees}`` turns the front view by that much (each within
   +-360), ``{"type": "view", "reset": true}`` puts it back; from the controlling tab (the view is the station's);
 - ``{"type": "size", "width": 320|640, "height": 240|480}``.

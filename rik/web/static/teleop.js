@@ -5,6 +5,9 @@
 (function () {
   const variant = decodeURIComponent(location.pathname.replace(/\/+$/, "").split("/").pop());
   const robotParam = new URLSearchParams(location.search).get("robot"); // null: the server's robot
+  // ?replay=<episode id> (the episodes page's link): once this tab controls the ready station, replay that episode
+  const replayParam = new URLSearchParams(location.search).get("replay");
+  let replaySent = false;
   const $ = (id) => document.getElementById(id);
   const root = $("station");
   const DEADZONE = 0.15;
@@ -124,6 +127,9 @@
   function pct(x) { return (100 * x).toFixed(0) + " %"; }
   function showStatus(st) {
     status = st;
+    if (replayParam && !replaySent && st.ready && st.role === "controller") {
+      replaySent = send({type: "command", name: "replay", episode: replayParam});
+    }
     const d = root.dataset;
     d.ready = String(!!st.ready);
     d.role = st.role || "";
