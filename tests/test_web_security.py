@@ -189,8 +189,10 @@ def test_a_page_of_another_origin_in_the_same_browser_cannot_act(variants: Path,
 
 
 def test_malformed_messages_get_a_notice_and_keep_the_tab(variants: Path, tmp_path: Path) -> None:
-    """A binary frame, non-JSON text, Infinity and NaN, a seq out of range, deep nesting, a list, an unknown type:
-    each is answered with a notice in the tab's status; the tab stays connected and a good input then moves."""
+    """A binary frame, non-JSON text, Infinity and NaN, a seq out of range, deep nesting, a list, an unknown type, a
+    replay of an episode that is no id: each is answered with a notice in the tab's status; a replay of a path out
+    of the episodes folder or of a hidden folder is refused in one line; the tab stays connected and a good input
+    then moves."""
     app = make_app(variants, tmp_path / "ep")
     bad = [(b"\x00\x01binary", "binary message"),
            ("not json", "not JSON"),
@@ -203,13 +205,19 @@ def test_malformed_messages_get_a_notice_and_keep_the_tab(variants: Path, tmp_pa
            ("[" * 30_000 + "]" * 30_000, "nested too deeply"),
            ("[1, 2]", "not a JSON object"),
            ('{"type": "launch"}', "ignored message type 'launch'"),
-           ('{"type": "size", "width": 1e9, "height": 2}', "choose one of")]
+           ('{"type": "size", "width": 1e9, "height": 2}', "choose one of"),
+           ('{"type": "command", "name": "replay", "episode": 7}', "its episode must be an episode id"),
+           ('{"type": "command", "name": "replay", "episode": "' + "x" * 300 + '"}', "its episode must be")]
     with served_app(app) as url, connect(ws_url(url), open_timeout=WAIT, max_size=None) as ws:
         statuses(ws, lambda s: s.get("ready") is True, "ready")
         for message, notice in bad:
             ws.send(message)
             st = statuses(ws, lambda s, n=notice: n in (s.get("notice") or ""), f"the notice {notice!r}")
             assert st["role"] == "controller"
+        for episode, says in (("../../etc", "would lead outside"), (".drafts", "no episode '.drafts'")):
+            ws.send(json.dumps({"type": "command", "name": "replay", "episode": episode}))  # outside the folder
+            st = statuses(ws, lambda s, w=says: w in (s.get("message") or ""), f"the refusal of {episode}")
+            assert st["message"].startswith("replay failed: ") and st["replay"] is None
         st = record_steps(ws, 3, seq=7)
         assert st["notice"] == "" and st["session"]["steps"] >= 3
         with connect(ws_url(url), open_timeout=WAIT) as big:  # over 64 KiB: closed (1009) before it is read whole
