@@ -275,33 +275,34 @@ def test_bad_spec(rik, tmp_path, case: str) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == written  # no out, out.work or variants
 
 
-def test_spec_robot_records_and_exports_that_robot(rik, tmp_path, variants) -> None:
-    """``robot: so100``: the episodes are the SO-100's (their ids say so), the dataset is in its layout; a spec that
+@pytest.mark.parametrize("robot", ["so100", "so101"])
+def test_spec_robot_records_and_exports_that_robot(rik, tmp_path, variants, robot: str) -> None:
+    """``robot: so100`` (or ``so101``): the episodes are that arm's (their ids say so), the dataset is in its layout; a spec that
     names the Hand-E, rik's default, hashes as one that names no robot (specs from before robots keep their hash)."""
     import json
 
     from rik.dataset.spec import load_spec, spec_hash
 
-    spec = tmp_path / "so100.yaml"
-    spec.write_text("repo_id: local/rik-so100\nrobot: so100\nvariants:\n  ids: [drawer-chest-80__two_point-bow-128__normal]\n"
+    spec = tmp_path / f"{robot}.yaml"
+    spec.write_text(f"repo_id: local/rik-{robot}\nrobot: {robot}\nvariants:\n  ids: [drawer-chest-80__two_point-bow-128__normal]\n"
                     "operators:\n  - strategy: contact_rich\nmax_seconds: 0.5\nstreams: []\n")
     hand_e = tmp_path / "hand-e.yaml"
-    hand_e.write_text(spec.read_text().replace("robot: so100", "robot: hand-e"))
+    hand_e.write_text(spec.read_text().replace(f"robot: {robot}", "robot: hand-e"))
     default = tmp_path / "default.yaml"
-    default.write_text(spec.read_text().replace("robot: so100\n", ""))
+    default.write_text(spec.read_text().replace(f"robot: {robot}\n", ""))
     assert spec_hash(load_spec(hand_e)) == spec_hash(load_spec(default)) != spec_hash(load_spec(spec))
     out = tmp_path / "ds"
     r = rik("dataset", "build", str(spec), "--out", str(out), "-j", "1", "--variants", str(variants))
     assert r.code == 0, r
-    assert "robot: so100" in r.out
+    assert f"robot: {robot}" in r.out
     warning = next(line for line in r.out.splitlines() if line.startswith("warning: "))  # one variant
     assert " never change in this dataset (" in warning and "observation.environment_state: " in warning
     assert "grasp_x" in warning
     episodes = sorted(p.name for p in (tmp_path / "ds.work" / "episodes").iterdir() if not p.name.startswith("."))
-    assert episodes == ["drawer-chest-80__two_point-bow-128__normal__drawer-1__contact_rich.so100__s0000"]
+    assert episodes == [f"drawer-chest-80__two_point-bow-128__normal__drawer-1__contact_rich.{robot}__s0000"]
     info = json.loads((out / "meta" / "info.json").read_text())
     assert info["robot_type"] == "so_follower" and info["features"]["action"]["names"][0] == "shoulder_pan.pos"
-    assert "rik catalog robot `so100`" in (out / "README.md").read_text()
+    assert f"rik catalog robot `{robot}`" in (out / "README.md").read_text()
     assert rik("dataset", "verify", str(out)).code == 0
 
 

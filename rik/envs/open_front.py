@@ -5,7 +5,7 @@
   name ``options={"variant": ..., "front": ..., "preset": ...}``. The gripper starts at a randomised pose in front of
   the handle: a reset with seed ``S`` starts where ``rik record --seed S`` starts on that variant;
 - **robot** (``robot=``, a catalog id, :mod:`rik.sim.robots.layout`): ``hand-e`` (rik's floating gripper, the
-  default), ``so100`` or ``panda-2f85`` (an arm at its mount beside the handle);
+  default), ``so100``, ``so101`` or ``panda-2f85`` (an arm at its mount beside the handle);
 - **observation** (a dict, shaped as LeRobot's environments return them): ``agent_pos`` = the robot's state as
   its export's ``observation.state`` holds it (the Hand-E's :data:`rik.sim.observation.ROBOT_STATE_NAMES`; an
   arm's joint positions and gripper, in its layout's names and units, e.g. the SO-100's degrees and gripper

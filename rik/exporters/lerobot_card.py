@@ -22,17 +22,11 @@ NORMALIZATION = {"act": '{"VISUAL": "MEAN_STD", "STATE": "MEAN_STD", "ENV": "MEA
                  "diffusion": '{"VISUAL": "MEAN_STD", "STATE": "MIN_MAX", "ENV": "MIN_MAX", "ACTION": "MIN_MAX"}'}
 """``--policy.normalization_mapping`` for ``lerobot-train``, per policy: its default mapping plus ``ENV`` (lerobot
 0.6.1's ACT and diffusion leave ``observation.environment_state`` unnormalised otherwise)."""
-CALIBRATION_NOTES = {
-    "so_follower": "**Joint zeros.** The joint positions are the simulated model's (MuJoCo Menagerie's SO-ARM100: 0 "
-                   "where its MJCF puts 0, its axes' signs), not LeRobot's calibration of a real arm: LeRobot's "
-                   "SO follower reads each body motor in degrees from the middle of the range recorded when the arm "
-                   "was calibrated, and the gripper as 0-100 over its calibrated range. The names and units match, "
-                   "but before co-training with real SO-100 data expect a fixed offset (and possibly a sign) per "
-                   "joint: estimate it from real episodes, e.g. from a pose both hold, and add it to one side.",
-}
-"""What a robot type's card says about its joint zeros, by ``robot_type``."""
 UNIT_WORDS = {"rad": "rad", "deg": "degrees", "fraction": "closure: 0 open, 1 closed",
               "percent": "percent of the opening: 100 open, 0 closed"}
+LEROBOT_STEPS = 4096
+"""Steps per turn of the STS3215's encoder (lerobot's ``MODEL_RESOLUTION['sts3215']``); its DEGREES mode divides by
+one less: ``(raw - mid) * 360 / 4095``, 0.024 % more than the angle, less than a step within a half turn."""
 CARD_FIELDS = "rik_card.json"
 """The card's fields, kept beside the dataset so that ``push`` can give the Hub the same card."""
 
@@ -64,8 +58,8 @@ def _range(values: list[float], unit: str) -> str:
 
 def robot_text(robot: Robot, layout: RobotLayout) -> str:
     """The card's section on the robot: its catalog name and id, its model's origin and licence, its mount, its
-    joints' and gripper's simulation parameters with their sources, and (for LeRobot's SO follower) what its
-    joint zeros are (markdown)."""
+    joints' and gripper's simulation parameters with their sources, and (for LeRobot's SO follower) how a real
+    arm's calibration maps onto its numbers (:func:`calibration_text`; markdown)."""
     g = robot.gripper
     lines = [f"**Robot: {robot.name}** (rik catalog robot `{robot.id}`, `robot_type` `{layout.robot_type}`).", "",
              f"- **Model:** {robot.model.origin}; licence {robot.model.licence}."]
@@ -100,10 +94,53 @@ def robot_text(robot: Robot, layout: RobotLayout) -> str:
                       "| damping (N·m·s/rad) |", "|---|---|---|---|---|---|---|"]
         lines += [f"| {x.name} | `{feature.get(x.name, '-')}` | {x.range[0]:g} .. {x.range[1]:g} | {x.torque:g} | "
                   f"{x.speed:g} | {x.stiffness:g} | {x.damping:g} |" for x in robot.joints.joints]
-    note = CALIBRATION_NOTES.get(layout.robot_type)
-    if note and not layout.is_pose:
+    note = calibration_text(robot, layout)
+    if note:
         lines += ["", note]
     return "\n".join(lines)
+
+
+def calibration_text(robot: Robot, layout: RobotLayout) -> str:
+    """For an arm whose layout counts joints from mid-range (LeRobot's SO follower): how a real follower's
+    calibration file maps onto the dataset's numbers, with each joint's 0 and the gripper's ends (markdown; empty
+    for other layouts)."""
+    import math
+
+    act = robot.gripper.actuation
+    if layout.is_pose or robot.joints is None or act is None or not any(
+            e.zero == "mid_range" for e in robot.lerobot.joints):
+        return ""
+    mid = [(name, joint, zero) for name, (joint, _), zero in zip(layout.state_names, layout.joints, layout.zeros,
+                                                                  strict=True) if joint is not None]
+    ranges = {j.name: j.range for j in robot.joints.joints}
+    rows = "\n".join(f"| `{name}` | {joint} | {math.degrees(ranges[joint][0]):.1f} .. "
+                     f"{math.degrees(ranges[joint][1]):.1f} | {math.degrees(zero):.1f} |" for name, joint, zero in mid)
+    same = act.ctrl_open == act.joint_open and act.ctrl_closed == act.joint_closed
+    command = ("the jaw servo's goal on the same scale, as a real follower's `Goal_Position`" if same else
+               f"rik's grip command on the same scale: 100 sets the jaw's goal at {act.ctrl_open:g} rad, 0 at "
+               f"{act.ctrl_closed:g} rad, past the closed end, so that the jaw presses what it holds with its servo's "
+               "capped force (a real follower's goal of 0 is the closed end, where its servo presses what it holds "
+               "with the force its P gain and torque limit give)")
+    return f"""**Calibration (LeRobot's SO follower).** The body joints are in degrees from the middle of each joint's
+range in the simulated model, where LeRobot's calibration puts a real arm's 0: `lerobot-calibrate` homes each motor
+at the middle of its travel and records its range of motion (`range_min`, `range_max` in the calibration file
+`~/.cache/huggingface/lerobot/calibration/robots/so_follower/<id>.json`, in steps of {LEROBOT_STEPS} a turn;
+`wrist_roll` gets the whole turn, 0-4095, so its 0 is the pose it was homed in), and the follower then reports
+`(raw - (range_min + range_max) / 2) * 360 / 4095` degrees. So a real arm reads the numbers here where its recorded
+range of motion is the model's range below, centred where the model's is (for `wrist_roll`: homed at the middle of
+the model's range); a real joint whose recorded range is off-centre from the model's by some degrees reads those
+degrees more or less than rik (measure it once, e.g. with the arm in a pose you can set in both, and add it to one
+side). The model's joint directions are taken as the servos'. rik writes plain degrees; LeRobot's 360/4095 scale
+differs from them by less than one step (0.088 degrees) within a half turn.
+
+| feature | model joint | model range (degrees) | 0 of the feature at the model's (degrees) |
+|---|---|---|---|
+{rows}
+
+`gripper.pos` is 0 with the jaw at {act.joint_closed:g} rad (closed) and 100 at {act.joint_open:g} rad (open), linear
+in the jaw's angle between: LeRobot's `RANGE_0_100`, `(raw - range_min) / (range_max - range_min) * 100`, with a
+calibration whose `range_min` is the closed jaw and `range_max` the open one (the follower's gripper is recorded so:
+0 closed, 100 open). Its action is {command}."""
 
 
 def _layout_bullets(layout: RobotLayout) -> tuple[str, str]:

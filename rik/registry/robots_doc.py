@@ -100,7 +100,8 @@ def _camera_and_layout(robot: dict[str, Any]) -> list[str]:
                 ""]
     lay = robot["lerobot"]
     if lay["layout"] == "joints":
-        names = ", ".join(f"`{e['name']}` ({e['unit']})" for e in lay["joints"])
+        names = ", ".join(f"`{e['name']}` ({e['unit']}{', 0 mid-range' if e.get('zero') == 'mid_range' else ''})"
+                          for e in lay["joints"])
         what = f"`observation.state` and `action`: {names}" + (
             "; `observation.ee_pose`: `ee.x` .. `ee.wz`" if lay["ee_pose"] else "")
     else:

@@ -95,7 +95,7 @@ class DatasetSpec(Frozen):
     operators: tuple[OperatorSpec, ...] = Field(min_length=1)
     robot: SimpleId = "hand-e"
     """The catalog robot that opens the fronts (``rik catalog list --kind robots``): ``hand-e`` (rik's floating
-    gripper), or an arm such as ``so100`` or ``panda-2f85``; the dataset is exported in its layout."""
+    gripper), or an arm such as ``so100``, ``so101`` or ``panda-2f85``; the dataset is exported in its layout."""
     episodes_per_variant: int = Field(default=1, ge=1, le=100_000)
     """Episodes of each operator on each variant."""
     seed: int = Field(default=0, ge=0, le=2**62)

@@ -265,7 +265,12 @@ class LayoutEntry(Frozen):
     """The robot joint it reads (None: the gripper)."""
     unit: Literal["rad", "deg", "fraction", "percent"]
     """A joint in rad or deg; the gripper as its closure: a fraction (0 open, 1 closed) or percent of opening
-    (100 open, 0 closed, as LeRobot's SO-100 calibrates it)."""
+    (100 open at ``joint_open``, 0 closed at ``joint_closed``, linear in the jaw joint's angle: LeRobot's
+    ``RANGE_0_100`` over a calibrated range from closed to open)."""
+    zero: Literal["model", "mid_range"] = "model"
+    """A joint's 0: the model's, or the middle of the joint's ``range`` (where LeRobot's calibration puts a real
+    arm's 0: its SO follower reads ``(raw - (range_min + range_max) / 2) * 360 / 4095`` degrees over the range of
+    motion recorded when calibrating)."""
 
 
 class LeRobotLayout(Frozen):
@@ -293,6 +298,10 @@ class LeRobotLayout(Frozen):
         for i, name in enumerate(names):
             if name in names[:i]:
                 raise FieldError(("joints", i, "name"), f"feature name '{name}' repeats (entry {names.index(name)})")
+        for i, entry in enumerate(self.joints):
+            if entry.joint is None and entry.zero != "model":
+                raise FieldError(("joints", i, "zero"), f"'{entry.name}' is the gripper: its 0 is the closed jaw "
+                                 "(zero: mid_range is for joints)")
         grippers = [i for i, j in enumerate(self.joints) if j.joint is None]
         if len(grippers) > 1:
             raise FieldError(("joints", grippers[1], "joint"), "only one entry may be the gripper (joint: null)")

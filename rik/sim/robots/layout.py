@@ -4,8 +4,9 @@ environment and ``rik eval`` so that a policy trained on an export runs in the e
 - the Hand-E (``layout: pose``): the robot's state of :data:`rik.sim.observation.ROBOT_STATE_NAMES` and the
   recorded action (target pose and gripper command, :data:`POSE_ACTION_NAMES`);
 - an arm (``layout: joints``): its joint positions in ``observation.state`` and the joint targets its servos were
-  given in ``action``, named and scaled as the catalog's ``lerobot.joints`` say (rad or deg; the gripper as a
-  closure fraction, 0 open and 1 closed, or as percent of its opening, 100 open and 0 closed), plus, where the
+  given in ``action``, named and scaled as the catalog's ``lerobot.joints`` say (rad or deg, from the model's 0 or
+  from the middle of the joint's range as LeRobot's calibration counts; the gripper as a closure fraction, 0 open
+  and 1 closed, or as percent of its opening, 100 open and 0 closed), plus, where the
   entry asks for it, ``observation.ee_pose``: the gripper frame in the arm's base frame, as LeRobot's
   end-effector names (``ee.x``, ``ee.y``, ``ee.z`` m; ``ee.wx``, ``ee.wy``, ``ee.wz``: a rotation vector, rad).
 """
@@ -41,6 +42,8 @@ class RobotLayout:
     ee_pose: bool
     joints: tuple[tuple[str | None, str], ...] = ()
     """An arm's (joint name or None for the gripper, unit) per state and action number."""
+    zeros: tuple[float, ...] = ()
+    """An arm's joint position (rad) that reads 0, per state and action number (0.0 for the gripper)."""
     robot: Robot | None = None
 
     @property
@@ -56,8 +59,9 @@ class RobotLayout:
         names = list(self.robot.joint_names)
         q = drive.joint_positions(scene)
         closure = min(max(drive.closure(scene), 0.0), 1.0)
-        return np.array([_to_unit(float(q[names.index(j)]), unit) if j is not None else _grip_to_unit(closure, unit)
-                         for j, unit in self.joints], np.float64)
+        return np.array([_to_unit(float(q[names.index(j)]) - zero, unit) if j is not None
+                         else _grip_to_unit(closure, unit) for (j, unit), zero in zip(self.joints, self.zeros,
+                                                                                       strict=True)], np.float64)
 
     # ---- action ---------------------------------------------------------------------------------------------
     def action(self, pose_action: np.ndarray, targets: np.ndarray) -> np.ndarray:
@@ -67,8 +71,9 @@ class RobotLayout:
             return np.asarray(pose_action, np.float64)
         names = list(self.robot.joint_names)
         grip = min(max(float(pose_action[6]), 0.0), 1.0)
-        return np.array([_to_unit(float(targets[names.index(j)]), unit) if j is not None else _grip_to_unit(grip, unit)
-                         for j, unit in self.joints], np.float64)
+        return np.array([_to_unit(float(targets[names.index(j)]) - zero, unit) if j is not None
+                         else _grip_to_unit(grip, unit) for (j, unit), zero in zip(self.joints, self.zeros,
+                                                                                    strict=True)], np.float64)
 
     def joint_targets(self, action: np.ndarray) -> tuple[np.ndarray, float]:
         """The inverse of :meth:`action` for an arm: (joint targets rad in the robot's joint order, gripper command
@@ -77,11 +82,11 @@ class RobotLayout:
         names = list(self.robot.joint_names)
         targets = np.zeros(len(names))
         grip = 0.0
-        for value, (joint, unit) in zip(np.asarray(action, np.float64), self.joints, strict=True):
+        for value, (joint, unit), zero in zip(np.asarray(action, np.float64), self.joints, self.zeros, strict=True):
             if joint is None:
                 grip = _grip_from_unit(float(value), unit)
             else:
-                targets[names.index(joint)] = _from_unit(float(value), unit)
+                targets[names.index(joint)] = _from_unit(float(value), unit) + zero
         return targets, min(max(grip, 0.0), 1.0)
 
     # ---- observation.ee_pose ----------------------------------------------------------------------------------
@@ -121,4 +126,13 @@ def robot_layout(robot: Robot | None) -> RobotLayout:
                            False)
     names = tuple(j.name for j in robot.lerobot.joints)
     return RobotLayout(robot.id, robot.lerobot.robot_type, names, names, robot.lerobot.ee_pose,
-                       tuple((j.joint, j.unit) for j in robot.lerobot.joints), robot)
+                       tuple((j.joint, j.unit) for j in robot.lerobot.joints),
+                       tuple(joint_zero(robot, j.joint) if j.joint is not None and j.zero == "mid_range" else 0.0
+                             for j in robot.lerobot.joints), robot)
+
+
+def joint_zero(robot: Robot, joint: str) -> float:
+    """The position (rad) of ``joint`` that LeRobot's calibration reads as 0: the middle of its range."""
+    assert robot.joints is not None
+    lo, hi = next(j.range for j in robot.joints.joints if j.name == joint)
+    return (lo + hi) / 2
