@@ -14,17 +14,18 @@ function cell(text, cls = "") {
 
 function pct(x) { return typeof x === "number" ? `${(100 * x).toFixed(1)} %` : "–"; }
 
+function damaged(tr, name, error, span) { // a row whose metadata could not be read: its name and the one line why
+  tr.className = "damaged";
+  const why = cell(error);
+  why.colSpan = span;
+  tr.append(cell(name), why);
+  return tr;
+}
+
 function episodeRow(e) {
   const tr = document.createElement("tr");
   tr.dataset.id = e.id;
-  if (e.error) {
-    tr.className = "damaged";
-    tr.append(cell(e.id));
-    const why = cell(e.error);
-    why.colSpan = 9;
-    tr.append(why);
-    return tr;
-  }
+  if (e.error) return damaged(tr, e.id, e.error, 9);
   tr.append(cell(e.id), cell(e.variant), cell(e.robot), cell(`${e.operator} (${e.operator_kind})`),
             cell(`${e.outcome} (${e.outcome_name})`, `outcome-${e.outcome}`), cell(pct(e.final_opening), "num"),
             cell(pct(e.max_opening), "num"), cell(e.steps, "num"), cell(e.seconds.toFixed(2), "num"));
@@ -46,14 +47,7 @@ function episodeRow(e) {
 function datasetRow(d) {
   const tr = document.createElement("tr");
   tr.dataset.name = d.name;
-  if (d.error) {
-    tr.className = "damaged";
-    tr.append(cell(d.name));
-    const why = cell(d.error);
-    why.colSpan = 7;
-    tr.append(why);
-    return tr;
-  }
+  if (d.error) return damaged(tr, d.name, d.error, 7);
   const outcomes = Object.entries(d.outcomes || {}).map(([k, n]) => `${k} ${n}`).join(", ");
   tr.append(cell(d.name), cell(d.repo_id), cell(d.robot), cell(d.episodes, "num"), cell(d.frames, "num"),
             cell(d.variants, "num"), cell(outcomes), cell((d.streams || []).join(", ")));
