@@ -116,7 +116,8 @@ def test_stats_and_demo(rik, tmp_path, monkeypatch) -> None:
     assert numbers["pairings"] == {"total": 1079, "fit": 1079}
     assert numbers["by_type"]["two_point"] == {"designs": 17, "handles": 34}
     monkeypatch.chdir(tmp_path)  # the demo writes into the working directory: here, not the repository
-    demo = rik("demo")
+    demo = rik("demo", "--res", "64")  # the README's `rik demo` renders at 128 px: the same code, a quarter the pixels
+    assert "observation.images.front (3, 64, 64)" in demo.out
     assert demo.code == 0 and "1079 of 1079" in demo.out
     assert {"variants", "episodes", "renders", "datasets", "sysid-data", "sysid-report", "sysid-catalog"} <= {
         p.name for p in tmp_path.iterdir()}

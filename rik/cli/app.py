@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from typing import Annotated
 
 import typer
 
@@ -53,7 +54,9 @@ app.command("serve")(serve.serve)
 
 
 @app.command()
-def demo(catalog_paths: CatalogOption = None) -> None:
+def demo(res: Annotated[int, typer.Option("--res", min=16, max=1024, help="Image size of the rendered streams "
+                                           "and the dataset's videos, px (square). 64 takes about half the time.")]
+         = rerender.DEMO_RES, catalog_paths: CatalogOption = None) -> None:
     """The main job on built-in defaults: validate the catalog and print its summary, then build a sample of
     assets (one handle of each type and a chest of drawers), measure their collision fidelity and run the finger
     test on the two-point handle, then build and check three MuJoCo variants into variants/, record two
@@ -69,8 +72,8 @@ def demo(catalog_paths: CatalogOption = None) -> None:
     assets.print_demo_assets(overlays(catalog_paths))
     variants.print_demo_variants(overlays(catalog_paths))
     episodes = variants.print_demo_episode(overlays(catalog_paths))
-    rerender.print_demo_renders(overlays(catalog_paths), episodes)
-    export.print_demo_export(overlays(catalog_paths), episodes)
+    rerender.print_demo_renders(overlays(catalog_paths), episodes, res=res)
+    export.print_demo_export(overlays(catalog_paths), episodes, res=res)
     sysid.print_demo_sysid(overlays(catalog_paths))
 
 

@@ -113,8 +113,9 @@ DEMO_REPO_ID = "local/rik-demo"
 
 
 def print_demo_export(overlay_paths: list[Path], episodes: list[Path], out: Path = DEMO_DATASET,
-                      renders: Path = Path("renders"), variants: Path = Path("variants")) -> None:
-    """Export the demo episodes (both streams, at the demo's render size) to a LeRobot dataset, load it back
+                      renders: Path = Path("renders"), variants: Path = Path("variants"),
+                      res: int = DEMO_RES) -> None:
+    """Export the demo episodes (both streams, ``res`` x ``res`` px as rendered) to a LeRobot dataset, load it back
     with ``LeRobotDataset`` and print what it holds. The demo's earlier dataset (and an interrupted export of it) is
     removed first, and only if rik made it (:func:`demo_folders`)."""
     from rik.exporters.lerobot_export import export_lerobot as run
@@ -127,8 +128,7 @@ def print_demo_export(overlay_paths: list[Path], episodes: list[Path], out: Path
     for old, kind in demo_folders(out):
         remove_directory(old, kind)  # the demo's own earlier output, never a folder of the user's
     with con.status("exporting to a LeRobot v3.0 dataset (lerobot's writer, AV1 video) ..."):
-        result = run(load_catalog(overlay_paths), episodes, out, ExportSpec(DEMO_REPO_ID, width=DEMO_RES,
-                                                                            height=DEMO_RES),
+        result = run(load_catalog(overlay_paths), episodes, out, ExportSpec(DEMO_REPO_ID, width=res, height=res),
                      renders=renders, variants=variants)
     con.print(f"dataset {result.root}: {result.episodes} episodes, {result.frames} frames at {result.fps} Hz, "
               f"{len(result.features)} features; every episode's video frames checked against its rows")

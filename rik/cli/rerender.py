@@ -109,9 +109,10 @@ DEMO_RES = 128
 
 
 def print_demo_renders(overlay_paths: list[Path], episodes: list[Path], out: Path = Path("renders"),
-                       variants: Path = Path("variants")) -> None:
-    """Render the demo episodes' sim streams and their Mitsuba re-renders, check that the two agree in
-    silhouette on the first episode's first state, and write the first episode's two streams side by side."""
+                       variants: Path = Path("variants"), res: int = DEMO_RES) -> None:
+    """Render the demo episodes' sim streams and their Mitsuba re-renders (``res`` x ``res`` px), check that the
+    two agree in silhouette on the first episode's first state, and write the first episode's two streams side by
+    side."""
     from rik.episodes.episode import read_episode, read_meta, states
     from rik.episodes.replay import episode_scene
     from rik.registry.load import load_catalog
@@ -123,7 +124,7 @@ def print_demo_renders(overlay_paths: list[Path], episodes: list[Path], out: Pat
     cat = load_catalog(overlay_paths)
     con = console()
     first = []
-    for spec in (StreamSpec("sim", DEMO_RES, DEMO_RES), StreamSpec("rerendered", DEMO_RES, DEMO_RES)):
+    for spec in (StreamSpec("sim", res, res), StreamSpec("rerendered", res, res)):
         with progress_bar() as progress:
             task = progress.add_task(f"{spec.key} frames", total=sum(read_meta(e).steps + 1 for e in episodes),
                                      last="")
@@ -138,7 +139,7 @@ def print_demo_renders(overlay_paths: list[Path], episodes: list[Path], out: Pat
     meta, table = read_episode(episodes[0])
     scene = episode_scene(cat, episodes[0], variants, meta)
     scene.restore(states(table)[0])
-    ious = {cam: silhouette_iou(scene.model, scene.data, cam, DEMO_RES, DEMO_RES, cat.finishes)
+    ious = {cam: silhouette_iou(scene.model, scene.data, cam, res, res, cat.finishes)
             for cam in first[0].cameras}
     con.print("alignment of the two streams, silhouette IoU at the first state: "
               + ", ".join(f"{cam} {v:.3f}" for cam, v in ious.items()))
