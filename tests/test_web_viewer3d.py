@@ -158,3 +158,35 @@ def test_3d_view_of_a_handle_and_a_built_variant_in_chromium(catalog, tmp_path: 
         page.wait_for_selector("#viewer-variant[data-ready='error']", timeout=30_000)
         assert "is not built" in page.text_content("#viewer-variant .viewer3d-error")
         assert errors == []
+
+
+def test_a_user_mesh_handle_is_served_and_a_changed_file_is_one_line(tmp_path: Path) -> None:
+    """A user catalog's imported handle: its mesh file (checked against its recorded sha256) as GLB; a file changed
+    since it was registered: a 404 with one line, not a traceback."""
+    import trimesh
+
+    from rik.assets.importer import mesh_sha256
+
+    (tmp_path / "meshes").mkdir()
+    for name in ("box", "changed"):
+        trimesh.creation.box(extents=(0.03, 0.03, 0.025)).export(tmp_path / "meshes" / f"{name}.stl")
+    digest = mesh_sha256(tmp_path / "meshes" / "box.stl")
+    designs = "".join(
+        f"  - id: knob/{name}\n    type: knob\n    subtype: imported\n    name: {name}\n"
+        f"    generator: {{name: user_mesh, file: meshes/{name}.stl, sha256: '{digest}'}}\n"
+        "    provenance: {origin: user_mesh, reference: test}\n" for name in ("box", "changed"))
+    handles = "".join(
+        f"  - id: knob/{name}-30\n    design: knob/{name}\n    size: '30'\n    finish: metal/stainless\n"
+        "    geometry: {length: 0.03, width: 0.03, projection: 0.025, grip_diameter: 0.03}\n"
+        "    mount: {kind: single_screw}\n    mass: 0.03\n    licence: MIT\n" for name in ("box", "changed"))
+    overlay = tmp_path / "mine.yaml"
+    overlay.write_text(f"designs:\n{designs}handles:\n{handles}")
+    catalog = load_catalog([overlay])
+    trimesh.creation.box(extents=(0.04, 0.03, 0.025)).export(tmp_path / "meshes" / "changed.stl")
+    with app_client(AppConfig(catalog, variants=tmp_path / "v", episodes=tmp_path / "ep")) as client:
+        gltf = glb_json(client.get("/catalog/model/knob/box-30/visual.glb").content)
+        assert gltf["accessors"][gltf["meshes"][0]["primitives"][0]["indices"]]["count"] == 36  # the box's 12 faces
+        answer = client.get("/catalog/model/knob/changed-30/visual.glb")
+        assert answer.status_code == 404
+        detail = answer.json()["detail"]
+        assert "changed.stl" in detail and "sha256" in detail and "\n" not in detail, detail

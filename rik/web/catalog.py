@@ -106,7 +106,10 @@ def handle_model(handle_id: str, request: Request) -> Response:
     """A handle's visual mesh as GLB (m, mount frame, its finish's material)."""
     _known(catalog_view(request), "handles", handle_id)
     catalog = request.app.state.config.catalog
-    return _glb(_memo(request).get(("handle", handle_id), lambda: handle_glb(catalog, handle_id)))
+    try:
+        return _glb(_memo(request).get(("handle", handle_id), lambda: handle_glb(catalog, handle_id)))
+    except RikError as exc:  # a user catalog's mesh file gone or changed: its one line, not a traceback
+        raise HTTPException(404, str(exc).splitlines()[0]) from None
 
 
 @router.get("/catalog/variant/{variant}/visual.glb", include_in_schema=False)
