@@ -80,7 +80,7 @@ def test_api_lists_episodes_and_datasets_and_says_what_is_damaged(catalog, knob_
                                           "with '.'; no '/')")
         assert all("\n" not in r.get("error", "") for r in rows.values())
         sets = {d["name"]: d for d in body["datasets"]}
-        assert sets.keys() == {"knob-demo", "broken"}
+        assert sets.keys() == {"knob-demo", "broken"} and body["datasets_total"] == 2  # not-a-dataset: not one
         assert (sets["knob-demo"]["episodes"], sets["knob-demo"]["frames"], sets["knob-demo"]["robot"]) == (2, 14,
                                                                                                          "hand-e")
         assert "rik_dataset.json: damaged: not the JSON rik wrote" in sets["broken"]["error"]

@@ -36,9 +36,10 @@ DATASET_META = "meta/rik_dataset.json"
 below rik.dataset, so it reads the file through :func:`rik.paths.read_meta_file` itself)."""
 
 
-def _folders(root: Path, meta: str) -> tuple[list[tuple[float, Path]], int]:
+def _folders(root: Path, meta: str, *, required: bool = False) -> tuple[list[tuple[float, Path]], int]:
     """Up to :data:`MAX_ROWS` visible subfolders of ``root`` with their metadata file's time (newest first; a
-    folder without one sorts last), and how many there are (of the first :data:`MAX_SCAN` entries)."""
+    folder without one sorts last, or is left out when ``required``), and how many there are (of the first
+    :data:`MAX_SCAN` entries)."""
     found: list[tuple[float, Path]] = []
     try:
         with os.scandir(root) as entries:
@@ -50,6 +51,8 @@ def _folders(root: Path, meta: str) -> tuple[list[tuple[float, Path]], int]:
                 try:
                     stamp = os.stat(Path(entry.path) / meta).st_mtime
                 except OSError:
+                    if required:
+                        continue
                     stamp = 0.0
                 found.append((stamp, Path(entry.path)))
     except OSError:
@@ -102,8 +105,8 @@ def listing(episodes: Path, datasets: Path) -> dict[str, Any]:
     if (datasets / DATASET_META).is_file():  # --datasets names one dataset itself
         dfound, dtotal = [(0.0, datasets)], 1
     else:
-        dfound, dtotal = _folders(datasets, DATASET_META)
-    drows = [r for r in (dataset_row(d) for _, d in dfound) if r is not None]
+        dfound, dtotal = _folders(datasets, DATASET_META, required=True)  # other folders are no datasets
+    drows = [r for r in (dataset_row(d) for _, d in dfound) if r is not None]  # None: its meta went meanwhile
     return {"episodes_folder": str(episodes), "datasets_folder": str(datasets),
             "episodes": rows, "episodes_total": total, "datasets": drows, "datasets_total": dtotal,
             "max_rows": MAX_ROWS}
