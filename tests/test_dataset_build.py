@@ -77,6 +77,27 @@ def built(tmp_path_factory: pytest.TempPathFactory, spec_file: Path, variants: P
     return out, r.stdout
 
 
+def test_the_web_apps_episodes_page_lists_the_built_dataset_with_its_numbers(built, tmp_path: Path) -> None:
+    """The dataset this module built, in the datasets folder of ``rik serve``: the episodes page's row has its name,
+    repo id, robot, episodes, frames and outcomes as the build recorded them (here, where a real build exists)."""
+    import json
+
+    from web_fixtures import app_client
+
+    from rik.registry.load import load_catalog
+    from rik.web.app import AppConfig
+
+    out, _ = built
+    recorded = json.loads((out / "meta" / "rik_dataset.json").read_text())
+    config = AppConfig(load_catalog(), variants=tmp_path / "variants", episodes=tmp_path / "ep", datasets=out.parent)
+    with app_client(config) as client:
+        row, = client.get("/api/episodes").json()["datasets"]
+    assert row == {"name": out.name, "repo_id": "local/rik-small", "robot": "hand-e",
+                   "episodes": recorded["counts"]["episodes"], "frames": recorded["counts"]["frames"],
+                   "variants": 2, "outcomes": recorded["outcomes"], "streams": ["sim"]}
+    assert row["episodes"] == 4 and row["frames"] > 4
+
+
 def test_build_loads_and_rebuild_does_nothing(rik, built, spec_file, variants) -> None:
     out, stdout = built
     assert "engine: local processes, 2 workers" in stdout

@@ -131,29 +131,3 @@ def test_episodes_page_in_chromium_lists_escapes_and_replays(catalog, knob_recor
         assert text == (f"replay failed: episode {real} is of variant {SHORT_KNOB} with robot hand-e, not this "
                         "station's (drawer-chest-80__two_point-bow-128__normal with hand-e): open its own replay link")
         assert errors == []
-
-
-@pytest.mark.slow
-def test_a_dataset_built_by_rik_is_listed_with_its_numbers(catalog, bow_variants: Path, tmp_path: Path) -> None:
-    """A real ``rik dataset build`` (one episode of the demo variant, 0.3 s, 32 px) into the app's datasets folder:
-    the page's row has its name, repo id, robot, episodes, frames and outcomes as the build recorded them."""
-    import subprocess
-    import sys
-
-    spec = tmp_path / "spec.yaml"
-    spec.write_text("repo_id: local/web-list\nvariants:\n  ids: [drawer-chest-80__two_point-bow-128__normal]\n"
-                    "operators:\n  - strategy: contact_rich\nepisodes_per_variant: 1\nmax_seconds: 0.3\n"
-                    "streams: [sim]\nresolution: 32\nshard_episodes: 1\n")
-    datasets = tmp_path / "datasets"
-    variants = shutil.copytree(bow_variants, tmp_path / "variants")
-    done = subprocess.run([sys.executable, "-m", "rik", "dataset", "build", str(spec), "--out",
-                           str(datasets / "web-list"), "-j", "1", "--variants", str(variants)],
-                          capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stdout + done.stderr
-    recorded = json.loads((datasets / "web-list" / "meta" / "rik_dataset.json").read_text())
-    with app_client(AppConfig(catalog, variants=variants, episodes=tmp_path / "ep", datasets=datasets)) as client:
-        row, = client.get("/api/episodes").json()["datasets"]
-    assert row == {"name": "web-list", "repo_id": "local/web-list", "robot": "hand-e",
-                   "episodes": recorded["counts"]["episodes"], "frames": recorded["counts"]["frames"],
-                   "variants": 1, "outcomes": recorded["outcomes"], "streams": ["sim"]}
-    assert row["episodes"] == 1 and row["frames"] > 1
