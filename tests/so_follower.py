@@ -1,8 +1,8 @@
 """lerobot's SO follower without its hardware, for the tests of the SO arms' exports: its motor table read from
 ``SOFollower.__init__``'s own source, and a motor bus whose servos are a simulated arm's joints, on which lerobot's
 own ``SOFollower.calibrate`` homes and records ranges and lerobot's own ``_normalize`` / ``_unnormalize`` read and
-write positions (constructing lerobot's Feetech bus needs the Feetech SDK, ``feetech-servo-sdk``, which lerobot's
-base install lacks)."""
+write positions. Nothing here opens a port or needs the Feetech SDK (lerobot's ``feetech`` extra): the bus's
+methods that do the arithmetic are lerobot's, called on this bus."""
 
 from __future__ import annotations
 
@@ -13,7 +13,8 @@ from typing import Any
 
 def so_follower_motors() -> dict:
     """The motor table lerobot's ``SOFollower`` builds in ``__init__`` (its ``Motor(...)`` entries, with the body
-    motors' norm mode its config's default chooses), read from the class's own source."""
+    motors' norm mode its config's default chooses), read from the class's own source (constructing the class
+    opens no port but needs the Feetech SDK)."""
     import ast
     import dataclasses
     import inspect
