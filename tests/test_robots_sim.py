@@ -184,6 +184,10 @@ def test_robot_check_cli(rik, variants: Path) -> None:
     assert "pass reach: reaches handle two_point/bow-128" in ok.out and "over the whole opening" in ok.out
     weak = rik("robot-check", BOW, "--robot", "so100", "--variants", str(variants))
     assert weak.code == 1 and "FAIL grip: two pads at 14 N with friction 0.35 hold 9.8 N" in weak.out
+    so101 = rik("robot-check", BOW, "--robot", "so101", "--variants", str(variants))
+    assert so101.code == 1 and "pass start_clear" in so101.out, so101.out + so101.err
+    assert "reaches handle two_point/bow-128 of variant " + BOW + " (front drawer-1) up to 90% open" in so101.out
+    assert "FAIL grip: two pads at 13 N with friction 0.35 hold 9.0 N by friction" in so101.out
 
 
 def test_episodes_from_before_robots_still_read_and_replay(variants: Path, tmp_path: Path) -> None:
