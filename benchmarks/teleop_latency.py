@@ -17,9 +17,10 @@ time for the same frame (the floor: the station cannot stream faster than it ren
   the station builds it: for ``--profile-steps`` control steps with an input held, the ms of the IK (the arm drive's
   command), the physics (the control step's ``mj_step`` calls), the rest of a recorded step (recording, grasp
   watch), each camera's render (``rik.teleop.frames.StationFrames``: the follow view and the wrist camera, painted
-  as the page shows them) and its JPEG; the station's ``send`` (a frame's header ``sent`` stamp until the client
-  holds it) and **real time** (simulated seconds per wall second while the input is held, from the frames' ``t``)
-  come from the station run.
+  as the page shows them, from the view model whose arm meshes are decimated) and its JPEG, and beside it the same
+  camera drawing the full-detail model (interleaved, so both see the same load); the station's ``send`` (a
+  frame's header ``sent`` stamp until the client holds it) and **real time** (simulated seconds per wall second
+  while the input is held, from the frames' ``t``) come from the station run.
 
 Target: at least 15 frames/s and real time at 320x240 on this machine's 2 CPU cores (MuJoCo on llvmpipe through
 EGL).
@@ -107,6 +108,7 @@ def profile(robot: str, size: tuple[int, int], steps: int = 60) -> dict[str, flo
     from rik.teleop.frames import StationFrames
     from rik.teleop.session import TeleopSession
     from rik.teleop.station import CAMERAS, encode_jpeg
+    from rik.teleop.view_model import visible_faces
 
     scene = demo_scene_object(robot)
     times: dict[str, list[float]] = {k: [] for k in ("ik", "physics", "tick")}
@@ -124,11 +126,12 @@ def profile(robot: str, size: tuple[int, int], steps: int = 60) -> dict[str, flo
     scene.robot_drive.command = timed("ik", drive_command)  # type: ignore[method-assign]
     scene._run = timed("physics", run)  # type: ignore[method-assign]
     frames = StationFrames(scene)
+    full = StationFrames(scene, budget=10**9)  # the same cameras drawing the physics model's full-detail meshes
     with tempfile.TemporaryDirectory() as tmp:
         session = TeleopSession(scene, Path(tmp), operator="bench")
         session.set_input(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.3]))  # roll slowly, as the station run does
         for cam in CAMERAS:
-            times[f"render {cam}"], times[f"JPEG {cam}"] = [], []
+            times[f"render {cam}"], times[f"JPEG {cam}"], times[f"full-detail {cam}"] = [], [], []
         warm = 5
         for i in range(steps + warm):
             t0 = time.perf_counter()
@@ -139,15 +142,20 @@ def profile(robot: str, size: tuple[int, int], steps: int = 60) -> dict[str, flo
                 rgb = frames.render(scene.data, cam, size)
                 t2 = time.perf_counter()
                 encode_jpeg(rgb)
+                t3 = time.perf_counter()
+                full.render(scene.data, cam, size)  # interleaved: the same load on both
                 times[f"render {cam}"].append(t2 - t1)
-                times[f"JPEG {cam}"].append(time.perf_counter() - t2)
+                times[f"JPEG {cam}"].append(t3 - t2)
+                times[f"full-detail {cam}"].append(time.perf_counter() - t3)
             if i < warm:
                 for v in times.values():
                     v.clear()
     frames.close()
+    full.close()
     out = {k: 1e3 * statistics.median(v) for k, v in times.items()}
     out["rest of step"] = out.pop("tick") - out["ik"] - out["physics"]
-    out["total"] = sum(out.values())
+    out["total"] = sum(v for k, v in out.items() if not k.startswith("full-detail"))
+    out["view faces"], out["full faces"] = visible_faces(frames.view.model), visible_faces(scene.model)
     return out
 
 
@@ -295,7 +303,9 @@ def main() -> None:
         return
     for w, h in sizes:
         phases = profile(args.robot, (w, h), args.profile_steps)
-        print(f"where a step's time goes at {w}x{h} (median ms over {args.profile_steps} steps, this process): "
+        faces = f"visible mesh faces drawn {phases.pop('view faces'):,.0f} of {phases.pop('full faces'):,.0f}"
+        print(f"where a step's time goes at {w}x{h} (median ms over {args.profile_steps} steps, this process; "
+              f"{faces}; full-detail: the same camera drawing every face, not part of the total): "
               + ", ".join(f"{k} {v:.1f}" for k, v in phases.items()))
     with tempfile.TemporaryDirectory() as tmp:
         proc, url = start_station(Path(tmp), args.robot)

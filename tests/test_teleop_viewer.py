@@ -298,3 +298,16 @@ def test_the_station_keeps_real_time_when_its_renders_are_slower_than_a_control_
     assert (total, renders) == (39, 25)
     steps, next_tick = due_steps(now + 1.0, next_tick, 0.05, MAX_CATCH_UP)
     assert steps == MAX_CATCH_UP and next_tick == now + 1.0
+
+
+def test_a_station_behind_real_time_renders_the_wrist_on_every_other_frame_and_catches_up_at_rest() -> None:
+    """On time, both stale cameras render; behind, the wrist is left out of every other render; a scene at rest
+    (only the wrist stale) renders the wrist, behind or not."""
+    from rik.teleop.station import cameras_due
+
+    both = ["front", "wrist"]
+    assert cameras_due(both, behind=False, skipped=False) == both
+    assert cameras_due(both, behind=True, skipped=False) == ["front"]
+    assert cameras_due(both, behind=True, skipped=True) == both
+    assert cameras_due(["wrist"], behind=True, skipped=False) == ["wrist"]
+    assert cameras_due([], behind=True, skipped=True) == []

@@ -7,7 +7,8 @@ The simulated world keeps its own clock (:func:`rik.teleop.pacing.due_steps`): w
 take longer than a control period (an arm's scene on a CPU rasteriser), the thread runs every control step that
 came due before it renders again, so frames drop and simulated time keeps pace with the wall clock (up to
 :data:`MAX_CATCH_UP` steps per render). Each is a whole control step with the input held at its time, recorded as
-at one step per render; replay is unchanged. The cameras render the scene's view model (:mod:`rik.teleop.frames`).
+at one step per render; replay is unchanged. While behind, the wrist camera renders on every other frame only
+(:func:`cameras_due`). The cameras render the scene's view model (:mod:`rik.teleop.frames`).
 
 Threads: websocket handlers (the event loop) only hand inputs and commands to the station under its lock; the
 station thread does all simulation and rendering (a MuJoCo GL context belongs to the thread that made it).
@@ -32,6 +33,7 @@ from rik.errors import RikError, os_error_text
 from rik.teleop.keys import FINE_FACTOR
 from rik.teleop.pacing import due_steps
 from rik.teleop.session import TeleopSession, check_time_limit
+from rik.teleop.view import FOLLOWED
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -112,8 +114,8 @@ class Client:
     slots: dict[str, bytes | str] = field(default_factory=dict)
     event: asyncio.Event = field(default_factory=asyncio.Event)
     lock: threading.Lock = field(default_factory=threading.Lock)
-    sent_key: object = None
-    """Key of the last frame pushed to this client (a frame is pushed once)."""
+    sent: dict[str, object] = field(default_factory=dict)
+    """Per camera, the key of the last frame pushed to this client (a frame is pushed once)."""
 
     def push(self, slot: str, payload: bytes | str) -> None:
         """Replace ``slot``'s payload (dropping an unsent older one) and wake the sender. Any thread."""
@@ -189,6 +191,18 @@ def parse_view(msg: dict[str, Any]) -> tuple[float, float] | None | str:
 
 MAX_CATCH_UP = 4
 """Control steps a station runs at most between two renders (0.2 s simulated at 20 Hz)."""
+WRIST = "wrist"
+
+
+def cameras_due(stale: list[str], behind: bool, skipped: bool) -> list[str]:
+    """Which of the ``stale`` cameras (their last image shows an older state) to render now: all of them, except
+    that while the station is ``behind`` real time (it ran more than one control step since the last render) the
+    wrist camera is left out of every other render (``skipped``: it was left out of the last one). The operator
+    steers on the front view; the wrist image is at most one render old, and up to date as soon as the scene rests
+    (the front is then current and only the wrist is stale)."""
+    if behind and not skipped and FOLLOWED in stale and WRIST in stale:
+        return [cam for cam in stale if cam != WRIST]
+    return list(stale)
 
 
 def build_station_scene(config: StationConfig, variant: str, robot: str) -> SimScene:
@@ -284,7 +298,7 @@ class Station:
                 size = (msg.get("width"), msg.get("height"))
                 if size in SIZES:
                     client.size = (int(size[0]), int(size[1]))
-                    client.sent_key = None
+                    client.sent = {}
                 else:
                     sizes = ", ".join(f"{w}x{h}" for w, h in SIZES)
                     client.notice = f"size {size[0]}x{size[1]}: choose one of {sizes}"
@@ -368,7 +382,8 @@ class Station:
         session = self.session
         assert session is not None
         renderers = StationFrames(session.scene)  # the follow view and a renderer per size, on this thread
-        frames: dict[tuple[int, int], tuple[object, list[bytes]]] = {}
+        frames: dict[tuple[int, int], dict[str, tuple[object, bytes]]] = {}  # per size, camera: (key, frame)
+        skipped: dict[tuple[int, int], bool] = {}  # per size: the wrist was left out of the last render
         replay_data = mujoco.MjData(session.scene.model)
         dt = 1.0 / session.scene.control_fps
         next_tick = time.monotonic()
@@ -385,13 +400,18 @@ class Station:
                 key = (session.episode, session.recorder.steps, float(data.time), self.replay and self.replay["row"],
                        self.view_turn)
                 for size in {size for _, size in sizes}:
-                    if size not in frames or frames[size][0] != key:
-                        frames[size] = (key, self._render(renderers, size, data, session))
+                    shown = frames.setdefault(size, {})
+                    stale = [cam for cam in CAMERAS if cam not in shown or shown[cam][0] != key]
+                    due = cameras_due(stale, behind=steps > 1, skipped=skipped.get(size, False))
+                    skipped[size] = WRIST in stale and WRIST not in due
+                    for cam, payload in zip(due, self._render(renderers, size, data, session, due), strict=True):
+                        shown[cam] = (key, payload)
+                    if FOLLOWED in due:
                         sent.append(time.monotonic())
                 for c, size in sizes:
-                    if c.sent_key != (key, size):
-                        c.sent_key = (key, size)
-                        for cam, payload in zip(CAMERAS, frames[size][1], strict=True):
+                    for cam, (k, payload) in frames.get(size, {}).items():
+                        if c.sent.get(cam) != (k, size):
+                            c.sent[cam] = (k, size)
                             c.push(cam, payload)
                 self._push_status(clients)
                 if len(sent) > 1:
@@ -534,11 +554,11 @@ class Station:
         mujoco.mj_forward(model, data)
         r["row"] += 1
 
-    def _render(self, renderers: StationFrames, size: tuple[int, int], data: Any,
-                session: TeleopSession) -> list[bytes]:
+    def _render(self, renderers: StationFrames, size: tuple[int, int], data: Any, session: TeleopSession,
+                cameras: list[str]) -> list[bytes]:
         out = []
         step = session.recorder.steps if self.replay is None else self.replay["row"]
-        for cam in CAMERAS:  # the page's front view follows the work; the wrist camera is the scene's
+        for cam in cameras:  # the page's front view follows the work; the wrist camera is the scene's
             jpeg = encode_jpeg(renderers.render(data, cam, size, self.view_turn))
             header = {"camera": cam, "step": step, "seq": self.applied_seq, "t": round(float(data.time), 4),
                       "sent": time.time(), "width": size[0], "height": size[1], "replay": self.replay is not None}

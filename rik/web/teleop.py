@@ -51,7 +51,9 @@ over 64 KiB closes the connection with code 1009):
   +-360), ``{"type": "view", "reset": true}`` puts it back; from the controlling tab (the view is the station's);
 - ``{"type": "size", "width": 320|640, "height": 240|480}``.
 
-Frames and status go to every tab through a latest-frame slot per tab (a slow tab skips frames). One tab controls
+Frames and status go to every tab through a latest-frame slot per tab (a slow tab skips frames). The world keeps
+real time whatever a render costs (a slow render drops frames, not simulated time); while the station is behind,
+the wrist camera is sent with every other ``front`` frame only. One tab controls
 (the first); the others watch and their input is refused with a notice, until the controlling tab leaves and one
 of them sends ``take_control``. The simulation steps only while a tab controls.
 """
