@@ -101,6 +101,9 @@ class EpisodeRecorder:
     max_opening: float = 0.0
     perturbed: bool = False
     """Whether any step executed another action than the one recorded (the table then has :data:`EXECUTED`)."""
+    action_kind: str = "pose"
+    """What the recorded actions are (meta.json's ``action_kind``): ``pose`` (:meth:`step`) or ``joints``
+    (:meth:`step_joints`); one episode holds one kind."""
 
     def _store(self, action: np.ndarray, targets: np.ndarray | None = None,
                executed: np.ndarray | None = None) -> None:
@@ -130,10 +133,28 @@ class EpisodeRecorder:
         """Record ``action`` and run ``executed`` (default: the same action) for one control step."""
         if executed is not None:
             self.perturbed = True
+        self._kind("pose")
         self._store(action, executed=executed)
         sent = np.asarray(action if executed is None else executed, np.float64)
         self.scene.step(sent)
         self.rows["robot_targets"][-1] = self.scene.robot_drive.targets(self.scene, sent)
+
+    def step_joints(self, targets: np.ndarray, grip: float) -> None:
+        """Record and run one control step of an arm driven joint by joint (:meth:`SimScene.step_joints`): the
+        action stored is the joint ``targets`` as commanded (rad, the robot's joint order) and then ``grip`` (0 open
+        .. 1 closed), which a replay runs again the same way."""
+        self._kind("joints")
+        s = self.scene
+        action = np.concatenate([np.asarray(targets, np.float64).reshape(-1), [float(grip)]])
+        self._store(action)
+        s.step_joints(action[:-1], float(action[-1]))
+        goal, _ = s.robot_drive.jaw(s, float(action[-1]))
+        self.rows["robot_targets"][-1] = np.concatenate([s.data.ctrl[s.robot_drive.arm_ctrl], [goal]])
+
+    def _kind(self, kind: str) -> None:
+        if self.steps and self.action_kind != kind:
+            raise RikError(f"an episode records one kind of action: it holds {self.action_kind} actions, not {kind}")
+        self.action_kind = kind
 
     @property
     def steps(self) -> int:
@@ -228,10 +249,12 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
                                 arm_force=g.arm_force),
             robot=s.robot_id, robot_base=_robot_base(s), robot_joints=s.robot_drive.joint_names,
             versions=_versions(), log=tuple(log), states_sha256=digest,
-            action_noise=action_noise if recorder.perturbed else None)
+            action_noise=action_noise if recorder.perturbed else None, action_kind=recorder.action_kind)
         data = meta.model_dump(mode="json")
         if data["action_noise"] is None:  # episodes without noise keep the meta.json they always had
             del data["action_noise"]
+        if data["action_kind"] == "pose":  # and pose-driven ones (every episode before leader arms) too
+            del data["action_kind"]
         meta = write_meta(staging, data)
         if final.exists():
             check_replaceable(final, EPISODE_FOLDER)
@@ -313,7 +336,8 @@ def read_episode(directory: Path) -> tuple[EpisodeMeta, pa.Table]:
     if table.num_rows != meta.steps + 1 or list(table.column_names) != list(columns):
         raise EpisodeError(f"{file}: {table.num_rows} rows and columns {table.column_names}, expected "
                            f"{meta.steps + 1} rows and {list(columns)}")
-    widths = {"state": meta.state_size, "action": None, "tcp": 3, "tcp_quat": 4,
+    joint_action = len(meta.robot_joints) if meta.action_kind == "joints" else None
+    widths = {"state": meta.state_size, "action": joint_action, "tcp": 3, "tcp_quat": 4,
               "robot_joints": len(meta.robot_joints), "robot_targets": len(meta.robot_joints), EXECUTED: 7}
     for name in VECTORS:
         if name in columns:

@@ -74,6 +74,9 @@ def verify_episode(catalog: Catalog, directory: Path, variants: Path = Path("var
     worst = 0.0
     for k in range(len(recorded) - 1):
         scene.restore(recorded[k])
-        scene.step(actions[k])
+        if meta.action_kind == "joints":  # an arm driven joint by joint: its targets (rad), then the grip
+            scene.step_joints(actions[k][:-1], float(actions[k][-1]))
+        else:
+            scene.step(actions[k])
         worst = max(worst, float(np.max(np.abs(scene.state() - recorded[k + 1]))))
     return ReplayCheck(worst == 0.0, len(recorded), worst)

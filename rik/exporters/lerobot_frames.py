@@ -142,9 +142,11 @@ class LoadedEpisode:
     recorded: RecordedEpisode
     layout: RobotLayout
     actions: np.ndarray
-    """The recorded ``action`` rows, (rows, :data:`ACTION_NAMES`)."""
+    """The recorded ``action`` rows, (rows, :data:`ACTION_NAMES`); a joint-driven episode's joint actions (meta
+    ``action_kind``: targets rad, then the grip)."""
     targets: np.ndarray
-    """An arm's recorded joint targets (``robot_targets``), (rows, joints); (rows, 0) for the Hand-E."""
+    """An arm's recorded joint targets (``robot_targets``), (rows, joints); (rows, 0) for the Hand-E; a joint-driven
+    episode's ``actions`` (the targets as commanded, before the servos held them within reach)."""
 
     @property
     def directory(self) -> Path:
@@ -165,6 +167,8 @@ def load_episode(catalog: Catalog, directory: Path, meta: EpisodeMeta | None = N
     layout = episode_layout(catalog, recorded.directory, recorded.meta)
     rows = len(recorded.states)
     actions = _rows(table, "action", rows)
+    if recorded.meta.action_kind == "joints":  # a leader's joint targets as commanded (rad) and the grip: exported
+        return LoadedEpisode(recorded, layout, actions, actions)  # as LeRobot's follower action (the leader's)
     if actions.shape[1] != len(ACTION_NAMES):
         raise RikError(f"{recorded.directory / 'states.parquet'}: column 'action' has {actions.shape[1]} numbers per "
                        f"row where the other episodes have {len(ACTION_NAMES)} ({', '.join(ACTION_NAMES)}); export "
@@ -195,7 +199,9 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
             if layout.ee_pose:
                 frame[EE_POSE] = layout.ee(scene).astype(np.float32)
             frame[OBS_ENV_STATE] = environment_state(scene).astype(np.float32)
-            frame[ACTION] = layout.action(actions[k], targets[k]).astype(np.float32)
+            action = (layout.joint_action(targets[k], float(targets[k][-1])) if meta.action_kind == "joints"
+                      else layout.action(actions[k], targets[k]))
+            frame[ACTION] = action.astype(np.float32)
             for stream, folder in streams.items():
                 for cam in cameras:
                     frame[image_key(cam, stream)] = read_frame(folder, cam, int(k))

@@ -74,5 +74,10 @@ class EpisodeMeta(Frozen):
     """Standard deviation of the noise added to the executed target position (m) for an episode recorded with
     noise (DART-style: ``states.parquet``'s ``action`` holds the operator's own action, ``executed_action`` what
     the robot was sent); absent (None) where every action ran as recorded."""
+    action_kind: Literal["pose", "joints"] = "pose"
+    """What ``states.parquet``'s ``action`` holds: ``pose``, the target pose and gripper command every strategy,
+    keyboard and policy records (:data:`rik.exporters.lerobot_frames.ACTION_NAMES`; absent from meta.json); or
+    ``joints``, an arm driven joint by joint (a leader arm): its joint targets as commanded (rad, in ``robot_joints``'
+    order) and the gripper command (0 open .. 1 closed) last, one number per ``robot_joints`` entry."""
     meta_sha256: str | None = Field(default=None, pattern=r"^[0-9a-f]{64}$")
     """sha256 of this file's other fields (:func:`rik.episodes.episode.meta_digest`); required from format 2 on."""

@@ -39,6 +39,8 @@ class Drive(Protocol):
     robot_id: str
     joint_names: tuple[str, ...]
     """Names of :meth:`joints` (the robot's joints, then the gripper)."""
+    arm_ctrl: np.ndarray
+    """Indices in ``data.ctrl`` of the robot's own servos (not the jaw's), in :meth:`joint_positions`' order."""
 
     def pose(self, scene: SimScene) -> np.ndarray: ...
 

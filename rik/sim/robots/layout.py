@@ -69,8 +69,14 @@ class RobotLayout:
         targets (``robot_targets``, rad) and the gripper command (``pose_action[6]``, 0 open .. 1 closed)."""
         if self.robot is None:
             return np.asarray(pose_action, np.float64)
+        return self.joint_action(targets, float(pose_action[6]))
+
+    def joint_action(self, targets: np.ndarray, grip: float) -> np.ndarray:
+        """An arm's ``action`` from its joint targets (rad, the robot's joint order; more numbers after them are
+        ignored) and gripper command (0 open .. 1 closed): what :meth:`joint_targets` inverts."""
+        assert self.robot is not None
         names = list(self.robot.joint_names)
-        grip = min(max(float(pose_action[6]), 0.0), 1.0)
+        grip = min(max(grip, 0.0), 1.0)
         return np.array([_to_unit(float(targets[names.index(j)]) - zero, unit) if j is not None
                          else _grip_to_unit(grip, unit) for (j, unit), zero in zip(self.joints, self.zeros,
                                                                                     strict=True)], np.float64)
