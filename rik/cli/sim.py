@@ -113,13 +113,23 @@ def record(variant: Annotated[str | None, typer.Argument(
 
 
 def teleop(variant: VariantArg,
-           device: Annotated[str, typer.Option("--device", "-d", help="keyboard or spacemouse (the viewer window).")]
+           device: Annotated[str, typer.Option("--device", "-d", help="keyboard, spacemouse, or a real LeRobot leader "
+                                               "arm: so101-leader (--robot so101) or so100-leader (--robot so100), "
+                                               "with --port (the viewer window).")]
            = "keyboard",
            web: Annotated[bool, typer.Option("--web", help="Serve the browser teleop station instead of opening a "
                                              "window (keyboard, gamepad; works headless, e.g. over an SSH "
                                              "tunnel).")] = False,
-           port: Annotated[int, typer.Option("--port", help="Port of the station with --web (0: a free one).")]
-           = 8765,
+           port: Annotated[str | None, typer.Option("--port", help="With --web: the station's port (default 8765; 0: "
+                                                    "a free one). With a leader arm: its serial port, e.g. "
+                                                    "/dev/ttyACM0.")] = None,
+           leader_id: Annotated[str | None, typer.Option("--leader-id", help="The leader arm's LeRobot id (its "
+                                                         "calibration file <id>.json; default: the only one "
+                                                         "there).")] = None,
+           calibration_dir: Annotated[Path | None, typer.Option("--calibration-dir", help="Folder of the leader's "
+                                                                "LeRobot calibration (default: LeRobot's, "
+                                                                "~/.cache/huggingface/lerobot/calibration/"
+                                                                "teleoperators/so_leader).")] = None,
            host: Annotated[str, typer.Option("--host", help="Address the station listens on with --web (default: "
                                              "this machine only).")] = "127.0.0.1",
            front: FrontOpt = None, out: EpisodesOutOpt = Path("episodes"), variants: VariantsOpt = Path("variants"),
@@ -142,9 +152,13 @@ def teleop(variant: VariantArg,
         if device != "keyboard":
             raise RikError(f"--device {device}: the browser station takes the browser's keyboard and gamepads; "
                            "--device is for the viewer window")
+        if leader_id is not None or calibration_dir is not None:
+            raise RikError("--leader-id and --calibration-dir are for a leader arm in the viewer window, not --web")
+        if not (port or "8765").isdigit() or int(port or "8765") > 65535:
+            raise RikError(f"--port {port}: with --web, the station's port is a number 0..65535")
         config = AppConfig(cat, variants=variants, episodes=out, overlays=tuple(overlays(catalog)),
                            max_seconds=max_seconds, seed=seed, front=front, robot=robot)
-        serve_station(config, variant, host=host, port=port,
+        serve_station(config, variant, host=host, port=int(port or "8765"),
                       on_ready=lambda url: con.print(f"teleop station: [bold]{url}[/] (Ctrl+C to stop; from another "
                                                      f"machine: ssh -L {url.rsplit(':', 1)[1].split('/')[0]}:"
                                                      f"localhost:{url.rsplit(':', 1)[1].split('/')[0]} THIS_HOST)",
@@ -153,7 +167,8 @@ def teleop(variant: VariantArg,
     from rik.teleop.desktop import teleoperate
 
     saved = teleoperate(cat, variant, device, out=out, variants=variants, front=front, seed=seed,
-                        max_seconds=max_seconds, on_message=con.print, robot=arm)
+                        max_seconds=max_seconds, on_message=con.print, robot=arm, port=port, leader_id=leader_id,
+                        calibration_dir=calibration_dir)
     if not saved:
         con.print("no episode saved")
     for meta in saved:

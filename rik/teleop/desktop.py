@@ -1,5 +1,7 @@
-"""Teleoperation in a window of its own: the keyboard (held keys move the target continuously) or a 3Dconnexion
-SpaceMouse drive a :class:`rik.teleop.session.TeleopSession`, which records at the scene's control rate.
+"""Teleoperation in a window of its own: the keyboard (held keys move the target continuously), a 3Dconnexion
+SpaceMouse or a real LeRobot leader arm (:mod:`rik.teleop.leader`: the SO-101's or SO-100's, driving the simulated
+arm of its type joint by joint) drive a :class:`rik.teleop.session.TeleopSession`, which records at the scene's
+control rate.
 
 Keymap (the same as the browser station's, :mod:`rik.teleop.keys`; directions as seen facing the front):
 
@@ -50,6 +52,7 @@ if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
     from rik.schemas.robots import Robot
+    from rik.teleop.leader import LeaderArm
 
 MAX_FPS = 60.0
 """Frames per second the window is drawn at most (no vsync under a virtual display)."""
@@ -108,10 +111,22 @@ class KeyboardDevice:
 DEVICES = {"keyboard": KeyboardDevice, "spacemouse": SpaceMouseDevice}
 
 
-def make_device(name: str) -> KeyboardDevice | SpaceMouseDevice:
-    """A device by name; a SpaceMouse is opened here, so a missing one fails before anything else happens."""
-    if name not in DEVICES:
-        raise DeviceError(f"unknown device '{name}' (devices: {', '.join(DEVICES)})")
+def make_device(name: str, robot: Robot | None = None, port: str | None = None, leader_id: str | None = None,
+                calibration_dir: Path | None = None) -> KeyboardDevice | SpaceMouseDevice | LeaderArm:
+    """A device by name; a SpaceMouse or a leader arm (on serial ``port``, driving ``robot``) is opened here, so a
+    missing one fails before anything else happens."""
+    from rik.teleop.leader import LEADERS, open_leader
+
+    if name not in DEVICES and name not in LEADERS:
+        raise DeviceError(f"unknown device '{name}' (devices: {', '.join([*DEVICES, *LEADERS])})")
+    if name in LEADERS:
+        if port is None:
+            raise DeviceError(f"--device {name}: give the leader arm's serial port, --port /dev/ttyACM0 "
+                              "(lerobot-find-port finds it)")
+        return open_leader(name, robot, port, leader_id=leader_id, calibration=calibration_dir)
+    if port is not None or leader_id is not None or calibration_dir is not None:
+        given = "--port" if port is not None else "--leader-id" if leader_id is not None else "--calibration-dir"
+        raise DeviceError(f"{given} is for a leader arm (--device {' or '.join(LEADERS)}), not --device {name}")
     device = DEVICES[name]()
     if isinstance(device, SpaceMouseDevice):
         device.open()
@@ -129,7 +144,7 @@ class Controls:
     """What the operator's keys do to the session (press edges) and the held-key velocity command."""
 
     session: TeleopSession
-    device: KeyboardDevice | SpaceMouseDevice
+    device: KeyboardDevice | SpaceMouseDevice | LeaderArm
     say: Callable[[str], None]
     window: TeleopWindow | None = None
     saved: list[EpisodeMeta] = field(default_factory=list)
@@ -176,7 +191,11 @@ class Controls:
         return frozenset(codes)
 
     def apply(self, held: frozenset[str]) -> None:
-        """Set the session's velocity command from the held keys (and the SpaceMouse)."""
+        """Set the session's velocity command from the held keys (and the SpaceMouse), or its joint targets from
+        the leader arm."""
+        if not isinstance(self.device, KeyboardDevice | SpaceMouseDevice):
+            self.session.set_joints(*self.device.read())
+            return
         command = velocity(held, fine="fine" in held)
         grip = None
         if isinstance(self.device, SpaceMouseDevice):
@@ -217,19 +236,22 @@ def _print(line: str) -> None:
 
 def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, variants: Path = Path("variants"),
                 front: str | None = None, seed: int = 0, max_seconds: float | None = None,
-                on_message: Callable[[str], None] | None = None, robot: Robot | None = None) -> list[EpisodeMeta]:
+                on_message: Callable[[str], None] | None = None, robot: Robot | None = None, port: str | None = None,
+                leader_id: str | None = None, calibration_dir: Path | None = None) -> list[EpisodeMeta]:
     """Teleoperate ``variant`` in a window with a device, episode after episode (see the module docstring), with
     the Hand-E or the arm ``robot`` (a catalog entry; one that cannot reach the handle is refused before the
     window opens): Enter saves an episode to ``out/<id>`` (each with its own id: nothing is overwritten),
-    Backspace discards it, Esc or closing the window quits and discards the unsaved one. Returns the saved
-    episodes' metas."""
+    Backspace discards it, Esc or closing the window quits and discards the unsaved one. A leader arm device
+    (``so101-leader``: serial ``port``, LeRobot's calibration ``leader_id`` in ``calibration_dir``) drives the
+    arm joint by joint instead of the motion keys. Returns the saved episodes' metas."""
     from rik.episodes.record import check_seeds
 
     say = on_message or _print
     check_seeds(seed, 1)
     check_time_limit(max_seconds)
-    device = make_device(device_name)
+    device = make_device(device_name, robot, port, leader_id, calibration_dir)
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        _close(device)
         raise DeviceError("teleoperation needs a display for its window (no DISPLAY is set); use rik teleop "
                           "VARIANT --web for the browser station, or rik record VARIANT --strategy NAME")
     if "mujoco" not in sys.modules:
@@ -246,23 +268,34 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
         import glfw
 
         glfw.terminate()
+        _close(device)
         raise
     session = TeleopSession(scene, out, operator=device_name, seed=seed, max_seconds=max_seconds)
     controls = Controls(session, device, say)
     window = TeleopWindow(scene, f"rik teleop: {variant} ({scene.robot_id})", controls.press)
     controls.window = window
-    say(f"teleop window open: episode {session.episode}; hold W/A/S/D/R/F to move, arrows and Q/E to turn, Space "
-        "grips, Enter saves, Backspace discards, Esc quits")
+    if isinstance(device, KeyboardDevice | SpaceMouseDevice):
+        say(f"teleop window open: episode {session.episode}; hold W/A/S/D/R/F to move, arrows and Q/E to turn, "
+            "Space grips, Enter saves, Backspace discards, Esc quits")
+    else:
+        say(f"teleop window open: episode {session.episode}; the {device_name} arm drives the {scene.robot_id} "
+            "(recording starts when it moves), Enter saves, Backspace discards, Esc quits")
     try:
         _loop(session, controls, window)
     except KeyboardInterrupt:
         controls.quit = True
     finally:
         window.close()
+        _close(device)
     if session.recording:
         say(f"quit without saving: episode {session.episode} ({session.recorder.steps / scene.control_fps:.1f} s) "
             "discarded")
     return controls.saved
+
+
+def _close(device: KeyboardDevice | SpaceMouseDevice | LeaderArm) -> None:
+    if not isinstance(device, KeyboardDevice | SpaceMouseDevice):
+        device.close()
 
 
 def _loop(session: TeleopSession, controls: Controls, window: TeleopWindow) -> None:

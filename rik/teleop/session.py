@@ -40,6 +40,10 @@ MAX_FREE_SEEDS = 100_000
 IDLE_KEPT_S = 0.5
 """Simulated seconds kept after the operator's last input when an episode is saved (a front still moving, jaws
 still closing); the idle rest (the person reaching for Enter) is trimmed."""
+LEADER_MOVED = (math.radians(1.0), 0.02)
+"""How far a leader arm must move (a joint rad, the grip's 0..1) to count as the operator's input: recording starts
+with it and a saved episode keeps :data:`IDLE_KEPT_S` after the last one. A still leader's reading wanders by an
+encoder step or two (0.09 deg each), well under 1 deg."""
 MOTION_MODES = ("path", "frame")
 """How W/S move the target: along the front's own path while the jaws hold its handle (a door's arc, a flap's, a
 drawer's slide), frame-fixed otherwise; or always frame-fixed (towards / away from the furniture)."""
@@ -128,6 +132,10 @@ class TeleopSession:
         """The last step moved along the front's path (:data:`MOTION_MODES`)."""
         self.last_input_step = 0
         """Recorded steps up to and including the last one with an input (a motion command or a grip change)."""
+        self.joint_input: tuple[np.ndarray, float] | None = None
+        """A leader arm's joint targets (rad, the robot's joint order) and grip (0..1), when one drives the arm."""
+        self._leader_moved_from: tuple[np.ndarray, float] | None = None
+        """The leader's input at the episode's start, then at its last move (:data:`LEADER_MOVED`)."""
 
     @property
     def recording(self) -> bool:
@@ -188,6 +196,41 @@ class TeleopSession:
         if grip is not None:
             self.grip = float(np.clip(np.nan_to_num(grip), 0.0, 1.0))
 
+    def set_joints(self, targets: np.ndarray, grip: float) -> None:
+        """A leader arm's reading: the arm's joint targets (rad, the robot's joint order) and grip (0 open ..
+        1 closed); from now on :meth:`tick` drives the arm joint by joint."""
+        t = np.asarray(targets, np.float64).reshape(-1)
+        if t.shape != (len(self.scene.robot_drive.joint_names) - 1,) or not np.all(np.isfinite(t)):
+            from rik.errors import RikError
+
+            raise RikError(f"joint targets {t.tolist()}: robot {self.scene.robot_id} takes "
+                           f"{len(self.scene.robot_drive.joint_names) - 1} finite numbers (rad)")
+        self.joint_input = (t, float(np.clip(np.nan_to_num(grip), 0.0, 1.0)))
+        if self._leader_moved_from is None:
+            self._leader_moved_from = self.joint_input
+
+    def _leader_moved(self) -> bool:
+        """Whether the leader moved by more than :data:`LEADER_MOVED` since the episode's start or its last move."""
+        assert self.joint_input is not None and self._leader_moved_from is not None
+        (t, g), (t0, g0) = self.joint_input, self._leader_moved_from
+        moved = float(np.max(np.abs(t - t0))) > LEADER_MOVED[0] or abs(g - g0) > LEADER_MOVED[1]
+        if moved:
+            self._leader_moved_from = self.joint_input
+        return moved
+
+    def _tick_joints(self) -> bool:
+        """One control step driven by the leader (:meth:`tick` with a joint input)."""
+        assert self.joint_input is not None
+        moved = self._leader_moved()
+        if not self.recording and not moved:
+            return False  # waiting for the leader to move: nothing recorded
+        if moved:
+            self.last_input_step = self.recorder.steps + 1
+        targets, self.grip = self.joint_input
+        self.recorder.step_joints(targets, self.grip)
+        self.grasp.update(handle_contact(self.scene), self.grip)
+        return True
+
     def toggle_grip(self) -> None:
         self.grip = 0.0 if self.grip >= 0.5 else 1.0
 
@@ -202,6 +245,8 @@ class TeleopSession:
         recorded. Returns whether the scene stepped."""
         if self.time_up:
             return False
+        if self.joint_input is not None:
+            return self._tick_joints()
         if not self.recording and not np.any(self.command) and self.grip == self.target[6]:
             return False  # waiting for the first input: nothing recorded
         dt = 1.0 / self.scene.control_fps
