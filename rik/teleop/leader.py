@@ -33,10 +33,6 @@ class LeaderError(RikError):
     """A leader arm cannot drive this robot, has no calibration, or cannot be reached."""
 
 
-def is_leader(device: str) -> bool:
-    return device in LEADERS
-
-
 def check_leader(device: str, robot: Robot | None) -> None:
     """A leader drives the simulated arm of its own type only (``so101-leader`` the ``so101``); one line otherwise."""
     want, _ = LEADERS[device]
