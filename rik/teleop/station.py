@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.errors import RikError, os_error_text
+from rik.teleop.frames import StationFrames
 from rik.teleop.keys import FINE_FACTOR
 from rik.teleop.pacing import due_steps
 from rik.teleop.session import TeleopSession, check_time_limit
@@ -38,7 +39,6 @@ from rik.teleop.view import FOLLOWED
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.sim.scene import SimScene
-    from rik.teleop.frames import StationFrames
 
 OPERATOR = "browser"
 """Operator name of episodes recorded in the browser."""
@@ -376,8 +376,6 @@ class Station:
                 self._push_status()
             return
         import mujoco
-
-        from rik.teleop.frames import StationFrames
 
         session = self.session
         assert session is not None
