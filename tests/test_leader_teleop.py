@@ -142,6 +142,8 @@ def test_a_leader_drives_the_so101_and_its_episode_replays_and_exports_as_the_le
     np.testing.assert_allclose(action, expected, atol=1e-4)  # the leader's readings, as float32
     state = np.stack([np.asarray(a, np.float64) for a in dataset.hf_dataset["observation.state"]])
     assert np.abs(state[-1, :5] - expected[-1, :5]).max() < 3.0  # the follower where the leader was, as it reads
+    card = (ds / "README.md").read_text()
+    assert "In 1 episode(s) a leader arm drove the joints" in card  # not "rik's differential IK" alone
 
 
 @pytest.mark.parametrize(("args", "line"), [

@@ -143,8 +143,9 @@ calibration whose `range_min` is the closed jaw and `range_max` the open one (th
 0 closed, 100 open). Its action is {command}."""
 
 
-def _layout_bullets(layout: RobotLayout) -> tuple[str, str]:
-    """The card's bullets of an arm: on ``observation.state`` (and ``observation.ee_pose``), and on ``action``."""
+def _layout_bullets(layout: RobotLayout, joint_driven: int = 0) -> tuple[str, str]:
+    """The card's bullets of an arm: on ``observation.state`` (and ``observation.ee_pose``), and on ``action``;
+    ``joint_driven`` episodes were driven joint by joint (a leader arm), not through the IK."""
     from rik.sim.robots.layout import EE_NAMES
 
     numbers = ", ".join(f"`{name}` ({UNIT_WORDS[unit]})"
@@ -157,6 +158,12 @@ def _layout_bullets(layout: RobotLayout) -> tuple[str, str]:
     action = ("- **`action`:** the joint targets the arm's position servos were given at each step (rik's "
               "differential IK turns the operator's target pose into them), in the names and units of "
               "`observation.state`; the gripper's entry is the gripper command.\n")
+    if joint_driven:  # a leader arm's episodes: its readings were the targets, no IK between
+        action = ("- **`action`:** the joint targets the arm's position servos were given at each step, in the names "
+                  "and units of `observation.state`; the gripper's entry is the gripper command. In "
+                  f"{joint_driven} episode(s) a leader arm drove the joints (its readings are the targets, as a real "
+                  "follower takes them); in the others rik's differential IK turned the operator's target pose into "
+                  "them.\n")
     return state, action
 
 
@@ -176,7 +183,7 @@ and for diffusion (its defaults normalise state and action by min and max)
 
 
 def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str, Any], info: dict[str, Any],
-                 robot: Robot) -> str:
+                 robot: Robot, joint_driven: int = 0) -> str:
     import rik
     from rik.sim.robots.layout import robot_layout
 
@@ -213,7 +220,7 @@ in your data loader.
   roll (rad), the jaw opening (m), the pads' centre (m, world) and the fingers' normal force on the front (N).
 """
     else:
-        state, action = _layout_bullets(layout)
+        state, action = _layout_bullets(layout, joint_driven)
     state_text = state + f"""- **`observation.environment_state`** (the front's state, {len(ENV_STATE_NAMES)} numbers):
   {_names(ENV_STATE_NAMES)}: the front's joint position (m for a drawer, rad for a door or flap) and velocity (m/s
   or rad/s), its opening (fraction of the range), the handle's grasp point (m, world), its orientation (unit
@@ -255,17 +262,17 @@ def card_fields(root: Path) -> dict[str, str]:
 
 
 def write_card(catalog: Catalog, root: Path, spec: ExportSpec, fps: int, checks: dict[str, Any],
-               extra: str = "", robot: str = "hand-e") -> Path:
+               extra: str = "", robot: str = "hand-e", joint_driven: int = 0) -> Path:
     """Write ``README.md`` (lerobot's dataset card, filled in) and the card's fields into the dataset; ``extra``
     (markdown) is added to the description (how a built dataset was made: :mod:`rik.dataset.build`); ``robot``: the
-    catalog robot whose episodes it holds."""
+    catalog robot whose episodes it holds; ``joint_driven``: how many of them a leader arm drove joint by joint."""
     from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
     from lerobot.datasets.utils import create_lerobot_dataset_card
 
     from rik.paths import write_atomic
 
     info = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))
-    description = (_description(catalog, spec, fps, checks, info, catalog.robot(robot))
+    description = (_description(catalog, spec, fps, checks, info, catalog.robot(robot), joint_driven)
                    + (f"\n{extra}\n" if extra else ""))
     fields = {"dataset_description": description,
               "paper": "Real-IKEA (see CITATION below)", "citation_bibtex": CITATION}

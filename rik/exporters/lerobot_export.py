@@ -355,7 +355,8 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     aggregate_shards(spec.repo_id, [p / "ds" for p in shard_dirs], merged)
     order_stats(merged)
     checks = lerobot_check.check_dataset(merged, spec.repo_id, len(dirs), layout)
-    lerobot_card.write_card(catalog, merged, spec, fps, checks, robot=robot)
+    lerobot_card.write_card(catalog, merged, spec, fps, checks, robot=robot,
+                            joint_driven=sum(m.action_kind == "joints" for m in metas.values()))
     publish(merged, out)
     shutil.rmtree(partial_dir, ignore_errors=True)
     return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
