@@ -77,6 +77,15 @@ def test_the_hand_e_scene_is_drawn_as_it_is(variants: Path) -> None:
     assert view.sync(scene.data) is scene.data
 
 
+def test_a_scene_whose_spec_does_not_match_is_drawn_in_full(variants: Path) -> None:
+    """A view model that cannot be made (here: the SO-100's scene given another scene's spec) falls back to the full
+    model: the station draws it, slower, rather than stopping."""
+    scene = build_scene(variants / BOW, robot=CAT.robot("so100"))
+    scene.spec = build_scene(variants / BOW).spec
+    view = ViewModel.of(scene)
+    assert view.model is scene.model and not view.decimated
+
+
 @pytest.mark.slow
 def test_the_panda_is_drawn_within_budget_where_it_is_and_its_physics_and_episode_do_not_change(
         variants: Path, tmp_path: Path) -> None:

@@ -184,13 +184,24 @@ def _mesh_arrays(model: mujoco.MjModel, mesh: int) -> tuple[np.ndarray, np.ndarr
 
 def build_view_model(scene: SimScene, budget: int = TRIANGLE_BUDGET, cache: Path | None = None) -> mujoco.MjModel:
     """The view model of ``scene`` (see the module docstring); the scene's own model when its visible meshes are
-    within ``budget`` or it was not built from a spec (``scene.spec``)."""
-    import mujoco
-
+    within ``budget``, it was not built from a spec (``scene.spec``), or a view model cannot be made from it (a
+    robot model that MuJoCo will not compile with user meshes, a spec that does not match: the station then draws
+    the full model, slower, rather than nothing)."""
     model = scene.model
     targets = face_targets(model, budget)
     if not targets or scene.spec is None:
         return model
+    try:
+        return _decimated_model(scene, targets, cache)
+    except (ValueError, AssertionError, KeyError, IndexError):
+        return model
+
+
+def _decimated_model(scene: SimScene, targets: dict[int, int], cache: Path | None) -> mujoco.MjModel:
+    import mujoco
+
+    model = scene.model
+    assert scene.spec is not None
     spec = scene.spec.copy()  # the same elements in the same order; ``id``: an element's index once compiled
     geoms = {int(sg.id): copied for sg, copied in zip(scene.spec.geoms, spec.geoms, strict=True)}
     meshes = {int(sm.id): copied for sm, copied in zip(scene.spec.meshes, spec.meshes, strict=True)}
