@@ -17,8 +17,9 @@ time for the same frame (the floor: the station cannot stream faster than it ren
   the station builds it: for ``--profile-steps`` control steps with an input held, the ms of the IK (the arm drive's
   command), the physics (the control step's ``mj_step`` calls), the rest of a recorded step (recording, grasp
   watch), each camera's render (``rik.teleop.frames.StationFrames``: the follow view and the wrist camera, painted
-  as the page shows them, from the view model whose arm meshes are decimated) and its JPEG, and beside it the same
-  camera drawing the full-detail model (interleaved, so both see the same load); the station's ``send`` (a
+  as the page shows them, from the view model whose arm meshes are decimated, anti-aliased or not as the station
+  decides) and its JPEG, and beside it the same camera as the station drew it before, the full-detail model
+  anti-aliased (interleaved, so both see the same load); the station's ``send`` (a
   frame's header ``sent`` stamp until the client holds it) and **real time** (simulated seconds per wall second
   while the input is held, from the frames' ``t``) come from the station run.
 
@@ -105,7 +106,7 @@ def profile(robot: str, size: tuple[int, int], steps: int = 60) -> dict[str, flo
     render and JPEG) with an input held, in this process, the scene built as the station builds it."""
     import numpy as np
 
-    from rik.teleop.frames import StationFrames
+    from rik.teleop.frames import ANTIALIAS_TRIAL, StationFrames
     from rik.teleop.session import TeleopSession
     from rik.teleop.station import CAMERAS, encode_jpeg
     from rik.teleop.view_model import visible_faces
@@ -126,13 +127,13 @@ def profile(robot: str, size: tuple[int, int], steps: int = 60) -> dict[str, flo
     scene.robot_drive.command = timed("ik", drive_command)  # type: ignore[method-assign]
     scene._run = timed("physics", run)  # type: ignore[method-assign]
     frames = StationFrames(scene)
-    full = StationFrames(scene, budget=10**9)  # the same cameras drawing the physics model's full-detail meshes
+    full = StationFrames(scene, budget=10**9, antialias=True)  # the cameras as before: every face, anti-aliased
     with tempfile.TemporaryDirectory() as tmp:
         session = TeleopSession(scene, Path(tmp), operator="bench")
         session.set_input(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.3]))  # roll slowly, as the station run does
         for cam in CAMERAS:
             times[f"render {cam}"], times[f"JPEG {cam}"], times[f"full-detail {cam}"] = [], [], []
-        warm = 5
+        warm = 5 + ANTIALIAS_TRIAL // len(CAMERAS)  # past the station's anti-aliasing trial
         for i in range(steps + warm):
             t0 = time.perf_counter()
             session.tick()
@@ -156,6 +157,7 @@ def profile(robot: str, size: tuple[int, int], steps: int = 60) -> dict[str, flo
     out["rest of step"] = out.pop("tick") - out["ik"] - out["physics"]
     out["total"] = sum(v for k, v in out.items() if not k.startswith("full-detail"))
     out["view faces"], out["full faces"] = visible_faces(frames.view.model), visible_faces(scene.model)
+    out["antialiased"] = float(frames.antialias)
     return out
 
 
@@ -303,9 +305,10 @@ def main() -> None:
         return
     for w, h in sizes:
         phases = profile(args.robot, (w, h), args.profile_steps)
-        faces = f"visible mesh faces drawn {phases.pop('view faces'):,.0f} of {phases.pop('full faces'):,.0f}"
+        faces = (f"visible mesh faces drawn {phases.pop('view faces'):,.0f} of {phases.pop('full faces'):,.0f}, "
+                 f"anti-aliasing {'kept' if phases.pop('antialiased') else 'off'}")
         print(f"where a step's time goes at {w}x{h} (median ms over {args.profile_steps} steps, this process; "
-              f"{faces}; full-detail: the same camera drawing every face, not part of the total): "
+              f"{faces}; full-detail: the same camera as before, every face anti-aliased, not in the total): "
               + ", ".join(f"{k} {v:.1f}" for k, v in phases.items()))
     with tempfile.TemporaryDirectory() as tmp:
         proc, url = start_station(Path(tmp), args.robot)

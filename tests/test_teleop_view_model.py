@@ -159,3 +159,22 @@ def test_the_panda_is_drawn_within_budget_where_it_is_and_its_physics_and_episod
     assert verify_episode(CAT, saved.path, variants).exact
     print(f"\nPanda: {full:,} visible mesh faces drawn as {visible_faces(view.model):,}; worst bounding box "
           f"{1e3 * worst:.1f} mm; picture {np.abs(a.astype(int) - b).mean():.2f} grey levels apart")
+
+
+def test_anti_aliasing_is_kept_where_renders_are_fast_and_a_station_without_it_changes_only_its_own_copy(
+        variants: Path) -> None:
+    """The decision from the trial renders' median (an outlier, such as the first render, does not decide it); a
+    station's frames without anti-aliasing render from a copy whose offscreen buffer has no multisampling, the
+    scene's model keeps its 4 samples, and the picture differs only at edges."""
+    from rik.teleop.frames import ANTIALIAS_BUDGET, StationFrames, keep_antialiasing
+
+    assert keep_antialiasing([ANTIALIAS_BUDGET / 2] * 11 + [1.0] * 9)
+    assert not keep_antialiasing([ANTIALIAS_BUDGET * 2] * 20)
+    scene = build_scene(variants / BOW)
+    plain, smooth = StationFrames(scene, antialias=False), StationFrames(scene, antialias=True)
+    a, b = (f.render(scene.data, "front", (320, 240)) for f in (plain, smooth))
+    assert plain.renderer((320, 240)).model.vis.quality.offsamples == 0
+    assert smooth.renderer((320, 240)).model is scene.model and scene.model.vis.quality.offsamples == 4
+    plain.close()
+    smooth.close()
+    assert a.std() > 10 and 0 < np.abs(a.astype(int) - b).mean() < 3
