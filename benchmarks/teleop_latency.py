@@ -9,9 +9,10 @@ time for the same frame (the floor: the station cannot stream faster than it ren
 - **station**: the real ``rik teleop VARIANT --web --port 0`` in its own process, a websocket client in this one
   (the ``websockets`` package, as a browser's page would talk to it). The client takes control, asks for the size,
   holds an input for ``--seconds`` and counts the ``front`` frames that arrive (streamed fps; the station sends
-  ``front`` and ``wrist`` each control step, so twice as many images); then ``--taps`` times: waits still, sends
-  one input with a new sequence number and measures the time until the first frame whose header says that input
-  was applied and whose step advanced (input-to-frame latency, ms: median and 90th percentile).
+  ``front`` and ``wrist`` each render, the wrist with every other one while it is behind real time); then
+  ``--taps`` times: waits still, sends one input with a new sequence number and measures the time until the first
+  frame whose header says that input was applied and whose step advanced (input-to-frame latency, ms: median and
+  90th percentile).
 
 - **where a step's time goes** (``profile``): the station's own pipeline in this process, with the robot's scene as
   the station builds it: for ``--profile-steps`` control steps with an input held, the ms of the IK (the arm drive's
