@@ -15,7 +15,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from rik.errors import RikError
-from rik.sim.grasp import PULL_SPEED, GraspPlan, hook_plans, pinch_fits, pinch_plan
+from rik.sim.grasp import PULL_SPEED, GraspPlan, hook_plans, pinch_fits, pinch_plan, swing_plans
 from rik.sim.pose import base_for_tcp
 from rik.sim.probe import APPROACH
 from rik.sim.scene import SimScene
@@ -41,6 +41,13 @@ NOISE_TIME = 0.5
 enough for the strategy's way back to be worth learning (white noise at 20 Hz averages out in the servos)."""
 NOISE_ANGLE_PER_M = 5.0
 """Standard deviation of the angle noise per metre of position noise, rad/m (0.01 m: 0.05 rad, 2.9 degrees)."""
+SAG_GAIN = 3.0
+"""A swinging-jaw arm's sag correction: the rate at which the commanded pads' point is moved to cancel the gap
+between where they were sent and where they are, 1/s (a time constant of 0.33 s)."""
+SAG_DWELL = 1.0
+"""How long a swinging-jaw arm pauses at the pre-grasp pose for its sag correction to settle, s."""
+SAG_LIMIT = 0.04
+"""The largest sag correction, m."""
 
 
 class Operator(Protocol):
@@ -65,11 +72,13 @@ class _Motion:
     a1: np.ndarray
     speed: float
     t: float = 0.0
+    dwell: float = 0.0
+    """The least time the motion lasts, s (a pause at its end, for a still one)."""
 
     @property
     def duration(self) -> float:
         return max(float(np.linalg.norm(self.end - self.start)) / self.speed,
-                   float(np.max(np.abs(self.a1 - self.a0))) / 1.5, 1e-9)
+                   float(np.max(np.abs(self.a1 - self.a0))) / 1.5, 1e-9, self.dwell)
 
 
 @dataclass
@@ -108,6 +117,8 @@ class ScriptedGrasp:
         self._cmd_tcp = scene.tcp()
         self._angles = scene.pose()[3:].copy()
         self._grip = 0.0
+        self._sag = np.zeros(3)
+        self._correct_sag = scene.gripper.fixed_jaw is not None
         self._start_plan(scene)
 
     # phases: approach (motions) -> close -> pull -> [release -> retreat -> approach ...]
@@ -125,6 +136,8 @@ class ScriptedGrasp:
         # leave the current spot along the old approach before turning, then come in along the new one
         self._motions = [_Motion(self._cmd_tcp, pre, self._angles.copy(), plan.angles, MOVE_SPEED),
                          _Motion(pre, target, plan.angles, plan.angles, APPROACH_SPEED)]
+        if self._correct_sag:  # pause at the pre-grasp pose until the sag correction has settled there
+            self._motions.insert(1, _Motion(pre, pre, plan.angles, plan.angles, MOVE_SPEED, dwell=SAG_DWELL))
         self._phase, self._clock = "approach", 0.0
         self.log.append(f"attempt {self._attempts + 1}: {plan.mode} {plan.detail}".strip())
 
@@ -142,13 +155,27 @@ class ScriptedGrasp:
         return executed
 
     def _action(self, scene: SimScene) -> np.ndarray:
-        return np.concatenate([base_for_tcp(scene.gripper, self._cmd_tcp, self._angles), [self._grip]])
+        return np.concatenate([base_for_tcp(scene.gripper, self._cmd_tcp + self._sag, self._angles), [self._grip]])
+
+    def _track(self, scene: SimScene, dt: float) -> None:
+        """A swinging-jaw arm (the SO arms) sags under its own weight by more than the millimetres its fixed jaw
+        clears a handle by; while it moves in free space, integrate the gap between the commanded pads' point and
+        the measured one into the command (up to :data:`SAG_LIMIT`), so the jaws arrive where the plan put them.
+        The correction is held while closing and pulling. Parallel jaws (Hand-E, Panda) are never corrected."""
+        if not self._correct_sag:
+            return
+        self._sag = self._sag + SAG_GAIN * dt * (self._cmd_tcp - scene.tcp())
+        size = float(np.linalg.norm(self._sag))
+        if size > SAG_LIMIT:
+            self._sag *= SAG_LIMIT / size
 
     def act(self, scene: SimScene) -> np.ndarray:
         dt = 1.0 / scene.control_fps
         self._clock += dt
         if self.done:
             return self._action(scene)
+        if self._phase in ("approach", "retreat"):
+            self._track(scene, dt)
         if self._phase == "approach":
             if self._follow(dt):
                 self._phase, self._clock, self._grip = "close", 0.0, 1.0
@@ -209,21 +236,29 @@ class ScriptedGrasp:
             self._phase, self._clock = "release", 0.0
 
 
+VERTICAL_SIDES = ("below", "above")
+HORIZONTAL_SIDES = ("left", "right")
+
+
 def _pinch_h(scene: SimScene) -> list[GraspPlan]:
-    return [pinch_plan(scene, vertical=False)]
+    return [*swing_plans(scene, HORIZONTAL_SIDES), pinch_plan(scene, vertical=False)]
 
 
 def _pinch_v(scene: SimScene) -> list[GraspPlan]:
-    return [pinch_plan(scene, vertical=True)]
+    return [*swing_plans(scene, VERTICAL_SIDES), pinch_plan(scene, vertical=True)]
 
 
 def _pinch_natural(scene: SimScene) -> list[GraspPlan]:
-    return [pinch_plan(scene, vertical=pinch_fits(scene))]
+    vertical = pinch_fits(scene)
+    return [*swing_plans(scene, VERTICAL_SIDES if vertical else HORIZONTAL_SIDES),
+            pinch_plan(scene, vertical=vertical)]
 
 
 def _contact_rich(scene: SimScene, geometry: str = "collision") -> list[GraspPlan]:
     natural = pinch_fits(scene, geometry)
-    return [*hook_plans(scene, limit=2, geometry=geometry), pinch_plan(scene, vertical=natural, geometry=geometry),
+    sides = (*VERTICAL_SIDES, *HORIZONTAL_SIDES) if natural else (*HORIZONTAL_SIDES, *VERTICAL_SIDES)
+    return [*swing_plans(scene, sides, limit=2, geometry=geometry), *hook_plans(scene, limit=2, geometry=geometry),
+            pinch_plan(scene, vertical=natural, geometry=geometry),
             pinch_plan(scene, vertical=not natural, geometry=geometry)]
 
 

@@ -10,8 +10,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rik.sim.pose import base_for_tcp, gripper_rotation
-from rik.sim.probe import APPROACH, CLEARANCE, find_hooks, front_face_y, handle_extent, pose_is_free
+from rik.sim.outcome import SUCCESS_OPENING
+from rik.sim.pose import angles_of, base_for_tcp, gripper_rotation
+from rik.sim.probe import APPROACH, CLEARANCE, find_hooks, front_face_y, handle_extent, pose_is_free, ray
 
 if TYPE_CHECKING:
     from rik.sim.scene import SimScene
@@ -21,6 +22,20 @@ PULL_SPEED = 0.12
 SWING_MARGIN = 0.008
 """A swinging gripper's fixed jaw comes this far clear of the handle (beyond :data:`CLEARANCE`), m: a hobby arm's servos
 sag a few millimetres under its own weight."""
+FIXED_GAP = 0.004
+"""A swinging gripper's fixed pad is placed this far from the handle's far side, m (the scripted strategies correct
+the arm's sag before they come in: :data:`rik.episodes.operators.SAG_GAIN`)."""
+SWING_TILTS = (75.0, 60.0, 45.0, 30.0, 15.0, 0.0)
+"""Angles of a swinging gripper's fingers from the front's normal, steepest first, deg: the steeper, the more of
+the pull presses the handle into the fixed jaw (sin of the angle) instead of resting on friction; 0 is the
+pinch straight into the front, the fixed jaw beside the handle."""
+SWING_BACK_OFF = 0.003
+"""Step by which a swinging gripper's grasp is drawn back along its fingers when their tips would touch the front
+(up to half the pad's length), m."""
+SWING_SIDES = {"below": np.array([0.0, 0.0, -1.0]), "above": np.array([0.0, 0.0, 1.0]),
+               "left": np.array([-1.0, 0.0, 0.0]), "right": np.array([1.0, 0.0, 0.0])}
+"""The sides a swinging gripper may come from (world), for the jaws closing in the vertical plane (below, above)
+or in the horizontal one (left, right)."""
 
 @dataclass(frozen=True)
 class GraspPlan:
@@ -80,3 +95,119 @@ def pinch_fits(scene: SimScene, geometry: str = "collision") -> bool:
     """Whether the handle is narrower vertically than horizontally (so a vertical pinch is the natural one)."""
     lo, hi = handle_extent(scene, geometry)
     return (hi[2] - lo[2]) <= (hi[0] - lo[0])
+
+
+def swing_frame(pull: np.ndarray, side: np.ndarray, tilt: float) -> np.ndarray:
+    """World rotation of a swinging gripper's frame (columns: closing axis x, y, fingers z) whose fingers point into
+    the front, tilted by ``tilt`` (rad) towards the handle from ``side`` (a unit vector across the pull), with the
+    fixed jaw (on the frame's +x) on the far side of the handle: x has a component against the pull."""
+    p = pull / np.linalg.norm(pull)
+    u = side - (side @ p) * p
+    u = u / np.linalg.norm(u)
+    fingers = -math.cos(tilt) * p - math.sin(tilt) * u
+    closing = -math.sin(tilt) * p + math.cos(tilt) * u
+    return np.column_stack([closing, np.cross(fingers, closing), fingers])
+
+
+def swing_plans(scene: SimScene, sides: tuple[str, ...] = ("below", "above"), limit: int = 1,
+                geometry: str = "collision") -> list[GraspPlan]:
+    """Grasps for a fixed and a swinging jaw (the SO arms): the fixed jaw's pad placed :data:`FIXED_GAP` from the
+    handle's far side (the side away from the pull, so that the pull presses the handle into the fixed jaw), the
+    swinging jaw open; closing it holds the handle against the fixed one. The fingers come in from one of
+    ``sides`` (:data:`SWING_SIDES`), tilted by :data:`SWING_TILTS` from the front's normal; a plan is kept when the
+    arm reaches it with the front closed (:func:`plan_reach`) and it, its way in and the pre-grasp pose touch
+    nothing (:func:`rik.sim.probe.pose_is_free`,
+    the robot's own geometry). The handle's cross-section is its bounding box from its far side (a ray from the
+    front's surface at the grasp point) to its outer face. Up to ``limit`` plans, those the arm can follow furthest
+    along the pull first (:func:`plan_reach`; every reach from a success's opening on counts alike), then the
+    steeper, then in the order of ``sides``. None for a gripper
+    with parallel jaws."""
+    g = scene.gripper
+    if g.fixed_jaw is None:
+        return []
+    lo, hi = handle_extent(scene, geometry)
+    centre = scene.grasp_point()
+    face = min(front_face_y(scene, centre[0], centre[2], hi[1] + 0.05, geometry), lo[1])
+    dist, _ = ray(scene, np.array([centre[0], face + 0.0005, centre[2]]), np.array([0.0, 1.0, 0.0]),
+                  geometry=geometry)
+    if not face + 0.0005 + dist < hi[1]:
+        return []
+    back = face + 0.0005 + dist
+    pull = scene.pull_direction()
+    plans: list[GraspPlan] = []
+    for tilt_deg in SWING_TILTS:
+        for side in sides:
+            u = SWING_SIDES[side]
+            axis = int(np.argmax(np.abs(u)))
+            rot = swing_frame(pull, u, math.radians(tilt_deg))
+            closing, fingers = rot[:, 0], rot[:, 2]
+            # the cross-section's corners in the plane of the pull and the side: where the fixed pad's face goes
+            corners = []
+            for y in (back, hi[1]):
+                for a in (lo[axis], hi[axis]):
+                    c = centre.copy()
+                    c[1], c[axis] = y, a
+                    corners.append(c)
+            mid = 0.5 * (corners[0] + corners[-1])
+            reach_far = max(float(closing @ c) for c in corners)
+            placed = mid + closing * (reach_far - float(closing @ mid) + FIXED_GAP - g.fixed_jaw)
+            angles = angles_of(rot)
+            # where the fingertips would touch the front, hold the handle nearer the tips of the pads
+            for back_off in np.arange(0.0, 0.5 * g.pad_length + 1e-9, SWING_BACK_OFF):
+                tcp = placed - fingers * back_off
+                if all(pose_is_free(scene, base_for_tcp(g, tcp - fingers * k * APPROACH, angles), g.finger_travel,
+                                    geometry) for k in (0.0, 0.5, 1.0)):
+                    break
+            else:
+                continue
+            plans.append(GraspPlan(f"swing_{side}", tcp, angles, -fingers, f"tilt {tilt_deg:.0f} deg",
+                                   f"swing_{side}_{tilt_deg:.0f}"))
+    reach = [plan_reach(scene, p) for p in plans]
+    # not even the closed handle: none; past a success's opening a further reach gains nothing, a steeper tilt
+    # (first among equals: the sort is stable) holds by more than friction
+    order = sorted((i for i in range(len(plans)) if reach[i] >= 0.0),
+                   key=lambda i: -min(round(reach[i], 2), SUCCESS_OPENING))
+    return [_with_detail(plans[i], f"reaches {reach[i]:.0%}") for i in order[:limit]]
+
+
+def _with_detail(plan: GraspPlan, words: str) -> GraspPlan:
+    from dataclasses import replace
+
+    return replace(plan, detail=f"{plan.detail}, {words}".strip(", "))
+
+
+REACH_STEPS = tuple(np.round(np.linspace(0.0, 1.0, 11), 2))
+"""Openings at which :func:`plan_reach` solves the arm, fractions of the front's range."""
+
+
+def plan_reach(scene: SimScene, plan: GraspPlan) -> float:
+    """The largest opening up to which the scene's arm can hold ``plan``'s grasp as the front opens (the pads kept
+    where they are on the handle, the gripper's angles kept), each opening solved by the arm's IK from the previous
+    one's posture and met within :data:`rik.sim.robots.reach.REACH_TOLERANCE`; -1: not even the closed one. A
+    robot without an arm IK (the floating Hand-E) reaches everything: 1. The scene is left as it was."""
+    from rik.sim.robots.drive import ArmDrive
+    from rik.sim.robots.reach import REACH_TOLERANCE, set_opening
+
+    drive = scene.robot_drive
+    if not isinstance(drive, ArmDrive):
+        return 1.0
+    ik = drive.ik
+    saved = scene.state()
+    best, q = -1.0, None
+    offset = plan.tcp - scene.grasp_point()
+    lo, hi = scene.front.range
+    now = (float(scene.data.qpos[scene.front.qpos_adr]) - lo) / (hi - lo) if hi > lo else 0.0
+    try:
+        for opening in REACH_STEPS:
+            if opening < now - 1e-6:
+                continue
+            set_opening(scene, float(opening))
+            pose = base_for_tcp(scene.gripper, scene.grasp_point() + offset, plan.angles)
+            position, rotation = drive._frame_target(scene, pose)
+            q, dp, da = ik.solve(position, rotation, q)
+            if dp > REACH_TOLERANCE[0] or da > REACH_TOLERANCE[1]:
+                break
+            best = float(opening)
+    finally:
+        scene.restore(saved)
+    return best

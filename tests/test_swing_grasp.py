@@ -1,0 +1,145 @@
+"""The grasp planner for a fixed and a swinging jaw (the SO arms): the frame it turns the gripper to, where it puts
+the fixed pad relative to the handle, and an episode on the demo's bow drawer under the smooth preset in which
+both pads hold the handle while the drawer opens."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+from shared import BOW, builtin_catalog
+
+from rik.episodes.operators import make_operator
+from rik.episodes.record import randomise_start, variant_dir
+from rik.sim.build import build_scene
+from rik.sim.grasp import FIXED_GAP, swing_frame, swing_plans
+from rik.sim.pose import angles_of, gripper_rotation
+from rik.sim.probe import front_face_y, handle_extent, ray
+
+CAT = builtin_catalog()
+SO_ARMS = ("so100", "so101")
+SMOOTH_BOW = BOW.replace("__normal", "__smooth")
+PULL = np.array([0.0, 1.0, 0.0])
+
+
+@pytest.mark.parametrize("side, across", [("below", np.array([0.0, 0.0, -1.0])),
+                                          ("right", np.array([1.0, 0.0, 0.0]))])
+@pytest.mark.parametrize("tilt_deg", [0.0, 30.0, 60.0, 90.0])
+def test_swing_frame_puts_the_fixed_jaw_against_the_pull(side: str, across: np.ndarray, tilt_deg: float) -> None:
+    """Fingers into the front tilted towards the handle from ``side``; the closing axis (towards the fixed jaw)
+    against the pull by sin(tilt); a right-handed rotation that the target pose's angles reproduce."""
+    t = math.radians(tilt_deg)
+    rot = swing_frame(PULL, across, t)
+    assert rot.T @ rot == pytest.approx(np.eye(3), abs=1e-12) and np.linalg.det(rot) == pytest.approx(1.0)
+    closing, fingers = rot[:, 0], rot[:, 2]
+    assert fingers @ PULL == pytest.approx(-math.cos(t), abs=1e-12)  # into the front
+    assert fingers @ across == pytest.approx(-math.sin(t), abs=1e-12)  # towards the handle from that side
+    assert closing @ PULL == pytest.approx(-math.sin(t), abs=1e-12)  # the fixed jaw on the far side
+    assert gripper_rotation(angles_of(rot)) == pytest.approx(rot, abs=1e-9)
+
+
+@pytest.fixture(scope="module")
+def smooth_variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("smooth-bow")
+    variant_dir(CAT, SMOOTH_BOW, out)
+    return out
+
+
+@pytest.mark.parametrize("robot", SO_ARMS)
+def test_fixed_pad_lies_against_the_handles_far_side(smooth_variants: Path, robot: str) -> None:
+    """On the bow's grip bar: the fixed pad's face (``fixed_jaw`` along the closing axis from the pads' centre) is
+    in the gap between the front and the bar's back, FIXED_GAP from the bar (a ray from the face towards the
+    swinging jaw, from somewhere along the pad, meets the handle there), and the bar lies between it and the open
+    swinging jaw."""
+    scene = build_scene(smooth_variants / SMOOTH_BOW, None, robot=CAT.robot(robot))
+    g = scene.gripper
+    plans = swing_plans(scene, ("below", "above"), limit=20)
+    assert any(not p.detail.startswith("tilt 0 ") for p in plans), f"{robot}: no tilted swinging-jaw grasp"
+    lo, hi = handle_extent(scene)
+    gp = scene.grasp_point()
+    face = min(front_face_y(scene, gp[0], gp[2], hi[1] + 0.05), lo[1])
+    back = face + 0.0005 + ray(scene, np.array([gp[0], face + 0.0005, gp[2]]), PULL)[0]
+    for plan in plans:
+        rot = gripper_rotation(plan.angles)
+        closing = rot[:, 0]
+        tilt = math.radians(float(plan.detail.split()[1]))
+        # the pull presses the bar into the fixed jaw by sin(tilt) of itself (tilt 0: beside it)
+        assert closing @ scene.pull_direction() == pytest.approx(-math.sin(tilt), abs=1e-6), plan
+        assert g.fixed_jaw is not None
+        pad = plan.tcp + g.fixed_jaw * closing
+        assert face < pad[1] < hi[1], (plan, pad, face, hi)
+        # the face's nearest point to the handle, over the pad's length along the fingers
+        dist = min(_distance_to_handle(scene, pad + rot[:, 2] * s, -closing)
+                   for s in np.linspace(-g.pad_length / 2, g.pad_length / 2, 15))
+        assert FIXED_GAP - 1e-4 <= dist <= FIXED_GAP + 0.015, (plan, dist)
+        assert g.fixed_jaw - g.stroke < closing @ (gp - plan.tcp) < g.fixed_jaw, plan
+        assert plan.approach @ rot[:, 2] == pytest.approx(-1.0)  # it comes in along its fingers
+        assert back < hi[1]
+
+
+def _distance_to_handle(scene: object, origin: np.ndarray, direction: np.ndarray) -> float:
+    """Along a ray, the distance to the first geom of the handle, passing through the robot (it stands at its start
+    pose, in the way), m; inf if it meets none."""
+    travelled = 0.0
+    for _ in range(10):
+        dist, geom = ray(scene, origin + direction * travelled, direction)  # type: ignore[arg-type]
+        if geom < 0:
+            return float("inf")
+        travelled += dist
+        if int(scene.model.geom_bodyid[geom]) == scene.front.handle_body:  # type: ignore[attr-defined]
+            return travelled
+        travelled += 1e-4
+    return float("inf")
+
+
+def _jaw_forces(scene: object) -> dict[str, float]:
+    """Normal force (N) of each jaw on the handle: the fixed jaw's body (the one its pads are on) and the swinging
+    jaw's, pads or not (the SO-100's jaw meshes stand proud of its pads in places)."""
+    m, d = scene.model, scene.data  # type: ignore[attr-defined]
+    bodies = {}
+    for g in range(m.ngeom):
+        for jaw in ("fixed", "moving"):
+            if f"{jaw}_jaw_pad" in m.geom(g).name:
+                bodies[int(m.geom_bodyid[g])] = jaw
+    assert sorted(set(bodies.values())) == ["fixed", "moving"], bodies
+    forces = {"fixed": 0.0, "moving": 0.0}
+    w = np.zeros(6)
+    for i in range(d.ncon):
+        b1, b2 = (int(m.geom_bodyid[int(g)]) for g in (d.contact.geom1[i], d.contact.geom2[i]))
+        for ours, other in ((b1, b2), (b2, b1)):
+            if ours in bodies and other == scene.front.handle_body:  # type: ignore[attr-defined]
+                mujoco.mj_contactForce(m, d, i, w)
+                forces[bodies[ours]] += abs(float(w[0]))
+    return forces
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("robot", [
+    pytest.param("so100", marks=pytest.mark.xfail(strict=True, reason=(
+        "measured: the SO-100's plan (swing_below, tilt 0, the one that reaches 90 %) jams the bow between its "
+        "swinging jaw's second pad and nothing of the fixed jaw (over 1000 N on that pad, none on the fixed jaw), "
+        "and the drawer still follows; not understood yet"))),
+    "so101"])
+def test_so_arm_holds_the_bow_with_both_jaws(smooth_variants: Path, robot: str) -> None:
+    """grasp_vertical with an SO arm on the smooth bow drawer plans a swinging-jaw grasp; once closed, both jaws
+    press the handle all through the first second of the pull, and the drawer follows."""
+    scene = build_scene(smooth_variants / SMOOTH_BOW, None, robot=CAT.robot(robot))
+    rng = np.random.default_rng(0)
+    randomise_start(scene, rng)
+    op = make_operator("grasp_vertical")
+    op.reset(scene, rng)
+    for _ in range(400):
+        if op._phase == "pull":
+            break
+        scene.step(op.act(scene))
+    assert op._phase == "pull" and op.log[0].startswith("attempt 1: swing_"), op.log
+    weakest = {"fixed": np.inf, "moving": np.inf}
+    for _ in range(scene.control_fps):
+        scene.step(op.act(scene))
+        forces = _jaw_forces(scene)
+        weakest = {k: min(weakest[k], forces[k]) for k in weakest}
+    assert weakest["fixed"] > 1.0 and weakest["moving"] > 1.0, (robot, weakest)
+    assert scene.opening() > 0.05, (robot, scene.opening(), op.log)
