@@ -209,6 +209,25 @@ def test_the_operators_view_paints_jaws_and_handle_in_colours_of_their_own(varia
     assert np.array_equal(scene.model.mat_rgba, materials)
 
 
+@pytest.mark.parametrize(("robot", "jaws"), [("so100", "JAWS_ALT_RGBA"), ("panda-2f85", "JAWS_RGBA")])
+def test_an_arm_painted_like_the_jaws_gets_jaws_of_another_colour(variants: Path, robot: str, jaws: str) -> None:
+    """The SO-100's own paint is orange, the jaws' colour: on it the jaws are magenta; the Panda's white and black
+    arm keeps the orange jaws."""
+    import mujoco
+
+    import rik.teleop.view as view
+
+    scene = build_scene(variants / DOOR, None, HAND_E, 20, robot=CAT.robot(robot).as_arm)
+    with mujoco.Renderer(scene.model, 120, 160) as r:
+        r.update_scene(scene.data, camera=view.FollowView(scene).at(scene.data))
+        view.paint_for_contrast(r.scene, scene)
+        hand = view.gripper_bodies(scene)
+        colours = [r.scene.geoms[i].rgba.copy() for i in range(r.scene.ngeom)
+                   if r.scene.geoms[i].objtype == mujoco.mjtObj.mjOBJ_GEOM
+                   and int(scene.model.geom_bodyid[r.scene.geoms[i].objid]) in hand]
+    assert colours and np.allclose(colours, getattr(view, jaws), atol=1e-6)
+
+
 @pytest.mark.parametrize("msg", [{"azimuth": "left"}, {"azimuth": float("nan")}, {"elevation": True},
                                  {"azimuth": 1e9}, {"azimuth": [1]}, {"reset": "yes", "azimuth": None}])
 def test_a_bad_view_message_is_refused_with_a_notice(msg: dict) -> None:

@@ -62,24 +62,31 @@ class FollowView:
 
 JAWS_RGBA = (0.95, 0.45, 0.05, 1.0)
 """The gripper's colour in the operator's view (orange), RGBA."""
+JAWS_ALT_RGBA = (0.85, 0.15, 0.80, 1.0)
+"""The gripper's colour when the arm's own paint is close to :data:`JAWS_RGBA` (the SO-100 is orange): magenta."""
+NEAR_COLOUR = 0.25
+"""Colours closer than this in every RGB channel (0..1) read as the same colour."""
 HANDLE_RGBA = (0.10, 0.45, 0.95, 1.0)
 """The operated handle's colour in the operator's view (blue): a white handle on a white front stands out, RGBA."""
 
 
 def paint_for_contrast(view: mujoco.MjvScene, scene: SimScene) -> None:
-    """Colour the gripper :data:`JAWS_RGBA` and the operated handle :data:`HANDLE_RGBA` in a view made by
-    ``update_scene`` (textures dropped): depth is easier to read when jaws, handle and front differ. The operator's
-    view only: the scene's materials, and every recorded stream, stay as they are."""
+    """Colour the gripper :data:`JAWS_RGBA` (:data:`JAWS_ALT_RGBA` on an arm painted close to it) and the operated
+    handle :data:`HANDLE_RGBA` in a view made by ``update_scene`` (textures dropped): depth is easier to read when
+    jaws, handle, front and arm differ. The operator's view only: the scene's materials, and every recorded stream,
+    stay as they are."""
     import mujoco
 
     bodies = scene.model.geom_bodyid
     hand = gripper_bodies(scene)
-    for i in range(view.ngeom):
-        g = view.geoms[i]
-        if g.objtype != mujoco.mjtObj.mjOBJ_GEOM:
-            continue
+    robot = frozenset(int(bodies[g]) for g in scene.robot_drive.geoms(scene))
+    drawn = [view.geoms[i] for i in range(view.ngeom) if view.geoms[i].objtype == mujoco.mjtObj.mjOBJ_GEOM]
+    arm = [g.rgba[:3] for g in drawn if int(bodies[g.objid]) in robot - hand]
+    jaws = JAWS_ALT_RGBA if any(max(abs(c - j) for c, j in zip(rgb, JAWS_RGBA[:3], strict=True)) < NEAR_COLOUR
+                                for rgb in arm) else JAWS_RGBA
+    for g in drawn:
         if int(bodies[g.objid]) in hand:
-            rgba = JAWS_RGBA
+            rgba = jaws
         elif int(bodies[g.objid]) == scene.front.handle_body:
             rgba = HANDLE_RGBA
         else:
