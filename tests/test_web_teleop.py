@@ -138,7 +138,8 @@ def test_browser_opens_the_demo_drawer_and_the_episode_replays_exactly(rik, vari
 
 def test_dragging_the_front_view_orbits_it_and_a_double_click_puts_it_back(variants: Path, tmp_path: Path) -> None:
     """The page's front view turns with a mouse drag (the station renders the turned view and reports the turn) and
-    a double-click resets it; nothing is recorded by looking around."""
+    a double-click resets it; so do the gamepad's right stick with LT held, and R3; nothing is recorded by looking
+    around."""
     with served(config(variants, tmp_path / "episodes")) as url, browser() as b:
         page = open_station(b, url)
         drive = Driver(page)
@@ -156,6 +157,15 @@ def test_dragging_the_front_view_orbits_it_and_a_double_click_puts_it_back(varia
         assert page.evaluate(f"{STATION}.steps") == "0"
         page.dblclick("#cam-front", timeout=WAIT_MS)
         drive.wait("Number(d.viewAzimuth) === 0 && Number(d.viewElevation) === 0")
+        # the gamepad: LT held, the right stick to the right and down orbits the same way; R3 puts the view back
+        lt = [{"pressed": i == 6, "value": float(i == 6)} for i in range(17)]
+        page.evaluate("b => window.rikTest.setGamepad({axes: [0, 0, 1, 0.6], buttons: b})", lt)
+        drive.wait("Number(d.viewAzimuth) < -20 && Number(d.viewElevation) < -5")
+        page.evaluate("b => window.rikTest.setGamepad({axes: [0, 0, 0, 0], buttons: b})",
+                      [{"pressed": i == 11, "value": float(i == 11)} for i in range(17)])
+        drive.wait("Number(d.viewAzimuth) === 0 && Number(d.viewElevation) === 0")
+        page.evaluate("window.rikTest.setGamepad(null)")
+        assert page.evaluate(f"{STATION}.steps") == "0"  # the stick turned the view, not the gripper
 
 
 FRONTS = {

@@ -15,6 +15,7 @@
   const PAD = [ // what the standard-mapping gamepad does (shown on the page)
     ["left stick", "left / right, towards / away"],
     ["right stick", "up / down (y), yaw (x)"],
+    ["LT / L2 (hold) + right stick", "orbit the front view instead (R3: put it back)"],
     ["d-pad", "pitch (up / down), roll (left / right)"],
     ["right trigger (RT / R2)", "grip: the harder, the tighter (analog)"],
     ["A / cross", "close / open the gripper"],
@@ -24,6 +25,9 @@
     ["Y / triangle", "replay the last saved episode"],
   ];
   const PAD_BUTTONS = {0: "toggle_grip", 9: "save", 8: "discard", 3: "replay"};
+  const ORBIT_BUTTON = 6;   // LT / L2 held: the right stick orbits the front view
+  const ORBIT_RESET = 11;   // R3 (the right stick pressed): the front view back
+  const ORBIT_SPEED = 90;   // degrees per second at full deflection
 
   let keymap = null;
   let ws = null;
@@ -32,6 +36,7 @@
   let lastSentAt = 0;
   let lastTrigger = 0;
   let padPrev = [];
+  let orbitAt = 0;     // when the last orbit turn was sent (ms)
   let virtualPad = null;
   let status = null;
   let lastStep = 0;
@@ -281,7 +286,11 @@
     const pad = readPad();
     if (pad) {
       const a = pad.axes || [];
-      axes[0] -= dz(a[0]); axes[1] += dz(a[1]); axes[2] -= dz(a[3]); axes[4] -= dz(a[2]);
+      axes[0] -= dz(a[0]); axes[1] += dz(a[1]);
+      if (pressed(pad, ORBIT_BUTTON)) orbit(dz(a[2]), dz(a[3]));
+      else { axes[2] -= dz(a[3]); axes[4] -= dz(a[2]); orbitAt = 0; }
+      if (pressed(pad, ORBIT_RESET) && !padPrev[ORBIT_RESET]) send({type: "view", reset: true});
+      padPrev[ORBIT_RESET] = pressed(pad, ORBIT_RESET);
       if (pressed(pad, 12)) axes[3] -= 1;
       if (pressed(pad, 13)) axes[3] += 1;
       if (pressed(pad, 14)) axes[5] += 1;
@@ -299,6 +308,18 @@
       $("pad-state").textContent = "no gamepad (press a button on it to connect)";
     }
     return {axes: axes.map((v) => Math.round(Math.max(-1, Math.min(1, v)) * 1000) / 1000), grip: grip, fine: fine};
+  }
+
+  // the right stick's orbit of the front view (LT held): turns sent at most every SEND_PERIOD, by the time since the
+  // last one, so the view turns at ORBIT_SPEED whatever the frame rate; stick right turns as a drag to the right
+  function orbit(x, y) {
+    const now = performance.now();
+    if (!x && !y) { orbitAt = 0; return; }
+    if (!orbitAt) { orbitAt = now; return; }
+    if (now - orbitAt < SEND_PERIOD) return;
+    const dt = Math.min(now - orbitAt, 200) / 1000;
+    orbitAt = now;
+    send({type: "view", azimuth: -ORBIT_SPEED * x * dt, elevation: -ORBIT_SPEED * y * dt});
   }
 
   function step() {
