@@ -176,38 +176,8 @@ def _with_detail(plan: GraspPlan, words: str) -> GraspPlan:
     return replace(plan, detail=f"{plan.detail}, {words}".strip(", "))
 
 
-REACH_STEPS = tuple(np.round(np.linspace(0.0, 1.0, 11), 2))
-"""Openings at which :func:`plan_reach` solves the arm, fractions of the front's range."""
-
-
 def plan_reach(scene: SimScene, plan: GraspPlan) -> float:
-    """The largest opening up to which the scene's arm can hold ``plan``'s grasp as the front opens (the pads kept
-    where they are on the handle, the gripper's angles kept), each opening solved by the arm's IK from the previous
-    one's posture and met within :data:`rik.sim.robots.reach.REACH_TOLERANCE`; -1: not even the closed one. A
-    robot without an arm IK (the floating Hand-E) reaches everything: 1. The scene is left as it was."""
-    from rik.sim.robots.drive import ArmDrive
-    from rik.sim.robots.reach import REACH_TOLERANCE, set_opening
-
-    drive = scene.robot_drive
-    if not isinstance(drive, ArmDrive):
-        return 1.0
-    ik = drive.ik
-    saved = scene.state()
-    best, q = -1.0, None
-    offset = plan.tcp - scene.grasp_point()
-    lo, hi = scene.front.range
-    now = (float(scene.data.qpos[scene.front.qpos_adr]) - lo) / (hi - lo) if hi > lo else 0.0
-    try:
-        for opening in REACH_STEPS:
-            if opening < now - 1e-6:
-                continue
-            set_opening(scene, float(opening))
-            pose = base_for_tcp(scene.gripper, scene.grasp_point() + offset, plan.angles)
-            position, rotation = drive._frame_target(scene, pose)
-            q, dp, da = ik.solve(position, rotation, q)
-            if dp > REACH_TOLERANCE[0] or da > REACH_TOLERANCE[1]:
-                break
-            best = float(opening)
-    finally:
-        scene.restore(saved)
-    return best
+    """The largest opening up to which the scene's robot can hold ``plan``'s grasp as the front opens (the pads kept
+    where they are on the handle, the gripper's angles kept): the drive's :meth:`hold_reach`; -1: not even the
+    closed one."""
+    return scene.robot_drive.hold_reach(scene, plan.tcp - scene.grasp_point(), plan.angles)

@@ -44,6 +44,7 @@ import numpy as np
 from rik.errors import RikError
 from rik.teleop.feedback import front_text, grasp_text, motion_text
 from rik.teleop.keys import COMMAND_KEYS, MOTION_KEYS, keymap_rows, velocity
+from rik.teleop.leader import LEADERS, LeaderArm, open_leader
 from rik.teleop.pacing import due_steps
 from rik.teleop.session import TeleopSession, check_time_limit, handle_text, time_text
 from rik.teleop.window import CAMERAS, TeleopWindow, open_display
@@ -52,7 +53,6 @@ if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
     from rik.schemas.robots import Robot
-    from rik.teleop.leader import LeaderArm
 
 MAX_FPS = 60.0
 """Frames per second the window is drawn at most (no vsync under a virtual display)."""
@@ -115,8 +115,6 @@ def make_device(name: str, robot: Robot | None = None, port: str | None = None, 
                 calibration_dir: Path | None = None) -> KeyboardDevice | SpaceMouseDevice | LeaderArm:
     """A device by name; a SpaceMouse or a leader arm (on serial ``port``, driving ``robot``) is opened here, so a
     missing one fails before anything else happens."""
-    from rik.teleop.leader import LEADERS, open_leader
-
     if name not in DEVICES and name not in LEADERS:
         raise DeviceError(f"unknown device '{name}' (devices: {', '.join([*DEVICES, *LEADERS])})")
     if name in LEADERS:

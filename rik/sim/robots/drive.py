@@ -21,7 +21,15 @@ import numpy as np
 from rik.sim.pose import angles_of, base_for_tcp, gripper_rotation
 from rik.sim.robots.arm import ROBOT_PREFIX, Placement
 from rik.sim.robots.gripper import jaw_target
-from rik.sim.robots.reach import OPENINGS, handle_words, natural_grasp, reachable_opening, reached, set_opening
+from rik.sim.robots.reach import (
+    OPENINGS,
+    REACH_TOLERANCE,
+    handle_words,
+    natural_grasp,
+    reachable_opening,
+    reached,
+    set_opening,
+)
 from rik.sim.robots.results import CheckResult, ReachPoint
 
 PROBE_ITERATIONS = 40
@@ -133,6 +141,10 @@ class FloatingDrive:
     def reach(self, scene: SimScene, openings: tuple[float, ...], force: float) -> list[ReachPoint]:
         """The base's servos reach every pose in the scene: every grasp is met exactly."""
         return [ReachPoint(o, 0.0, 0.0, (), 0.0, "") for o in openings]
+
+    def hold_reach(self, scene: SimScene, offset: np.ndarray, angles: np.ndarray) -> float:
+        """The base's servos hold any grasp over the whole opening: 1."""
+        return 1.0
 
     def reach_checks(self, scene: SimScene, force: float) -> list[CheckResult]:
         g = scene.gripper
@@ -283,6 +295,9 @@ class ArmDrive:
     def reach(self, scene: SimScene, openings: tuple[float, ...], force: float) -> list[ReachPoint]:
         return _arm_reach_profile(scene, self, openings, force)
 
+    def hold_reach(self, scene: SimScene, offset: np.ndarray, angles: np.ndarray) -> float:
+        return _arm_hold_reach(scene, self, offset, angles)
+
     def reach_checks(self, scene: SimScene, force: float) -> list[CheckResult]:
         return _arm_reach_checks(scene, self, force)
 
@@ -310,6 +325,35 @@ def _torque_use(scene: SimScene, drive: ArmDrive, q: np.ndarray, force: float) -
     d.qpos[:], d.qvel[:] = saved
     mujoco.mj_forward(m, d)
     return float(share[worst]), drive.robot.joints.joints[worst].name
+
+
+HOLD_STEPS = tuple(np.round(np.linspace(0.0, 1.0, 11), 2))
+"""Openings at which :func:`_arm_hold_reach` solves the arm, fractions of the front's range."""
+
+
+def _arm_hold_reach(scene: SimScene, drive: ArmDrive, offset: np.ndarray, angles: np.ndarray) -> float:
+    """:meth:`Drive.hold_reach` of an arm: from the front's opening now on, each of :data:`HOLD_STEPS` solved by its
+    IK from the previous one's posture, the gripper frame at the grasp point plus ``offset`` (m, world) with
+    ``angles``, met within :data:`rik.sim.robots.reach.REACH_TOLERANCE`; the largest opening met, -1 for none. The
+    scene is left as it was."""
+    saved = scene.state()
+    best, q = -1.0, None
+    lo, hi = scene.front.range
+    now = (float(scene.data.qpos[scene.front.qpos_adr]) - lo) / (hi - lo) if hi > lo else 0.0
+    try:
+        for opening in HOLD_STEPS:
+            if opening < now - 1e-6:
+                continue
+            set_opening(scene, float(opening))
+            pose = base_for_tcp(scene.gripper, scene.grasp_point() + offset, angles)
+            position, rotation = drive._frame_target(scene, pose)
+            q, dp, da = drive.ik.solve(position, rotation, q)
+            if dp > REACH_TOLERANCE[0] or da > REACH_TOLERANCE[1]:
+                break
+            best = float(opening)
+    finally:
+        scene.restore(saved)
+    return best
 
 
 def _arm_reach_profile(scene: SimScene, drive: ArmDrive, openings: tuple[float, ...], force: float
