@@ -5,7 +5,7 @@ and the robot checks size a robot's reach with the natural pinch. Lengths in m, 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -171,8 +171,6 @@ def swing_plans(scene: SimScene, sides: tuple[str, ...] = ("below", "above"), li
 
 
 def _with_detail(plan: GraspPlan, words: str) -> GraspPlan:
-    from dataclasses import replace
-
     return replace(plan, detail=f"{plan.detail}, {words}".strip(", "))
 
 

@@ -56,12 +56,7 @@ class RobotLayout:
         if self.robot is None:
             return robot_state(scene)
         drive = scene.robot_drive
-        names = list(self.robot.joint_names)
-        q = drive.joint_positions(scene)
-        closure = min(max(drive.closure(scene), 0.0), 1.0)
-        return np.array([_to_unit(float(q[names.index(j)]) - zero, unit) if j is not None
-                         else _grip_to_unit(closure, unit) for (j, unit), zero in zip(self.joints, self.zeros,
-                                                                                       strict=True)], np.float64)
+        return self._in_units(drive.joint_positions(scene), drive.closure(scene))
 
     # ---- action ---------------------------------------------------------------------------------------------
     def action(self, pose_action: np.ndarray, targets: np.ndarray) -> np.ndarray:
@@ -74,10 +69,15 @@ class RobotLayout:
     def joint_action(self, targets: np.ndarray, grip: float) -> np.ndarray:
         """An arm's ``action`` from its joint targets (rad, the robot's joint order; more numbers after them are
         ignored) and gripper command (0 open .. 1 closed): what :meth:`joint_targets` inverts."""
+        return self._in_units(targets, grip)
+
+    def _in_units(self, q: np.ndarray, grip: float) -> np.ndarray:
+        """An arm's joint positions or targets ``q`` (rad, the robot's joint order) and its gripper's closure or
+        command ``grip`` (0 open .. 1 closed, clamped) in this layout's names, zeros and units, float64."""
         assert self.robot is not None
         names = list(self.robot.joint_names)
         grip = min(max(grip, 0.0), 1.0)
-        return np.array([_to_unit(float(targets[names.index(j)]) - zero, unit) if j is not None
+        return np.array([_to_unit(float(q[names.index(j)]) - zero, unit) if j is not None
                          else _grip_to_unit(grip, unit) for (j, unit), zero in zip(self.joints, self.zeros,
                                                                                     strict=True)], np.float64)
 
