@@ -11,11 +11,10 @@ import mujoco
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
-from shared import BOW, builtin_catalog
+from shared import BOW, builtin_catalog, grasp_until_pull
 
 from rik.episodes.episode import COLUMNS_2, META, STATES, meta_digest, read_episode
-from rik.episodes.operators import make_operator
-from rik.episodes.record import randomise_start, record_one
+from rik.episodes.record import record_one
 from rik.episodes.replay import verify_episode
 from rik.sim.build import build_scene
 from rik.sim.robots.checks import reach_profile, run_checks
@@ -35,14 +34,7 @@ def _closed_grip(variants: Path, robot: str) -> tuple[object, dict[str, float]]:
     gripper body on the handle."""
     entry = CAT.robot(robot)
     scene = build_scene(variants / BOW, None, robot=entry if entry.kind.value == "arm" else None)
-    rng = np.random.default_rng(0)
-    randomise_start(scene, rng)
-    op = make_operator("grasp_vertical")
-    op.reset(scene, rng)
-    for _ in range(200):
-        if op._phase == "pull":
-            break
-        scene.step(op.act(scene))
+    op = grasp_until_pull(scene, 200)
     assert op._phase == "pull", f"{robot}: the grasp never closed ({op.log})"
     hold = op._action(scene)
     for _ in range(20):

@@ -10,10 +10,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
-from shared import BOW, builtin_catalog
+from shared import BOW, builtin_catalog, grasp_until_pull
 
-from rik.episodes.operators import make_operator
-from rik.episodes.record import randomise_start, variant_dir
+from rik.episodes.record import variant_dir
 from rik.sim.build import build_scene
 from rik.sim.grasp import FIXED_GAP, swing_frame, swing_plans
 from rik.sim.pose import angles_of, gripper_rotation
@@ -127,14 +126,7 @@ def test_so_arm_holds_the_bow_with_both_jaws(smooth_variants: Path, robot: str) 
     """grasp_vertical with an SO arm on the smooth bow drawer plans a swinging-jaw grasp; once closed, both jaws
     press the handle all through the first second of the pull, and the drawer follows."""
     scene = build_scene(smooth_variants / SMOOTH_BOW, None, robot=CAT.robot(robot))
-    rng = np.random.default_rng(0)
-    randomise_start(scene, rng)
-    op = make_operator("grasp_vertical")
-    op.reset(scene, rng)
-    for _ in range(400):
-        if op._phase == "pull":
-            break
-        scene.step(op.act(scene))
+    op = grasp_until_pull(scene, 400)
     assert op._phase == "pull" and op.log[0].startswith("attempt 1: swing_"), op.log
     weakest = {"fixed": np.inf, "moving": np.inf}
     for _ in range(scene.control_fps):
