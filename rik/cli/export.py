@@ -47,6 +47,9 @@ def export_lerobot(
         outcomes: Annotated[str, typer.Option("--outcomes", help="Export only episodes with these outcomes, "
                                               "comma-separated (S: the successful demonstrations; F failed, P "
                                               "partly opened).")] = "F,P,S",
+        action_frame: Annotated[str, typer.Option("--action-frame", help="The Hand-E's action position: world, "
+                                                  "or handle (target minus the handle's grasp point: "
+                                                  "target_dx, target_dy, target_dz).")] = "world",
         resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted export into --out.")] = False,
         push_to_hub: Annotated[bool, typer.Option("--push-to-hub", help="Upload the finished dataset to the "
                                                   "Hugging Face Hub as --repo-id (needs a login).")] = False,
@@ -66,7 +69,8 @@ def export_lerobot(
     width, height = parse_resolution(res)
     spec = ExportSpec(repo_id, parse_streams(streams),
                       tuple(c.strip() for c in cameras.split(",") if c.strip()) if cameras else (), width, height,
-                      fps, codec, spp, denoise, variant, shard_episodes, parse_outcomes(outcomes))
+                      fps, codec, spp, denoise, variant, shard_episodes, parse_outcomes(outcomes),
+                      action_frame)
     cat = load_catalog(overlays(catalog))
     with progress_bar() as progress:
         report = stage_progress(progress)

@@ -56,6 +56,9 @@ def eval_policy(
         workers: WorkersOpt = DEFAULT_WORKERS,
         variants: Annotated[Path, typer.Option("--variants", help="Directory of built variants.")] = Path("variants"),
         robot: RobotOpt = DEFAULT_ROBOT,
+        action_frame: Annotated[str, typer.Option("--action-frame", help="A Hand-E policy's action position: "
+                                                  "world, handle (an export made with --action-frame handle), or "
+                                                  "auto: what its training statistics say.")] = "auto",
         catalog: CatalogOption = None) -> None:
     """Evaluate a policy on rik's benchmark: episodes drawn from a split, F/P/S per handle type x preset (the
     paper's Table 3) with Wilson intervals, per-episode rows, videos and lerobot-eval's eval_info.json. A policy
@@ -74,6 +77,8 @@ def eval_policy(
     )
     from rik.registry.load import load_catalog
 
+    if action_frame not in ("auto", "world", "handle"):
+        raise RikError(f"--action-frame {action_frame}: use one of auto, world, handle")
     if label and len(policies) > 1:
         raise RikError("--label names one policy; with several, each is named by its type and training run")
     from rik.episodes.draw import Draw
@@ -81,7 +86,8 @@ def eval_policy(
     cat = load_catalog(overlays(catalog))
     draw = Draw.parse(split, types, presets, kinds)
     specs = [prepare(cat, EvalSpec(p, draw.split, draw.handle_types, draw.presets, draw.kinds, per_cell, seed,
-                                   episode_length, rerendered, videos, str(variants), label, robot))
+                                   episode_length, rerendered, videos, str(variants), label, robot,
+                                   action_frame))
              for p in policies]
     labels = [s.label for s in specs]
     if len(set(labels)) < len(labels):

@@ -212,7 +212,8 @@ def export_spec(plan: Plan) -> ExportSpec:
     w, h = s.size
     return ExportSpec(s.repo_id, streams=s.streams, cameras=s.cameras, width=w, height=h, fps=s.fps, codec=s.codec,
                       spp=s.render.spp, denoise=s.render.denoise, variant=s.render.variant,
-                      shard_episodes=s.shard_episodes, outcomes=tuple(s.outcomes))
+                      shard_episodes=s.shard_episodes, outcomes=tuple(s.outcomes),
+                      action_frame=s.action_frame)
 
 
 # ---- the scheduler ----------------------------------------------------------------------------------------------
@@ -507,7 +508,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
 
     robot = catalog.robot(plan.spec.robot)
     checks = check_dataset(merged, plan.spec.repo_id, kept,
-                           robot_layout(robot.as_arm))
+                           robot_layout(robot.as_arm, plan.spec.action_frame))
     fps = int(checks["fps"])
     write_card(catalog, merged, schedule.xspec, fps, checks, extra=_card_text(plan), robot=plan.spec.robot)
     result.episodes, result.dataset_frames = int(checks["episodes"]), int(checks["frames"])

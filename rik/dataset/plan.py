@@ -178,11 +178,18 @@ def check_operators(spec: DatasetSpec, source: str) -> None:
 
 
 def check_robot(catalog: Catalog, spec: DatasetSpec, source: str) -> None:
-    """The spec's robot is in the catalog."""
+    """The spec's robot is in the catalog, and has the spec's action frame (only the Hand-E's pose action has a
+    handle frame)."""
+    from rik.sim.robots.layout import robot_layout
+
     try:
-        catalog.robot(spec.robot)
+        robot = catalog.robot(spec.robot)
     except RikError as exc:
         raise _field_error(source, "robot", exc) from None
+    try:
+        robot_layout(robot.as_arm, spec.action_frame)
+    except RikError as exc:
+        raise _field_error(source, "action_frame", exc) from None
 
 
 def check_codec(spec: DatasetSpec, source: str) -> None:

@@ -17,7 +17,9 @@
   :data:`rik.sim.observation.MAX_DELTA` (m and rad per control step) and the gripper command (0 open, 1 closed
   with full force); or
   ``absolute``, the target pose itself (x, y, z m; pitch, yaw, roll rad) and the gripper command, as rik's
-  episodes and the Hand-E's LeRobot exports record them; both drive any robot (an arm through its IK); or, for an
+  episodes and the Hand-E's LeRobot exports record them; ``handle``, the same with the position measured from the
+  handle's grasp point now (``environment_state``'s ``grasp_x`` .. ``grasp_z``; the export's
+  ``--action-frame handle``); all three drive any robot (an arm through its IK); or, for an
   arm only, ``joints``: its layout's action vector, the numbers (and units) an arm's export writes as ``action``
   (the servos' joint targets and the gripper's goal, e.g. the SO-100's degrees and percent open), applied joint by
   joint (:meth:`rik.sim.scene.SimScene.step_joints`);
@@ -58,7 +60,7 @@ ENV_ID = "rik/OpenFront-v0"
 DEFAULT_VARIANT = "drawer-chest-80__two_point-bow-128__normal"
 EPISODE_LENGTH = 400
 """Control steps of an episode before it is truncated: 20 s at 20 Hz; scripted demonstrations take up to 232."""
-ACTION_MODES = ("delta", "absolute", "joints")
+ACTION_MODES = ("delta", "absolute", "handle", "joints")
 DEFAULT_ROBOT = "hand-e"
 SCENE_CACHE = 16
 """Compiled scenes kept per environment (a split draws many variants)."""
@@ -96,8 +98,8 @@ class OpenFrontEnv(gym.Env):
         self.layout = robot_layout(self._robot)
         if action_mode == "joints" and self.layout.is_pose:
             arms = ", ".join(r for r, e in self._catalog.robots.items() if e.as_arm is not None)
-            raise RikError(f"action_mode 'joints': robot {robot} takes a target pose (action_mode 'delta' or "
-                           f"'absolute'); joint actions are for arms ({arms})")
+            raise RikError(f"action_mode 'joints': robot {robot} takes a target pose (action_mode 'delta', "
+                           f"'absolute' or 'handle'); joint actions are for arms ({arms})")
         self._variants = Path(variants_dir)
         self._draw = None
         if split is not None or variant is None:
@@ -251,8 +253,10 @@ class OpenFrontEnv(gym.Env):
             else:
                 a = np.asarray(action, np.float64).reshape(-1)
                 if a.shape != (7,) or not np.all(np.isfinite(a)):
-                    raise RikError(f"action {a.tolist()}: an absolute action is 7 finite numbers (target x, y, z m; "
-                                   "pitch, yaw, roll rad; gripper 0..1)")
+                    raise RikError(f"action {a.tolist()}: an {self.action_mode} action is 7 finite numbers (target "
+                                   "x, y, z m; pitch, yaw, roll rad; gripper 0..1)")
+                if self.action_mode == "handle":  # the target from the handle's grasp point, as the policy saw it
+                    a = robot_layout(None, "handle").world_action(a, self.scene.grasp_point())
                 absolute = np.concatenate([a[:6], [float(np.clip(a[6], 0.0, 1.0))]])
             self._target = absolute[:6]
             self.scene.step(absolute)

@@ -55,6 +55,9 @@ class EvalSpec:
     """Name of the operator in tables (default: the strategy, or the policy's type and folder)."""
     robot: str = "hand-e"
     """The robot (catalog id) that runs the episodes."""
+    action_frame: str = "auto"
+    """A pose policy's action frame: ``world``, ``handle``, or ``auto``
+    (:func:`rik.evaluation.load.trained_action_frame`)."""
     needs: dict[str, Any] = field(default_factory=dict)
     """Filled by :func:`prepare`: the policy's cameras, streams and image size."""
 
@@ -88,7 +91,9 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered, layout=layout)
     check_policy_folder(Path(spec.operator))  # processors and weights: before anything is built or written
     label = spec.label or f"{needs.policy_type}:{run_name(Path(spec.operator))}"
-    return EvalSpec(**{**asdict(spec), "label": label, "needs": asdict(needs)})
+    frame = needs.action_frame if spec.action_frame == "auto" else spec.action_frame
+    robot_layout(robot.as_arm, frame)  # a handle frame for an arm: one line
+    return EvalSpec(**{**asdict(spec), "label": label, "needs": asdict(needs), "action_frame": frame})
 
 
 def run_name(policy_dir: Path) -> str:
@@ -110,7 +115,7 @@ def env_config(spec: EvalSpec) -> Any:
                         handle_types=",".join(spec.handle_types), presets=",".join(spec.presets),
                         kinds=",".join(spec.kinds), cameras=",".join(needs["cameras"]),
                         streams=",".join(needs["streams"]) or "sim", observation_height=h, observation_width=w,
-                        variants_dir=spec.variants)
+                        variants_dir=spec.variants, action_frame=spec.action_frame)
 
 
 # ---- one worker's episodes ----------------------------------------------------------------------------------
@@ -371,7 +376,14 @@ def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
 
 
 def _spec_json(spec: EvalSpec) -> Any:
-    return json.loads(json.dumps(asdict(spec), default=list))
+    """The spec as JSON data; without ``action_frame`` and the needs' where they are the world's (runs from before
+    the handle frame stay finished)."""
+    data = json.loads(json.dumps(asdict(spec), default=list))
+    if data.get("action_frame") in ("auto", "world"):
+        del data["action_frame"]
+    if data.get("needs", {}).get("action_frame") == "world":
+        del data["needs"]["action_frame"]
+    return data
 
 
 def finished_rows(out: Path, spec: EvalSpec) -> list[dict[str, Any]] | None:

@@ -37,6 +37,8 @@ class PolicyNeeds:
     streams: tuple[str, ...]
     image_size: tuple[int, int]
     """(height, width) of its images, px ((96, 128) when it takes none)."""
+    action_frame: str = "world"
+    """The frame of its pose action (:func:`trained_action_frame`); an arm's joint action: ``world``."""
 
 
 def policy_config(policy_dir: Path) -> dict[str, Any]:
@@ -117,7 +119,46 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
     if OBS_STATE not in inputs:
         raise RikError(f"{file}: the policy takes no 'observation.state'; rik's policies read the robot's state")
     return PolicyNeeds(config["type"], tuple(dict.fromkeys(cameras)), tuple(dict.fromkeys(streams)),
-                       size or (96, 128))
+                       size or (96, 128), trained_action_frame(Path(policy_dir)) if layout.is_pose else "world")
+
+
+def trained_action_frame(policy_dir: Path) -> str:
+    """The frame of a pose policy's action, from its training data's statistics in its own folder (the
+    unnormaliser's state file holds the dataset's): ``handle`` where the actions' mean position lies nearer the
+    origin than to the handle's mean grasp point (a handle-frame action is a few centimetres from the handle; a
+    world-frame one is where the handle is), else ``world`` (also where the statistics are not there)."""
+    import numpy as np
+
+    from rik.evaluation.policy_files import PROCESSORS, member
+
+    post = read_json(Path(policy_dir), PROCESSORS[1])
+    steps = post.get("steps") if isinstance(post, dict) else None
+    states = [str(s["state_file"]) for s in steps or [] if isinstance(s, dict)
+              and s.get("registry_name") == "unnormalizer_processor" and isinstance(s.get("state_file"), str)]
+    if not states:
+        return "world"
+    file = member(Path(policy_dir), states[0], f"{Path(policy_dir) / PROCESSORS[1]}: field 'state_file'")
+    centre: dict[str, np.ndarray] = {}
+    try:
+        from safetensors import safe_open
+
+        with safe_open(str(file), framework="numpy") as f:
+            names = set(f.keys())
+            for key, width in ((ACTION, 7), (OBS_ENV_STATE, len(ENV_STATE_NAMES))):
+                if f"{key}.mean" in names:
+                    centre[key] = np.asarray(f.get_tensor(f"{key}.mean"), np.float64).reshape(-1)
+                elif {f"{key}.min", f"{key}.max"} <= names:
+                    centre[key] = (np.asarray(f.get_tensor(f"{key}.min"), np.float64).reshape(-1)
+                                   + np.asarray(f.get_tensor(f"{key}.max"), np.float64).reshape(-1)) / 2
+                if key in centre and centre[key].shape != (width,):
+                    del centre[key]
+    except Exception as e:  # not safetensors, truncated: the folder check names it; here only the frame is asked
+        raise RikError(f"{file}: not readable statistics ({str(e).splitlines()[0] if str(e) else type(e).__name__})"
+                       ) from None
+    if ACTION not in centre or OBS_ENV_STATE not in centre:
+        return "world"
+    position, grasp = centre[ACTION][:3], centre[OBS_ENV_STATE][3:6]
+    return "handle" if np.linalg.norm(position) < np.linalg.norm(position - grasp) else "world"
 
 
 def _image_feature(key: str) -> tuple[str | None, str]:

@@ -187,7 +187,7 @@ def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str,
     import rik
     from rik.sim.robots.layout import robot_layout
 
-    layout = robot_layout(robot.as_arm)
+    layout = robot_layout(robot.as_arm, spec.action_frame)
     images = [k for k, f in info["features"].items() if f.get("dtype") == "video"]
     sim_only = [k for k in images if not k.endswith("_rerendered")]
     from rik.sim.observation import ENV_STATE_NAMES, ROBOT_STATE_NAMES
@@ -215,6 +215,13 @@ in your data loader.
     if layout.is_pose:
         action = ("- **`action`:** the commanded target pose of the gripper base (m, rad) and the gripper "
                   "command (0 open, 1 closed).\n")
+        if layout.action_frame == "handle":
+            action = ("- **`action`** (in the handle frame, `--action-frame handle`): the commanded target position "
+                      "of the gripper base less the handle's grasp point of the same step's "
+                      "`observation.environment_state` (`target_dx`, `target_dy`, `target_dz`: m, world axes), its "
+                      "pitch, yaw, roll (rad) and the gripper command (0 open, 1 closed). rik's environment takes it "
+                      "with `action_mode=\"handle\"` (`--env.action_frame=handle`; `auto` reads it from the "
+                      "policy's training statistics).\n")
         state = f"""- **`observation.state`** (the robot's state, {len(ROBOT_STATE_NAMES)} numbers, rik's state layout
   {checks.get('layout', 2)}): {_names(ROBOT_STATE_NAMES)}: the gripper base's position (m, world) and pitch, yaw,
   roll (rad), the jaw opening (m), the pads' centre (m, world) and the fingers' normal force on the front (N).

@@ -129,12 +129,12 @@ def quiet_encoders() -> None:
     av.logging.set_libav_level(av.logging.ERROR)
 
 
-def shard_layout(catalog: Catalog, metas: dict[Path, EpisodeMeta]) -> RobotLayout:
+def shard_layout(catalog: Catalog, metas: dict[Path, EpisodeMeta], action_frame: str = "world") -> RobotLayout:
     """The robot layout of a shard's episodes (their metas), which share one robot (:func:`one_robot` checks that
-    they do)."""
+    they do), its pose action in ``action_frame``."""
     one_robot(metas)
     directory, meta = next(iter(metas.items()))
-    return episode_layout(catalog, directory, meta)
+    return episode_layout(catalog, directory, meta, action_frame)
 
 
 def render_streams(catalog: Catalog, episode: LoadedEpisode, spec: ExportSpec, cameras: Sequence[str],
@@ -164,10 +164,11 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     check_codec_size(spec)  # rik dataset's shards come here without export_lerobot's checks
     quiet_encoders()
     metas = {s.directory: read_meta(s.directory) for s in sources}
-    layout = shard_layout(catalog, metas)
+    layout = shard_layout(catalog, metas, spec.action_frame)
     # every episode of the shard read and checked (its one read) before anything is rendered or written: bad input
     # costs no render; the shard holds its episodes' states (shard_episodes of them) until each is saved
-    loaded: list[LoadedEpisode | None] = [load_episode(catalog, s.directory, metas[s.directory]) for s in sources]
+    loaded: list[LoadedEpisode | None] = [load_episode(catalog, s.directory, metas[s.directory], spec.action_frame)
+                                          for s in sources]
     if root.exists():
         shutil.rmtree(root)  # an unfinished shard is redone from scratch
     root.parent.mkdir(parents=True, exist_ok=True)
@@ -275,7 +276,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                           ", ".join(str(e) for e in episodes))
     dirs = list(metas)
     robot = one_robot(metas)
-    layout = [episode_layout(catalog, d, m) for d, m in metas.items()][0]  # in the catalog, with its joints
+    layout = [episode_layout(catalog, d, m, spec.action_frame) for d, m in metas.items()][0]  # in the catalog
     fps = _episode_fps(metas, spec)
     plan = _plan(metas, spec, fps, robot)
     if partial_dir.exists():
@@ -286,6 +287,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         _check_layout(partial_dir, old)
         if isinstance(old, dict) and isinstance(old.get("spec"), dict):
             old["spec"].setdefault("robot", "hand-e")  # plans written before robots were the Hand-E's
+            old["spec"].setdefault("action_frame", "world")  # and before the handle frame
         if old != json.loads(json.dumps(plan)):
             raise RikError(f"{partial_dir}: the interrupted export there was of other episodes or settings; delete "
                            "it, or run it again with the same ones")

@@ -79,15 +79,21 @@ def features(cameras: Sequence[str], streams: Sequence[str], width: int, height:
     return out
 
 
-def episode_layout(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> RobotLayout:
-    """The LeRobot layout of an episode's robot (:func:`rik.sim.robots.layout.robot_layout`); an arm's recorded
-    joints must be its catalog entry's, as the layout reads them by name."""
+def episode_layout(catalog: Catalog, directory: Path, meta: EpisodeMeta, action_frame: str = "world"
+                   ) -> RobotLayout:
+    """The LeRobot layout of an episode's robot (:func:`rik.sim.robots.layout.robot_layout`), its pose action in
+    ``action_frame``; an arm's recorded joints must be its catalog entry's, as the layout reads them by name, and
+    its action has no handle frame (one line, naming the episode)."""
     from rik.episodes.replay import episode_robot
     from rik.sim.robots.layout import robot_layout
 
     robot = episode_robot(catalog, directory, meta)
     if robot.as_arm is None:
-        return robot_layout(None)
+        return robot_layout(None, action_frame)
+    if action_frame != "world":
+        raise RikError(f"{Path(directory) / 'meta.json'}: --action-frame {action_frame}: the episode's robot "
+                       f"'{robot.id}' acts with joint targets, which have no handle frame (only the Hand-E's pose "
+                       "action has one); export it with --action-frame world")
     expected = (*robot.joint_names, "gripper")
     if tuple(meta.robot_joints) != expected:
         raise RikError(f"{Path(directory) / 'meta.json'}: field 'robot_joints': the episode recorded joints "
@@ -157,14 +163,15 @@ class LoadedEpisode:
         return self.recorded.meta
 
 
-def load_episode(catalog: Catalog, directory: Path, meta: EpisodeMeta | None = None) -> LoadedEpisode:
+def load_episode(catalog: Catalog, directory: Path, meta: EpisodeMeta | None = None, action_frame: str = "world"
+                 ) -> LoadedEpisode:
     """Read the episode in ``directory`` for the export: ``meta.json`` (unless given) and ``states.parquet``, checked
     whole (:func:`rik.episodes.episode.read_episode`), its robot's layout (:func:`episode_layout`) and its action
     rows, refused (one line) when they are not the :data:`ACTION_NAMES` rik exports: the export's one check of
     their width."""
     recorded = RecordedEpisode(directory, meta)
     table = recorded.table
-    layout = episode_layout(catalog, recorded.directory, recorded.meta)
+    layout = episode_layout(catalog, recorded.directory, recorded.meta, action_frame)
     rows = len(recorded.states)
     actions = _rows(table, "action", rows)
     if recorded.meta.action_kind == "joints":  # a leader's joint targets as commanded (rad) and the grip: exported
@@ -200,7 +207,7 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
                 frame[EE_POSE] = layout.ee(scene).astype(np.float32)
             frame[OBS_ENV_STATE] = environment_state(scene).astype(np.float32)
             action = (layout.joint_action(targets[k], float(targets[k][-1])) if meta.action_kind == "joints"
-                      else layout.action(actions[k], targets[k]))
+                      else layout.action(actions[k], targets[k], scene.grasp_point()))
             frame[ACTION] = action.astype(np.float32)
             for stream, folder in streams.items():
                 for cam in cameras:

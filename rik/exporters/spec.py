@@ -55,6 +55,9 @@ class ExportSpec:
     shard_episodes: int = 16
     outcomes: tuple[str, ...] = ("F", "P", "S")
     """Outcomes of the episodes exported (``("S",)``: the successful demonstrations only); the others are left out."""
+    action_frame: str = "world"
+    """The Hand-E's ``action`` position: in the world (``world``) or from the handle's grasp point (``handle``,
+    :data:`rik.sim.robots.layout.HANDLE_ACTION_NAMES`); an arm's joint action is always ``world``."""
 
     def stream(self, kind: str) -> StreamSpec:
         """The image stream ``kind`` (``sim`` or ``rerendered``) at this export's size and quality."""
@@ -113,6 +116,10 @@ def check_spec(spec: ExportSpec) -> None:
     if not spec.streams and spec.cameras:
         raise RikError(f"--cameras {','.join(spec.cameras)}: a state-only export (--streams {NO_STREAMS}) has no "
                        "cameras; drop --cameras or give --streams")
+    from rik.sim.robots.layout import ACTION_FRAMES
+
+    if spec.action_frame not in ACTION_FRAMES:
+        raise RikError(f"--action-frame {spec.action_frame}: use one of {', '.join(ACTION_FRAMES)}")
     if spec.codec not in CODECS:
         raise RikError(f"--codec: '{spec.codec}' is not offered (codecs: {', '.join(CODECS)})")
     if spec.repo_id.count("/") != 1 or not all(spec.repo_id.split("/")):

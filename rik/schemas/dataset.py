@@ -117,6 +117,9 @@ class DatasetSpec(Frozen):
     outcomes: tuple[Literal["F", "P", "S"], ...] = Field(default=("F", "P", "S"), min_length=1)
     """Outcomes of the episodes exported into the dataset: ``[S]`` keeps the successful demonstrations only (every
     episode is recorded, and counted in the build's outcomes, either way)."""
+    action_frame: Literal["world", "handle"] = "world"
+    """The Hand-E's exported ``action`` position: in the world, or from the handle's grasp point (``handle``:
+    ``target_dx``, ``target_dy``, ``target_dz``, the target minus the grasp point); arms' joint actions: world."""
 
     @field_validator("resolution")
     @classmethod

@@ -46,7 +46,7 @@ import rik.envs.open_front  # noqa: F401  (registers rik/OpenFront-v0 with gymna
 from rik.sim.feature_keys import EE_POSE
 from rik.sim.robots.layout import EE_NAMES, RobotLayout, robot_layout
 
-__all__ = ["AUTO", "RikEnvConfig", "env_kwargs", "robot_layout_of"]
+__all__ = ["AUTO", "RikEnvConfig", "action_mode", "env_kwargs", "robot_layout_of"]
 
 AUTO = "auto"
 """``--env.cameras=auto``: the cameras of the command line's policy."""
@@ -93,15 +93,24 @@ class RikEnvConfig(EnvConfig):
     """Samples per pixel of the ``rerendered`` stream."""
     variants_dir: str = "variants"
     """Folder of built variants (missing ones are built there)."""
+    action_frame: str = AUTO
+    """The Hand-E's action position: ``world``, ``handle`` (from the handle's grasp point: an export made with
+    ``--action-frame handle``), or ``auto``: the frame of the policy of ``--policy.path`` (its training data's
+    statistics tell), ``world`` without one."""
     render_mode: str = "rgb_array"
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         from rik.sim.observation import ENV_STATE_NAMES, image_name
+        from rik.sim.robots.layout import ACTION_FRAMES
 
         layout = robot_layout_of(self.robot)
+        if self.action_frame not in (AUTO, *ACTION_FRAMES):
+            raise ValueError(f"--env.action_frame={self.action_frame!r}: use one of {AUTO}, {', '.join(ACTION_FRAMES)}")
         _fit_policy(self, layout)
+        if self.action_frame == AUTO:
+            self.action_frame = "world"
         self.features = {ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(len(layout.action_names),)),
                          "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(len(layout.state_names),)),
                          "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(len(ENV_STATE_NAMES),))}
@@ -151,6 +160,8 @@ def _fit_policy(cfg: RikEnvConfig, layout: RobotLayout) -> None:
     from rik.sim.observation import image_name
 
     needs = policy_needs(folder, allow_rerendered=True, layout=layout)
+    if cfg.action_frame == AUTO:
+        cfg.action_frame = needs.action_frame
     if cfg.cameras == AUTO:
         cfg.cameras = ",".join(needs.cameras)
         if needs.cameras:
@@ -172,6 +183,14 @@ def _fit_policy(cfg: RikEnvConfig, layout: RobotLayout) -> None:
                          f"--env.observation_width={w}, or leave them and --env.cameras out")
 
 
+def action_mode(cfg: RikEnvConfig) -> str:
+    """The environment's ``action_mode`` for a config: an arm's ``joints``; the Hand-E's ``absolute`` target pose,
+    or ``handle`` where its action frame is the handle's."""
+    if not robot_layout_of(cfg.robot).is_pose:
+        return "joints"
+    return "handle" if cfg.action_frame == "handle" else "absolute"
+
+
 def env_kwargs(cfg: RikEnvConfig) -> dict:
     """The keyword arguments of ``rik.envs.open_front.OpenFrontEnv`` for a config."""
     from rik.episodes.draw import Draw
@@ -180,7 +199,7 @@ def env_kwargs(cfg: RikEnvConfig) -> dict:
     cameras = _names(cfg.cameras)
     return {"variant": None, "split": draw.split, "handle_types": draw.handle_types, "presets": draw.presets,
             "kinds": draw.kinds, "robot": cfg.robot,
-            "action_mode": "absolute" if robot_layout_of(cfg.robot).is_pose else "joints",
+            "action_mode": action_mode(cfg),
             "streams": _names(cfg.streams) if cameras else (),
             "cameras": cameras or ("front",), "image_size": (cfg.observation_height, cfg.observation_width),
             "spp": cfg.spp, "episode_length": cfg.episode_length, "variants_dir": cfg.variants_dir,

@@ -2,7 +2,11 @@
 environment and ``rik eval`` so that a policy trained on an export runs in the environment unchanged.
 
 - the Hand-E (``layout: pose``): the robot's state of :data:`rik.sim.observation.ROBOT_STATE_NAMES` and the
-  recorded action (target pose and gripper command, :data:`POSE_ACTION_NAMES`);
+  recorded action (target pose and gripper command, :data:`POSE_ACTION_NAMES`), its position either in the world
+  (``action_frame="world"``, the default) or from the handle's grasp point (``"handle"``,
+  :data:`HANDLE_ACTION_NAMES`: the target minus the grasp point of the same step's
+  ``observation.environment_state``, world axes), which leaves a policy millimetres to learn near the handle
+  where the world frame leaves it a fraction of the whole workspace;
 - an arm (``layout: joints``): its joint positions in ``observation.state`` and the joint targets its servos were
   given in ``action``, named and scaled as the catalog's ``lerobot.joints`` say (rad or deg, from the model's 0 or
   from the middle of the joint's range as LeRobot's calibration counts; the gripper as a closure fraction, 0 open
@@ -19,6 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rik.errors import RikError
 from rik.sim.observation import ROBOT_STATE_NAMES, robot_state
 
 if TYPE_CHECKING:
@@ -27,6 +32,11 @@ if TYPE_CHECKING:
 
 POSE_ACTION_NAMES = ("target_x", "target_y", "target_z", "target_pitch", "target_yaw", "target_roll", "gripper")
 """The Hand-E's action: target pose of the gripper base (m, rad) and gripper command (0 open, 1 closed)."""
+HANDLE_ACTION_NAMES = ("target_dx", "target_dy", "target_dz", "target_pitch", "target_yaw", "target_roll", "gripper")
+"""The Hand-E's action in the handle frame: the target position minus the handle's grasp point (m, world axes; the
+grasp point of the same step's ``observation.environment_state``), then as :data:`POSE_ACTION_NAMES`."""
+ACTION_FRAMES = ("world", "handle")
+"""Where a pose action's position is measured from: the world's origin, or the handle's grasp point."""
 EE_NAMES = ("ee.x", "ee.y", "ee.z", "ee.wx", "ee.wy", "ee.wz")
 HAND_E_ROBOT_TYPE = "rik_hand_e"
 
@@ -45,6 +55,8 @@ class RobotLayout:
     zeros: tuple[float, ...] = ()
     """An arm's joint position (rad) that reads 0, per state and action number (0.0 for the gripper)."""
     robot: Robot | None = None
+    action_frame: str = "world"
+    """A pose action's frame (:data:`ACTION_FRAMES`); an arm's joint action is always ``world``."""
 
     @property
     def is_pose(self) -> bool:
@@ -59,12 +71,26 @@ class RobotLayout:
         return self._in_units(drive.joint_positions(scene), drive.closure(scene))
 
     # ---- action ---------------------------------------------------------------------------------------------
-    def action(self, pose_action: np.ndarray, targets: np.ndarray) -> np.ndarray:
-        """``action`` of a recorded row: the pose action itself for the Hand-E; for an arm its servos' joint
-        targets (``robot_targets``, rad) and the gripper command (``pose_action[6]``, 0 open .. 1 closed)."""
+    def action(self, pose_action: np.ndarray, targets: np.ndarray, grasp_point: np.ndarray | None = None
+               ) -> np.ndarray:
+        """``action`` of a recorded row: the pose action itself for the Hand-E (in the handle frame: its position
+        less ``grasp_point``, m, world); for an arm its servos' joint targets (``robot_targets``, rad) and the
+        gripper command (``pose_action[6]``, 0 open .. 1 closed)."""
         if self.robot is None:
-            return np.asarray(pose_action, np.float64)
+            out = np.array(pose_action, np.float64)
+            if self.action_frame == "handle":
+                assert grasp_point is not None, "a handle-frame action needs the step's grasp point"
+                out[:3] -= np.asarray(grasp_point, np.float64)
+            return out
         return self.joint_action(targets, float(pose_action[6]))
+
+    def world_action(self, action: np.ndarray, grasp_point: np.ndarray) -> np.ndarray:
+        """The inverse of :meth:`action` for the Hand-E: the world-frame pose action (target pose m, rad; gripper)
+        of an ``action`` in this layout's frame, given the handle's grasp point now (m, world)."""
+        out = np.array(action, np.float64)
+        if self.action_frame == "handle":
+            out[:3] += np.asarray(grasp_point, np.float64)
+        return out
 
     def joint_action(self, targets: np.ndarray, grip: float) -> np.ndarray:
         """An arm's ``action`` from its joint targets (rad, the robot's joint order; more numbers after them are
@@ -124,17 +150,30 @@ def _grip_from_unit(value: float, unit: str) -> float:
     return 1.0 - value / 100.0 if unit == "percent" else value
 
 
-def robot_layout(robot: Robot | None) -> RobotLayout:
-    """The layout of a catalog robot (None, or a floating one: the Hand-E's pose layout)."""
+def robot_layout(robot: Robot | None, action_frame: str = "world") -> RobotLayout:
+    """The layout of a catalog robot (None, or a floating one: the Hand-E's pose layout), its pose action in
+    ``action_frame`` (:data:`ACTION_FRAMES`; only a pose layout has a handle frame)."""
+    if action_frame not in ACTION_FRAMES:
+        raise RikError(f"action frame '{action_frame}': use one of {', '.join(ACTION_FRAMES)}")
     if robot is None or robot.lerobot.layout == "pose":
         robot_type = HAND_E_ROBOT_TYPE if robot is None else robot.lerobot.robot_type
-        return RobotLayout("hand-e" if robot is None else robot.id, robot_type, ROBOT_STATE_NAMES, POSE_ACTION_NAMES,
-                           False)
+        pose_names = HANDLE_ACTION_NAMES if action_frame == "handle" else POSE_ACTION_NAMES
+        return RobotLayout("hand-e" if robot is None else robot.id, robot_type, ROBOT_STATE_NAMES, pose_names,
+                           False, action_frame=action_frame)
+    if action_frame != "world":
+        raise RikError(f"action frame '{action_frame}': robot {robot.id} acts with joint targets, which have no "
+                       "handle frame (it is the Hand-E's pose action's)")
     names = tuple(j.name for j in robot.lerobot.joints)
     return RobotLayout(robot.id, robot.lerobot.robot_type, names, names, robot.lerobot.ee_pose,
                        tuple((j.joint, j.unit) for j in robot.lerobot.joints),
                        tuple(joint_zero(robot, j.joint) if j.joint is not None and j.zero == "mid_range" else 0.0
                              for j in robot.lerobot.joints), robot)
+
+
+def action_frame_of(names: list[str] | tuple[str, ...]) -> str:
+    """The frame of a pose action from its names (a dataset's ``action`` names): ``handle`` for
+    :data:`HANDLE_ACTION_NAMES`, else ``world``."""
+    return "handle" if tuple(names) == HANDLE_ACTION_NAMES else "world"
 
 
 def joint_zero(robot: Robot, joint: str) -> float:
