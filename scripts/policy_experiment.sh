@@ -23,7 +23,7 @@ SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, ma
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
 STAGES=${STAGES:-data train eval report}
-DATASETS=${DATASETS:-pl pl-quarter pln hull cm}  # the data sets the data stage builds
+DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh}  # the data sets the data stage builds
 IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
 DEVICE=${DEVICE:-cpu}          # lerobot-train's --policy.device (cuda on a GPU machine)
 LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers (data-loading processes; 12 for images on a GPU)
@@ -84,6 +84,12 @@ if stage data; then
   build pln planned-dart-360 variants                # the same episodes, DART-style
   build hull planned-hull-360 variants-hull          # the same episodes in hull variants (rejected ones left out)
   build pl-images planned-360-images variants        # the main data set with both cameras (IMAGES=1)
+  # the main data set's episodes with the action in the handle frame (what examples/policies/planned-360-handle.yaml
+  # builds, without recording the same episodes again)
+  if [[ " $DATASETS " == *" plh "* ]] && [ ! -d ds-plh ]; then
+    "${RIK[@]}" export-lerobot work-pl/episodes --out ds-plh --repo-id local/rik-plh --streams none --outcomes S \
+      --variants variants --action-frame handle
+  fi
   # the CoACD demonstrations of exactly the episodes the hull data set holds (the ablation compares collision,
   # not data size): same seeds, same demonstrator, same plans (tests/test_collision_mode.py)
   if [[ " $DATASETS " == *" cm "* ]] && [ ! -d ds-cm ]; then
@@ -101,6 +107,7 @@ fi
 if stage train; then
   train act-pl pl "$STEPS" 0 "${ACT[@]}"
   train act-pl-quarter pl-quarter $(( STEPS / 3 )) 0 "${ACT[@]}"
+  train act-plh plh $(( STEPS / 3 )) 0 "${ACT[@]}"   # the same recipe, the action from the handle's grasp point
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
   if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
   # the image run (IMAGES=1): the same recipe with both cameras; ResNet-18 from scratch (no ImageNet weights
@@ -120,6 +127,9 @@ if stage eval; then
     evaluate "$(checkpoint act-pl "$step")" "act-pl-$step"
   done
   evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
+  for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )); do  # rik eval reads its frame from its statistics
+    evaluate "$(checkpoint act-plh "$step")" "act-plh-$step"
+  done
   if [ "${DIFFUSION:-0}" = 1 ]; then evaluate "$(checkpoint dp-pl "$STEPS")" "dp-pl-$STEPS"; fi
   if [ "$IMAGES" = 1 ]; then evaluate "runs/act-pl-images/checkpoints/last/pretrained_model" act-pl-images; fi
   # ACT's chunking at evaluation, the same weights: the whole chunk of 20, and one action with temporal ensembling
@@ -155,8 +165,14 @@ if stage report; then
     --out demos-heldout --variants variants --workers "$WORKERS"
   [ -d ds-heldout ] || "${RIK[@]}" export-lerobot demos-heldout --out ds-heldout --repo-id local/rik-heldout \
     --streams none --outcomes S --variants variants
+  [ -d ds-heldout-h ] || "${RIK[@]}" export-lerobot demos-heldout --out ds-heldout-h --repo-id local/rik-heldout-h \
+    --streams none --outcomes S --variants variants --action-frame handle
   for step in $(( STEPS / 10 )) $(( STEPS / 3 )) "$STEPS"; do
     uv run --project "$REPO" --locked python "$REPO/scripts/policy_precision.py" "$(checkpoint act-pl "$step")" \
       ds-heldout
   done | tee report/precision.txt
+  for step in $(( STEPS / 10 )) $(( STEPS / 3 )); do  # the handle-frame run against the same episodes in its frame
+    uv run --project "$REPO" --locked python "$REPO/scripts/policy_precision.py" "$(checkpoint act-plh "$step")" \
+      ds-heldout-h
+  done | tee -a report/precision.txt
 fi

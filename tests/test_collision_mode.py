@@ -139,3 +139,22 @@ def test_the_planned_strategy_grasps_the_same_under_hull_and_coacd_collision(fol
     assert planned["coacd"][0][0].startswith("hook")  # the loop of the bow is found on the visual mesh
     rich = {mode: _plans(folders[mode] / BOW, "contact_rich") for mode in ("coacd", "hull")}
     assert rich["coacd"] != rich["hull"]
+
+
+def test_planned_above_hooks_from_above_first_and_is_as_blind_to_collision(folders: dict[str, Path]) -> None:
+    """planned_above keeps planned's plans but puts the hooks from above first (planned ranks hooks by bite, so a
+    handle is hooked from above in one drawer and from below in another); it plans on the visual mesh too."""
+    from rik.sim.build import build_scene
+    from rik.sim.grasp import hook_plans
+
+    above = {mode: _plans(folders[mode] / BOW, "planned_above") for mode in ("coacd", "hull")}
+    assert above["coacd"] and above["coacd"] == above["hull"]
+    hooks = [m for m, _, _ in above["coacd"] if m.startswith("hook")]
+    assert hooks and hooks == sorted(hooks, key=lambda m: m != "hook_above")  # every above hook before any below
+    scene = build_scene(folders["coacd"] / BOW)
+    every = hook_plans(scene, limit=50, geometry="visual")
+    preferred = hook_plans(scene, limit=50, geometry="visual", prefer="below")
+    assert {p.key for p in every} == {p.key for p in preferred} and {p.mode for p in every} == {"hook_above",
+                                                                                                "hook_below"}
+    assert [p.key for p in preferred if p.mode == "hook_below"] == [p.key for p in every if p.mode == "hook_below"]
+    assert preferred[0].mode == "hook_below"

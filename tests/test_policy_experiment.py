@@ -17,7 +17,7 @@ import pytest
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 
 ROOT = Path(__file__).parents[1]
-DATASETS = ("pl", "pl-quarter", "pln", "hull", "cm")
+DATASETS = ("pl", "pl-quarter", "pln", "hull", "cm", "plh")
 
 
 def test_the_experiments_data_stage_builds_every_data_set(tmp_path: Path) -> None:
@@ -28,7 +28,9 @@ def test_the_experiments_data_stage_builds_every_data_set(tmp_path: Path) -> Non
     exp = tmp_path / "exp"
     episodes = {name: json.loads((exp / f"ds-{name}" / "meta" / "info.json").read_text())["total_episodes"]
                 for name in DATASETS}
-    assert episodes == {"pl": 2, "pl-quarter": 1, "pln": 2, "hull": 2, "cm": 2}
+    assert episodes == {"pl": 2, "pl-quarter": 1, "pln": 2, "hull": 2, "cm": 2, "plh": 2}
+    names = json.loads((exp / "ds-plh" / "meta" / "info.json").read_text())["features"]["action"]["names"]
+    assert names[:3] == ["target_dx", "target_dy", "target_dz"]  # the main data set's episodes, handle frame
     # the specs the stage built from are examples/policies' own, with the reduced draw and the first seed
     spec = (exp / "specs" / "pl.yaml").read_text()
     assert "  draw: 2 " in spec and "\nseed: 378\n" in spec

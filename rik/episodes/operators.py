@@ -254,16 +254,21 @@ def _pinch_natural(scene: SimScene) -> list[GraspPlan]:
             pinch_plan(scene, vertical=vertical)]
 
 
-def _contact_rich(scene: SimScene, geometry: str = "collision") -> list[GraspPlan]:
+def _contact_rich(scene: SimScene, geometry: str = "collision", prefer: str | None = None) -> list[GraspPlan]:
     natural = pinch_fits(scene, geometry)
     sides = (*VERTICAL_SIDES, *HORIZONTAL_SIDES) if natural else (*HORIZONTAL_SIDES, *VERTICAL_SIDES)
-    return [*swing_plans(scene, sides, limit=2, geometry=geometry), *hook_plans(scene, limit=2, geometry=geometry),
+    return [*swing_plans(scene, sides, limit=2, geometry=geometry),
+            *hook_plans(scene, limit=2, geometry=geometry, prefer=prefer),
             pinch_plan(scene, vertical=natural, geometry=geometry),
             pinch_plan(scene, vertical=not natural, geometry=geometry)]
 
 
 def _planned(scene: SimScene) -> list[GraspPlan]:
     return _contact_rich(scene, geometry="visual")
+
+
+def _planned_above(scene: SimScene) -> list[GraspPlan]:
+    return _contact_rich(scene, geometry="visual", prefer="above")
 
 
 @dataclass(frozen=True)
@@ -287,6 +292,10 @@ STRATEGIES: dict[str, Strategy] = {s.name: s for s in (
     Strategy("planned", "as contact_rich, but every grasp is planned on the catalog's visual meshes, not on the "
              "collision model: the same plan whichever collision a variant was built with (hull, CoACD)",
              lambda: ScriptedGrasp("planned", _planned, closed_loop=True, jitter=0.002)),
+    Strategy("planned_above", "as planned, but a hook from above first wherever one is found (planned ranks hooks "
+             "by their bite, so the same handle is hooked from above in one drawer and from below in the next): "
+             "one way to hold each handle, which a policy that cannot see the handle's shape can imitate",
+             lambda: ScriptedGrasp("planned_above", _planned_above, closed_loop=True, jitter=0.002)),
 )}
 PARAMS = ("jitter", "regrasps", "action_noise")
 """Parameters :func:`make_operator` sets on a strategy."""

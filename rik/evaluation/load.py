@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
-from rik.evaluation.policy_files import CONFIG, parsed_config, read_json
+from rik.evaluation.policy_files import CONFIG, PROCESSORS, member, parsed_config, read_json
 from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, STREAM_SUFFIX
 
@@ -128,8 +128,6 @@ def trained_action_frame(policy_dir: Path) -> str:
     origin than to the handle's mean grasp point (a handle-frame action is a few centimetres from the handle; a
     world-frame one is where the handle is), else ``world`` (also where the statistics are not there)."""
     import numpy as np
-
-    from rik.evaluation.policy_files import PROCESSORS, member
 
     post = read_json(Path(policy_dir), PROCESSORS[1])
     steps = post.get("steps") if isinstance(post, dict) else None

@@ -69,12 +69,17 @@ def pinch_plan(scene: SimScene, vertical: bool, geometry: str = "collision") -> 
     return GraspPlan(mode, tcp, angles, np.array([0.0, 1.0, 0.0]), key=mode)
 
 
-def hook_plans(scene: SimScene, limit: int = 6, geometry: str = "collision") -> list[GraspPlan]:
+def hook_plans(scene: SimScene, limit: int = 6, geometry: str = "collision", prefer: str | None = None
+               ) -> list[GraspPlan]:
     """Form-closure grasps: a finger behind material of the front (see :func:`rik.sim.probe.find_hooks`), with
-    the jaws open across the handle and the whole gripper clear of the furniture there and on the way in."""
+    the jaws open across the handle and the whole gripper clear of the furniture there and on the way in; with
+    ``prefer`` (``above`` or ``below``) the hooks from that side first, in their own order, then the others."""
     g = scene.gripper
     plans: list[GraspPlan] = []
-    for h in find_hooks(scene, g.finger_thickness, g.finger_width, g.stroke, g.pad_length, geometry=geometry):
+    hooks = find_hooks(scene, g.finger_thickness, g.finger_width, g.stroke, g.pad_length, geometry=geometry)
+    if prefer is not None:
+        hooks.sort(key=lambda h: h.side != prefer)  # stable: each side keeps find_hooks' ranking
+    for h in hooks:
         sign = 1.0 if h.side == "above" else -1.0
         tcp = h.pad + h.normal * g.finger_travel
         angles = np.array([sign * h.tilt, 0.0, math.pi / 2])
