@@ -62,6 +62,8 @@ EPISODE_LENGTH = 400
 """Control steps of an episode before it is truncated: 20 s at 20 Hz; scripted demonstrations take up to 232."""
 ACTION_MODES = ("delta", "absolute", "handle", "joints")
 DEFAULT_ROBOT = "hand-e"
+HANDLE_LAYOUT = robot_layout(None, "handle")
+"""The pose layout whose action is measured from the handle's grasp point (``action_mode="handle"``)."""
 SCENE_CACHE = 16
 """Compiled scenes kept per environment (a split draws many variants)."""
 
@@ -256,7 +258,7 @@ class OpenFrontEnv(gym.Env):
                     raise RikError(f"action {a.tolist()}: an {self.action_mode} action is 7 finite numbers (target "
                                    "x, y, z m; pitch, yaw, roll rad; gripper 0..1)")
                 if self.action_mode == "handle":  # the target from the handle's grasp point, as the policy saw it
-                    a = robot_layout(None, "handle").world_action(a, self.scene.grasp_point())
+                    a = HANDLE_LAYOUT.world_action(a, self.scene.grasp_point())
                 absolute = np.concatenate([a[:6], [float(np.clip(a[6], 0.0, 1.0))]])
             self._target = absolute[:6]
             self.scene.step(absolute)
