@@ -105,11 +105,15 @@ so the k-th logged loss is taken at step k x LOG_FREQ."""
 def training_losses(work: Path) -> dict[str, list[tuple[int, float]]]:
     """Run -> (step, ACT's L1 loss on normalised actions) from lerobot-train's logs ``train-<run>.log``."""
     out: dict[str, list[tuple[int, float]]] = {}
-    for log in sorted(work.glob("train-*.log")):
-        points = [((k + 1) * LOG_FREQ, float(m.group(1)))
+    # a run resumed from its last checkpoint (lerobot-train --resume=true) logs into train-<run>-resume.log, its
+    # steps counted on from the first log's last one
+    for log in sorted(work.glob("train-*.log"), key=lambda p: p.stem.endswith("-resume")):
+        run = log.stem.removeprefix("train-").removesuffix("-resume")
+        start = out[run][-1][0] if log.stem.endswith("-resume") and out.get(run) else 0
+        points = [(start + (k + 1) * LOG_FREQ, float(m.group(1)))
                   for k, m in enumerate(STEP_LOG.finditer(log.read_text(encoding="utf-8", errors="replace")))]
         if points:
-            out[log.stem.removeprefix("train-")] = points
+            out[run] = out.get(run, []) + points if start else points
     return out
 
 
