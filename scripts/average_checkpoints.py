@@ -3,8 +3,9 @@ training): docs/policies.md measured S on unseen handles swing from 44 % to 28 %
 apart of the same run, and an average of the weights along the flat end of the run is the usual remedy.
 
 Writes a saved-policy folder (the last averaged checkpoint's config, processors and statistics; its
-``model.safetensors`` the element-wise mean of every checkpoint's in ``--from`` .. ``--to``), which ``rik eval`` and
-``lerobot-eval`` run as any other. Checkpoints of one run share their dataset statistics, so the processors fit.
+``model.safetensors`` the element-wise mean of every checkpoint's in ``--from`` .. ``--to``; ``averaged.json`` names
+the run and the steps), which ``rik eval`` and ``lerobot-eval`` run as any other. Checkpoints of one run share their
+dataset statistics, so the processors fit.
 
     uv run python scripts/average_checkpoints.py runs/act-pl --from 20000 --to 30000 --out runs/act-pl-swa
 """
@@ -12,11 +13,14 @@ Writes a saved-policy folder (the last averaged checkpoint's config, processors 
 from __future__ import annotations
 
 import argparse
+import json
 import shutil
 import sys
 from pathlib import Path
 
 WEIGHTS = "model.safetensors"
+AVERAGED = "averaged.json"
+"""The averaged folder's note of what it averages: ``{"run": ..., "steps": [...]}``."""
 
 
 def checkpoints(run: Path, first: int, last: int) -> list[Path]:
@@ -40,6 +44,8 @@ def average(folders: list[Path], out: Path) -> Path:
     shutil.rmtree(staged, ignore_errors=True)
     shutil.copytree(folders[-1], staged)
     save_file({name: (t / len(folders)).astype(dtypes[name]) for name, t in total.items()}, str(staged / WEIGHTS))
+    (staged / AVERAGED).write_text(json.dumps({"run": folders[0].parents[2].name,
+                                               "steps": [int(f.parent.name) for f in folders]}) + "\n")
     if out.exists():
         shutil.rmtree(out)
     staged.rename(out)

@@ -31,6 +31,13 @@ def _train_facts(policy: Path) -> dict[str, Any]:
     """Run name, step and data set (root, episodes) of a saved checkpoint; empty for a scripted operator."""
     if not (policy / "train_config.json").is_file():
         return {}
+    averaged = policy / "averaged.json"  # scripts/average_checkpoints.py's folder: the run's mean weights
+    if averaged.is_file():
+        note = json.loads(averaged.read_text(encoding="utf-8"))
+        facts = _train_facts(policy.parent.parent / "runs" / note["run"] / "checkpoints" / f"{note['steps'][-1]:06d}"
+                             / "pretrained_model")
+        return {**facts, "run": f"{note['run']}, weights averaged {note['steps'][0] // 1000}k-"
+                f"{note['steps'][-1] // 1000}k", "averaged": True}
     config = json.loads((policy / "train_config.json").read_text(encoding="utf-8"))
     saved = policy.name == "pretrained_model" and policy.parents[1].name == "checkpoints"
     work = policy.parents[4] if saved else policy.parents[1]  # runs/<run>/checkpoints/<step>/..., or <folder>/<copy>
@@ -119,7 +126,9 @@ def training_losses(work: Path) -> dict[str, list[tuple[int, float]]]:
 
 def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[int, float]]] | None = None) -> Path:
     plt = pyplot()
-    fig, (ax, loss_ax) = plt.subplots(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [3, 2]})
+    fig, (ax, loss_ax) = plt.subplots(1, 2, figsize=(12, 6.4), gridspec_kw={"width_ratios": [3, 2]})
+    for axes in (ax, loss_ax):  # a colour per run (more runs than matplotlib's ten default colours)
+        axes.set_prop_cycle(color=plt.get_cmap("tab20").colors)
     runs: dict[str, list[dict[str, Any]]] = {}
     for r in found:
         if "step" in r and r["simulator"] == "coacd":
@@ -129,7 +138,9 @@ def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[in
         x = [p["step"] * (1 + 0.02 * k) for p in points]  # a little apart, so equal points stay visible
         y = [100 * p["rate"] for p in points]
         err = [[100 * (p["rate"] - p["lo"]) for p in points], [100 * (p["hi"] - p["rate"]) for p in points]]
-        ax.errorbar(x, y, yerr=err, marker="o", capsize=3, label=name)
+        averaged = points[0].get("averaged", False)
+        ax.errorbar(x, y, yerr=err, marker="*" if averaged else "o", markersize=12 if averaged else 6, capsize=3,
+                    label=name)
     scripted: dict[float, list[str]] = {}
     for r in found:
         if "run" not in r and r["simulator"] == "coacd":
@@ -146,7 +157,7 @@ def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[in
     ax.set_ylabel("S on unseen handles (test split), %")
     ax.set_ylim(0, 105)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="center right")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncol=3)
     ax.set_title("State-only policies: S against training steps (95 % Wilson intervals)", fontsize=10)
     for run, points in sorted((losses or {}).items()):
         loss_ax.plot([p[0] for p in points], [p[1] for p in points], label=run)
@@ -155,7 +166,7 @@ def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[in
     loss_ax.set_ylabel("L1 loss (normalised actions)")
     loss_ax.grid(alpha=0.3, which="both")
     if losses:
-        loss_ax.legend(fontsize=7)
+        loss_ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncol=2)
     loss_ax.set_title("training loss (lerobot-train's log; 500-step means)", fontsize=10)
     fig.tight_layout()
     return save_figure(fig, png)

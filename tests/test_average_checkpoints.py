@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import json
 from pathlib import Path
 
 import numpy as np
@@ -36,5 +37,7 @@ def test_the_average_is_the_mean_of_the_chosen_checkpoints(tmp_path: Path) -> No
     assert weights["w"].dtype == np.float32 and weights["b"].tolist() == [3.0]
     assert (tmp_path / "avg" / "config.json").read_text() == '{"step": 3000}'  # the last averaged one's
     assert not (tmp_path / "avg.partial").exists()
+    assert json.loads((tmp_path / "avg" / "averaged.json").read_text()) == {"run": "run",
+                                                                            "steps": [1000, 2000, 3000]}
     assert script.main([str(run), "--from", "3500", "--to", "9000", "--out", str(tmp_path / "one")]) == 2
     assert not (tmp_path / "one").exists()
