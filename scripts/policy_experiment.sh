@@ -23,7 +23,7 @@ SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, ma
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
 STAGES=${STAGES:-data train eval report}
-DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh}  # the data sets the data stage builds
+DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah}  # the data sets the data stage builds
 IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
 DEVICE=${DEVICE:-cpu}          # lerobot-train's --policy.device (cuda on a GPU machine)
 LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers (data-loading processes; 12 for images on a GPU)
@@ -83,13 +83,17 @@ if stage data; then
   build pl-quarter planned-360 variants $(( DEMOS / 4 > 0 ? DEMOS / 4 : 1 ))  # the first quarter of them
   build pln planned-dart-360 variants                # the same episodes, DART-style
   build hull planned-hull-360 variants-hull          # the same episodes in hull variants (rejected ones left out)
+  build pla planned-above-360 variants               # the same seeds, planned_above: one way to hold each handle
   build pl-images planned-360-images variants        # the main data set with both cameras (IMAGES=1)
   # the main data set's episodes with the action in the handle frame (what examples/policies/planned-360-handle.yaml
   # builds, without recording the same episodes again)
-  if [[ " $DATASETS " == *" plh "* ]] && [ ! -d ds-plh ]; then
-    "${RIK[@]}" export-lerobot work-pl/episodes --out ds-plh --repo-id local/rik-plh --streams none --outcomes S \
-      --variants variants --action-frame handle
-  fi
+  for pair in "plh pl" "plah pla"; do
+    set -- $pair
+    if [[ " $DATASETS " == *" $1 "* ]] && [ ! -d "ds-$1" ]; then
+      "${RIK[@]}" export-lerobot "work-$2/episodes" --out "ds-$1" --repo-id "local/rik-$1" --streams none \
+        --outcomes S --variants variants --action-frame handle
+    fi
+  done
   # the CoACD demonstrations of exactly the episodes the hull data set holds (the ablation compares collision,
   # not data size): same seeds, same demonstrator, same plans (tests/test_collision_mode.py)
   if [[ " $DATASETS " == *" cm "* ]] && [ ! -d ds-cm ]; then
@@ -108,6 +112,8 @@ if stage train; then
   train act-pl pl "$STEPS" 0 "${ACT[@]}"
   train act-pl-quarter pl-quarter $(( STEPS / 3 )) 0 "${ACT[@]}"
   train act-plh plh $(( STEPS / 3 )) 0 "${ACT[@]}"   # the same recipe, the action from the handle's grasp point
+  train act-pla pla $(( STEPS * 2 / 3 )) 0 "${ACT[@]}"  # the same recipe, planned_above's demonstrations
+  train act-plah plah $(( STEPS / 3 )) 0 "${ACT[@]}"  # both changes
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
   if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
   # the image run (IMAGES=1): the same recipe with both cameras; ResNet-18 from scratch (no ImageNet weights
@@ -129,6 +135,23 @@ if stage eval; then
   evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
   for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )); do  # rik eval reads its frame from its statistics
     evaluate "$(checkpoint act-plh "$step")" "act-plh-$step"
+    evaluate "$(checkpoint act-plah "$step")" "act-plah-$step"
+  done
+  for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )) $(( STEPS * 2 / 3 )); do
+    evaluate "$(checkpoint act-pla "$step")" "act-pla-$step"
+  done
+  # the mean of a run's saved weights over a window fixed in advance (scripts/average_checkpoints.py): act-pl's last
+  # third, and both demonstrators' SHORT_STEPS .. STEPS/3 and STEPS/3 .. 2 STEPS/3
+  average() {  # average RUN FROM TO
+    local out="averaged/$1-$2-$3"
+    [ -f "$out/model.safetensors" ] || uv run --project "$REPO" --locked python "$REPO/scripts/average_checkpoints.py" \
+      "runs/$1" --from "$2" --to "$3" --out "$out" > /dev/null
+    evaluate "$out" "$1-mean-$2-$3"
+  }
+  average act-pl $(( STEPS * 2 / 3 )) "$STEPS"
+  for run in act-pl act-pla; do
+    average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
+    average "$run" $(( STEPS / 3 )) $(( STEPS * 2 / 3 ))
   done
   if [ "${DIFFUSION:-0}" = 1 ]; then evaluate "$(checkpoint dp-pl "$STEPS")" "dp-pl-$STEPS"; fi
   if [ "$IMAGES" = 1 ]; then evaluate "runs/act-pl-images/checkpoints/last/pretrained_model" act-pl-images; fi

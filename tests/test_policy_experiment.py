@@ -21,7 +21,9 @@ DATASETS = ("pl", "pl-quarter", "pln", "hull", "cm", "plh")
 
 
 def test_the_experiments_data_stage_builds_every_data_set(tmp_path: Path) -> None:
-    env = {**os.environ, "STAGES": "data", "DEMOS": "2", "SEED": "378", "WORKERS": "1"}
+    # planned_above's data sets (pla, plah) are built by the same two steps as pl and plh; left out to save the suite
+    # their recording
+    env = {**os.environ, "STAGES": "data", "DEMOS": "2", "SEED": "378", "WORKERS": "1", "DATASETS": " ".join(DATASETS)}
     r = subprocess.run(["bash", str(ROOT / "scripts" / "policy_experiment.sh"), str(tmp_path / "exp")], cwd=ROOT,
                        env=env, capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
