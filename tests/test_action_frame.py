@@ -24,27 +24,27 @@ def _columns(root: Path) -> dict[str, np.ndarray]:
             for k in ("action", "observation.environment_state")}
 
 
-def test_a_handle_frame_export_is_the_world_export_less_the_grasp_point(rik, knob_recording: Path,
-                                                                      tmp_path: Path) -> None:
-    from rik.sim.robots.layout import HANDLE_ACTION_NAMES, POSE_ACTION_NAMES
+def test_a_handle_frame_export_is_the_recorded_action_less_the_grasp_point(rik, knob_recording: Path,
+                                                                         tmp_path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    from rik.sim.robots.layout import HANDLE_ACTION_NAMES
 
     episodes, variants = knob_recording / "episodes", knob_recording / "variants"
-    for frame in ("world", "handle"):
-        r = rik("export-lerobot", str(episodes), "--out", str(tmp_path / frame), "--repo-id", f"local/{frame}",
-                "--streams", "none", "--variants", str(variants), "--action-frame", frame)
-        assert r.code == 0, r
-    world, handle = _columns(tmp_path / "world"), _columns(tmp_path / "handle")
+    r = rik("export-lerobot", str(episodes), "--out", str(tmp_path / "handle"), "--repo-id", "local/handle",
+            "--streams", "none", "--variants", str(variants), "--action-frame", "handle")
+    assert r.code == 0, r
+    handle = _columns(tmp_path / "handle")
+    [episode] = list(episodes.iterdir())
+    recorded = np.stack(pq.read_table(episode / "states.parquet").column("action").to_numpy(zero_copy_only=False))
+    assert recorded.shape == handle["action"].shape  # the Hand-E's world-frame export is the recorded action
     grasp = handle["observation.environment_state"][:, 3:6]
     assert np.abs(grasp).max() > 0.1  # the grasp point is far from the origin: the test can tell the frames apart
-    np.testing.assert_array_equal(world["observation.environment_state"], handle["observation.environment_state"])
-    np.testing.assert_allclose(handle["action"][:, :3] + grasp, world["action"][:, :3], atol=1e-6)
-    np.testing.assert_array_equal(handle["action"][:, 3:], world["action"][:, 3:])
-    names = {f: json.loads((tmp_path / f / "meta" / "info.json").read_text())["features"]["action"]["names"]
-             for f in ("world", "handle")}
-    assert names == {"world": list(POSE_ACTION_NAMES), "handle": list(HANDLE_ACTION_NAMES)}
-    card = (tmp_path / "handle" / "README.md").read_text()
-    assert "in the handle frame, `--action-frame handle`" in card
-    assert "in the handle frame" not in (tmp_path / "world" / "README.md").read_text()
+    np.testing.assert_allclose(handle["action"][:, :3] + grasp, recorded[:, :3], atol=1e-6)
+    np.testing.assert_allclose(handle["action"][:, 3:], recorded[:, 3:], atol=1e-6)
+    info = json.loads((tmp_path / "handle" / "meta" / "info.json").read_text())
+    assert info["features"]["action"]["names"] == list(HANDLE_ACTION_NAMES)
+    assert "in the handle frame, `--action-frame handle`" in (tmp_path / "handle" / "README.md").read_text()
     r = rik("export-lerobot", str(episodes), "--out", str(tmp_path / "up"), "--repo-id", "local/up", "--streams",
             "none", "--variants", str(variants), "--action-frame", "up")
     assert r.code == 2 and r.err.strip() == "rik: error: --action-frame up: use one of world, handle"
