@@ -135,3 +135,5 @@ def test_an_arm_has_no_handle_frame(rik, bow_variants: Path, tmp_path: Path) -> 
     with pytest.raises(ValueError, match=r"^--env\.action_frame='up': use one of auto, world, handle$"):
         RikEnvConfig(action_frame="up")
     assert RikEnvConfig().action_frame == "world"  # auto, without a policy on the command line
+    with pytest.raises(ValueError, match=r"^--env\.action_frame=handle: robot so100 acts with joint targets"):
+        RikEnvConfig(robot="so100", action_frame="handle")

@@ -111,6 +111,9 @@ class RikEnvConfig(EnvConfig):
         _fit_policy(self, layout)
         if self.action_frame == AUTO:
             self.action_frame = "world"
+        if self.action_frame != "world" and not layout.is_pose:
+            raise ValueError(f"--env.action_frame={self.action_frame}: robot {self.robot} acts with joint targets, "
+                             "which have no handle frame (it is the Hand-E's pose action's)")
         self.features = {ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(len(layout.action_names),)),
                          "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(len(layout.state_names),)),
                          "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(len(ENV_STATE_NAMES),))}
