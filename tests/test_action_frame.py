@@ -104,8 +104,10 @@ def test_a_policys_action_frame_comes_from_its_training_statistics(tmp_path: Pat
     # min-max statistics only (diffusion's mapping): their centre
     span = {"min": [x - 0.1 for x in handle], "max": [x + 0.1 for x in handle]}
     assert trained_action_frame(_policy_stats(tmp_path / "m", span, {"min": grasp, "max": grasp})) == "handle"
-    # no environment state in the statistics: the world, as before the handle frame existed
+    # no environment state in the statistics, or no postprocessor at all: the world, as before the handle frame
     assert trained_action_frame(_policy_stats(tmp_path / "n", {"mean": handle}, {})) == "world"
+    (tmp_path / "bare").mkdir()
+    assert trained_action_frame(tmp_path / "bare") == "world"
     bad = _policy_stats(tmp_path / "bad", {"mean": handle}, {"mean": grasp})
     state = bad / "policy_postprocessor_step_0_unnormalizer_processor.safetensors"
     state.write_bytes(b"not safetensors")

@@ -126,9 +126,13 @@ def trained_action_frame(policy_dir: Path) -> str:
     """The frame of a pose policy's action, from its training data's statistics in its own folder (the
     unnormaliser's state file holds the dataset's): ``handle`` where the actions' mean position lies nearer the
     origin than to the handle's mean grasp point (a handle-frame action is a few centimetres from the handle; a
-    world-frame one is where the handle is), else ``world`` (also where the statistics are not there)."""
+    world-frame one is where the handle is), else ``world`` (also where the statistics, or the postprocessor that
+    names their file, are not there)."""
     import numpy as np
 
+    post_file = Path(policy_dir) / PROCESSORS[1]
+    if not post_file.exists() and not post_file.is_symlink():
+        return "world"  # no statistics to tell (a folder of config.json alone): the frame of every older policy
     post = read_json(Path(policy_dir), PROCESSORS[1])
     steps = post.get("steps") if isinstance(post, dict) else None
     states = [str(s["state_file"]) for s in steps or [] if isinstance(s, dict)
