@@ -36,10 +36,11 @@ def average(folders: list[Path], out: Path) -> Path:
     from safetensors.numpy import load_file, save_file
 
     total: dict[str, np.ndarray] = {}
+    dtypes: dict[str, np.dtype] = {}
     for folder in folders:
         for name, tensor in load_file(str(folder / WEIGHTS)).items():
             total[name] = total.get(name, 0) + tensor.astype(np.float64)
-    dtypes = {name: t.dtype for name, t in load_file(str(folders[-1] / WEIGHTS)).items()}
+            dtypes[name] = tensor.dtype  # the last checkpoint's, as its copy keeps
     staged = out.with_name(out.name + ".partial")
     shutil.rmtree(staged, ignore_errors=True)
     shutil.copytree(folders[-1], staged)

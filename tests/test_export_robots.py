@@ -291,6 +291,19 @@ def test_a_dataset_holds_one_robot(rik, so100: Path, panda: Path, variants: Path
     assert not out.exists() and not (tmp_path / "mixed.partial").exists()
 
 
+def test_an_arms_episodes_have_no_handle_frame(rik, so100: Path, variants: Path, tmp_path: Path) -> None:
+    from rik.episodes.episode import find_episodes
+
+    out = tmp_path / "handle"
+    r = rik("export-lerobot", str(so100 / "episodes"), "--streams", "none", "--repo-id", REPO, "--out", str(out),
+            "--variants", str(variants), "--action-frame", "handle")
+    so = find_episodes([so100 / "episodes"])[0]
+    assert r.code == 2 and r.err.strip() == (
+        f"rik: error: {so / 'meta.json'}: action frame 'handle': robot so100 acts with joint targets, which have no "
+        "handle frame (it is the Hand-E's pose action's); export it with --action-frame world")
+    assert not out.exists() and not (tmp_path / "handle.partial").exists()
+
+
 def test_resume_takes_the_robot_as_part_of_the_plan(rik, panda: Path, variants: Path, tmp_path: Path) -> None:
     """An interrupted export's plan names the robot; one of another robot (or a plan from before robots, which was
     the Hand-E's) is not continued with these episodes; the right one is."""

@@ -76,9 +76,10 @@ def eval_policy(
         write_tables,
     )
     from rik.registry.load import load_catalog
+    from rik.sim.robots.layout import ACTION_FRAMES
 
-    if action_frame not in ("auto", "world", "handle"):
-        raise RikError(f"--action-frame {action_frame}: use one of auto, world, handle")
+    if action_frame not in ("auto", *ACTION_FRAMES):
+        raise RikError(f"--action-frame {action_frame}: use one of auto, {', '.join(ACTION_FRAMES)}")
     if label and len(policies) > 1:
         raise RikError("--label names one policy; with several, each is named by its type and training run")
     from rik.episodes.draw import Draw

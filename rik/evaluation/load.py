@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 from rik.errors import RikError
 from rik.evaluation.policy_files import CONFIG, PROCESSORS, member, parsed_config, read_json
 from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
-from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, STREAM_SUFFIX
+from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, GRASP_POINT, STREAM_SUFFIX
 
 if TYPE_CHECKING:
     from rik.sim.robots.layout import RobotLayout
@@ -130,6 +130,8 @@ def trained_action_frame(policy_dir: Path) -> str:
     names their file, are not there)."""
     import numpy as np
 
+    from rik.sim.robots.layout import POSE_ACTION_NAMES
+
     post_file = Path(policy_dir) / PROCESSORS[1]
     if not post_file.exists() and not post_file.is_symlink():
         return "world"  # no statistics to tell (a folder of config.json alone): the frame of every older policy
@@ -146,7 +148,7 @@ def trained_action_frame(policy_dir: Path) -> str:
 
         with safe_open(str(file), framework="numpy") as f:
             names = set(f.keys())
-            for key, width in ((ACTION, 7), (OBS_ENV_STATE, len(ENV_STATE_NAMES))):
+            for key, width in ((ACTION, len(POSE_ACTION_NAMES)), (OBS_ENV_STATE, len(ENV_STATE_NAMES))):
                 if f"{key}.mean" in names:
                     centre[key] = np.asarray(f.get_tensor(f"{key}.mean"), np.float64).reshape(-1)
                 elif {f"{key}.min", f"{key}.max"} <= names:
@@ -159,7 +161,7 @@ def trained_action_frame(policy_dir: Path) -> str:
                        ) from None
     if ACTION not in centre or OBS_ENV_STATE not in centre:
         return "world"
-    position, grasp = centre[ACTION][:3], centre[OBS_ENV_STATE][3:6]
+    position, grasp = centre[ACTION][:3], centre[OBS_ENV_STATE][GRASP_POINT]
     return "handle" if np.linalg.norm(position) < np.linalg.norm(position - grasp) else "world"
 
 

@@ -88,18 +88,18 @@ def episode_layout(catalog: Catalog, directory: Path, meta: EpisodeMeta, action_
     from rik.sim.robots.layout import robot_layout
 
     robot = episode_robot(catalog, directory, meta)
+    try:
+        layout = robot_layout(robot.as_arm, action_frame)
+    except RikError as exc:  # a handle frame for an arm's joint action
+        raise RikError(f"{Path(directory) / 'meta.json'}: {exc}; export it with --action-frame world") from None
     if robot.as_arm is None:
-        return robot_layout(None, action_frame)
-    if action_frame != "world":
-        raise RikError(f"{Path(directory) / 'meta.json'}: --action-frame {action_frame}: the episode's robot "
-                       f"'{robot.id}' acts with joint targets, which have no handle frame (only the Hand-E's pose "
-                       "action has one); export it with --action-frame world")
+        return layout
     expected = (*robot.joint_names, "gripper")
     if tuple(meta.robot_joints) != expected:
         raise RikError(f"{Path(directory) / 'meta.json'}: field 'robot_joints': the episode recorded joints "
                        f"{', '.join(meta.robot_joints) or '(none)'}, but robot '{robot.id}' of the catalog has "
                        f"{', '.join(expected)}; export it with the catalog it was recorded with (--catalog)")
-    return robot_layout(robot)
+    return layout
 
 
 def task_text(catalog: Catalog, meta: EpisodeMeta, front_kind: str) -> str:
@@ -191,7 +191,7 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
     :func:`load_episode`, resampled to ``fps``, its images read from ``streams`` (stream kind -> finished stream
     folder)."""
     from rik.render.streams import read_frame
-    from rik.sim.observation import environment_state
+    from rik.sim.observation import GRASP_POINT, environment_state
 
     meta, layout, actions, targets = episode.meta, episode.layout, episode.actions, episode.targets
     scene = episode.recorded.scene(catalog, variants)
@@ -205,9 +205,10 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
             frame: dict[str, np.ndarray] = {OBS_STATE: layout.state(scene).astype(np.float32)}
             if layout.ee_pose:
                 frame[EE_POSE] = layout.ee(scene).astype(np.float32)
-            frame[OBS_ENV_STATE] = environment_state(scene).astype(np.float32)
+            env_state = environment_state(scene)
+            frame[OBS_ENV_STATE] = env_state.astype(np.float32)
             action = (layout.joint_action(targets[k], float(targets[k][-1])) if meta.action_kind == "joints"
-                      else layout.action(actions[k], targets[k], scene.grasp_point()))
+                      else layout.action(actions[k], targets[k], env_state[GRASP_POINT]))
             frame[ACTION] = action.astype(np.float32)
             for stream, folder in streams.items():
                 for cam in cameras:

@@ -31,6 +31,8 @@ ENV_STATE_NAMES = ("front_qpos", "front_qvel", "opening", "grasp_x", "grasp_y", 
 """The front's joint position (m or rad) and velocity (m/s or rad/s), its opening (fraction of the range), the
 handle's grasp point (m, world), its orientation (unit quaternion w, x, y, z with w >= 0, world) and the unit
 direction in which the grasp point moves as the front opens (world)."""
+GRASP_POINT = slice(ENV_STATE_NAMES.index("grasp_x"), ENV_STATE_NAMES.index("grasp_z") + 1)
+"""Where the handle's grasp point (m, world) sits in the front's state: ``environment_state(scene)[GRASP_POINT]``."""
 CAMERAS = ("front", "wrist")
 """The scene's cameras: ``front`` looks at the base unit, ``wrist`` rides on the gripper."""
 STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
