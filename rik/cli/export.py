@@ -50,6 +50,9 @@ def export_lerobot(
         action_frame: Annotated[str, typer.Option("--action-frame", help="The Hand-E's action position: world, "
                                                   "or handle (target minus the handle's grasp point: "
                                                   "target_dx, target_dy, target_dz).")] = "world",
+        handle_shape: Annotated[bool, typer.Option("--handle-shape", help="End observation.environment_state with "
+                                                   "the handle's shape: its type, mount and grasp dimensions "
+                                                   "(11 numbers).")] = False,
         resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted export into --out.")] = False,
         push_to_hub: Annotated[bool, typer.Option("--push-to-hub", help="Upload the finished dataset to the "
                                                   "Hugging Face Hub as --repo-id (needs a login).")] = False,
@@ -70,7 +73,7 @@ def export_lerobot(
     spec = ExportSpec(repo_id, parse_streams(streams),
                       tuple(c.strip() for c in cameras.split(",") if c.strip()) if cameras else (), width, height,
                       fps, codec, spp, denoise, variant, shard_episodes, parse_outcomes(outcomes),
-                      action_frame)
+                      action_frame, handle_shape)
     cat = load_catalog(overlays(catalog))
     with progress_bar() as progress:
         report = stage_progress(progress)

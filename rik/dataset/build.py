@@ -213,7 +213,7 @@ def export_spec(plan: Plan) -> ExportSpec:
     return ExportSpec(s.repo_id, streams=s.streams, cameras=s.cameras, width=w, height=h, fps=s.fps, codec=s.codec,
                       spp=s.render.spp, denoise=s.render.denoise, variant=s.render.variant,
                       shard_episodes=s.shard_episodes, outcomes=tuple(s.outcomes),
-                      action_frame=s.action_frame)
+                      action_frame=s.action_frame, handle_shape=s.handle_shape)
 
 
 # ---- the scheduler ----------------------------------------------------------------------------------------------

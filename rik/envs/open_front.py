@@ -9,7 +9,9 @@
 - **observation** (a dict, shaped as LeRobot's environments return them): ``agent_pos`` = the robot's state as
   its export's ``observation.state`` holds it (the Hand-E's :data:`rik.sim.observation.ROBOT_STATE_NAMES`; an
   arm's joint positions and gripper, in its layout's names and units, e.g. the SO-100's degrees and gripper
-  percent) and ``environment_state`` = the front's state (:mod:`rik.sim.observation`), float32; for a robot whose
+  percent) and ``environment_state`` = the front's state (:mod:`rik.sim.observation`), float32, followed by the
+  handle's shape with ``handle_shape=True`` (:data:`rik.sim.observation.HANDLE_SHAPE_NAMES`; the export's
+  ``--handle-shape``); for a robot whose
   layout has one (the Panda), ``ee_pose`` = its gripper frame in its base frame (``ee.x`` .. ``ee.wz``: m and a
   rotation vector, rad), float32; with image streams also ``pixels`` = ``{camera: uint8 HxWx3}`` (``front``,
   ``wrist``; ``front_rerendered`` for Mitsuba's stream);
@@ -44,9 +46,10 @@ import numpy as np
 from rik.errors import RikError
 from rik.sim.observation import (
     CAMERAS,
-    ENV_STATE_NAMES,
     delta_to_absolute,
+    env_state_names,
     environment_state,
+    handle_shape_state,
     image_name,
 )
 from rik.sim.outcome import SUCCESS_OPENING, classify
@@ -80,7 +83,8 @@ class OpenFrontEnv(gym.Env):
                  streams: tuple[str, ...] = (),
                  cameras: tuple[str, ...] = CAMERAS, image_size: tuple[int, int] = (96, 128), spp: int = 16,
                  episode_length: int = EPISODE_LENGTH, variants_dir: str | Path = "variants",
-                 render_mode: str | None = None, catalog_paths: tuple[str, ...] = ()) -> None:
+                 render_mode: str | None = None, catalog_paths: tuple[str, ...] = (),
+                 handle_shape: bool = False) -> None:
         from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, Draw
         from rik.registry.load import load_catalog
 
@@ -110,6 +114,8 @@ class OpenFrontEnv(gym.Env):
             self._draw.check(self._catalog)
         self._variant, self._front = variant, front
         self.action_mode = action_mode
+        self.handle_shape = bool(handle_shape)
+        self._shape: np.ndarray | None = None  # the reset handle's shape (handle_shape=True)
         self._streams = streams
         self._cameras, self._size, self._spp = cameras, image_size, spp
         self._max_episode_steps = episode_length
@@ -132,7 +138,8 @@ class OpenFrontEnv(gym.Env):
         self.task_description = ""
         spaces: dict[str, gym.Space[Any]] = {
             "agent_pos": gym.spaces.Box(-np.inf, np.inf, (len(self.layout.state_names),), np.float32),
-            "environment_state": gym.spaces.Box(-np.inf, np.inf, (len(ENV_STATE_NAMES),), np.float32)}
+            "environment_state": gym.spaces.Box(-np.inf, np.inf, (len(env_state_names(self.handle_shape)),),
+                                                 np.float32)}
         if self.layout.ee_pose:
             spaces["ee_pose"] = gym.spaces.Box(-np.inf, np.inf, (len(EE_NAMES),), np.float32)
         if self._streams:
@@ -213,6 +220,7 @@ class OpenFrontEnv(gym.Env):
         self._opening = self._max_opening = self.scene.opening()
         self._steps = 0
         handle = self._catalog.handles[key.handle]
+        self._shape = handle_shape_state(self._catalog, key.handle) if self.handle_shape else None
         self._episode = {"seed": episode_seed, "variant": key.id, "front": self.scene.front.id,
                          "handle_type": self._catalog.handle_type(handle).value, "preset": key.preset}
         self.task_description = instruction(self._catalog, key.handle, self.scene.front.kind)
@@ -224,7 +232,7 @@ class OpenFrontEnv(gym.Env):
 
     def _obs(self) -> dict[str, Any]:
         obs: dict[str, Any] = {"agent_pos": self.layout.state(self.scene).astype(np.float32),
-                               "environment_state": environment_state(self.scene).astype(np.float32)}
+                               "environment_state": environment_state(self.scene, self._shape).astype(np.float32)}
         if self.layout.ee_pose:
             obs["ee_pose"] = self.layout.ee(self.scene).astype(np.float32)
         if self._streams:

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 from rik.errors import RikError
 from rik.evaluation.policy_files import CONFIG, PROCESSORS, member, parsed_config, read_json
 from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
-from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, GRASP_POINT, STREAM_SUFFIX
+from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, GRASP_POINT, SHAPED_ENV_STATE_NAMES, STREAM_SUFFIX
 
 if TYPE_CHECKING:
     from rik.sim.robots.layout import RobotLayout
@@ -39,6 +39,9 @@ class PolicyNeeds:
     """(height, width) of its images, px ((96, 128) when it takes none)."""
     action_frame: str = "world"
     """The frame of its pose action (:func:`trained_action_frame`); an arm's joint action: ``world``."""
+    handle_shape: bool = False
+    """Whether its ``observation.environment_state`` ends with the handle's shape (it was trained on an export made
+    with ``--handle-shape``: :data:`rik.sim.observation.SHAPED_ENV_STATE_NAMES` wide)."""
 
 
 def policy_config(policy_dir: Path) -> dict[str, Any]:
@@ -79,7 +82,10 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
     if action is not None and tuple(action.get("shape", ())) != (len(layout.action_names),):
         raise RikError(f"{file}: output 'action' has shape {list(action.get('shape', ()))}; robot {robot} takes "
                        f"[{len(layout.action_names)}] ({hint})")
-    widths = {OBS_STATE: len(layout.state_names), OBS_ENV_STATE: len(ENV_STATE_NAMES)}
+    env_width = tuple((inputs.get(OBS_ENV_STATE) or {}).get("shape", ()))
+    handle_shape = env_width == (len(SHAPED_ENV_STATE_NAMES),)  # trained with --handle-shape
+    widths = {OBS_STATE: len(layout.state_names),
+              OBS_ENV_STATE: len(SHAPED_ENV_STATE_NAMES if handle_shape else ENV_STATE_NAMES)}
     if layout.ee_pose:
         widths[EE_POSE] = len(EE_NAMES)
     for key, feature in inputs.items():
@@ -97,7 +103,8 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
                                f"[{widths[key]}] ({hint})")
             if shape != (widths[key],):
                 raise RikError(f"{file}: input '{key}' has shape {list(shape)}; rik's environment supplies "
-                               f"[{widths[key]}]")
+                               f"[{widths[key]}]" + (f" (or [{len(SHAPED_ENV_STATE_NAMES)}] with the handle's "
+                                                     "shape)" if key == OBS_ENV_STATE else ""))
             continue
         camera, stream = _image_feature(key)
         if camera is None:
@@ -119,7 +126,8 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
     if OBS_STATE not in inputs:
         raise RikError(f"{file}: the policy takes no 'observation.state'; rik's policies read the robot's state")
     return PolicyNeeds(config["type"], tuple(dict.fromkeys(cameras)), tuple(dict.fromkeys(streams)),
-                       size or (96, 128), trained_action_frame(Path(policy_dir)) if layout.is_pose else "world")
+                       size or (96, 128), trained_action_frame(Path(policy_dir)) if layout.is_pose else "world",
+                       handle_shape)
 
 
 def trained_action_frame(policy_dir: Path) -> str:
@@ -148,13 +156,14 @@ def trained_action_frame(policy_dir: Path) -> str:
 
         with safe_open(str(file), framework="numpy") as f:
             names = set(f.keys())
-            for key, width in ((ACTION, len(POSE_ACTION_NAMES)), (OBS_ENV_STATE, len(ENV_STATE_NAMES))):
+            for key, widths in ((ACTION, (len(POSE_ACTION_NAMES),)),
+                                (OBS_ENV_STATE, (len(ENV_STATE_NAMES), len(SHAPED_ENV_STATE_NAMES)))):
                 if f"{key}.mean" in names:
                     centre[key] = np.asarray(f.get_tensor(f"{key}.mean"), np.float64).reshape(-1)
                 elif {f"{key}.min", f"{key}.max"} <= names:
                     centre[key] = (np.asarray(f.get_tensor(f"{key}.min"), np.float64).reshape(-1)
                                    + np.asarray(f.get_tensor(f"{key}.max"), np.float64).reshape(-1)) / 2
-                if key in centre and centre[key].shape != (width,):
+                if key in centre and centre[key].shape[0] not in widths:
                     del centre[key]
     except Exception as e:  # not safetensors, truncated: the folder check names it; here only the frame is asked
         raise RikError(f"{file}: not readable statistics ({str(e).splitlines()[0] if str(e) else type(e).__name__})"

@@ -103,10 +103,11 @@ def check_frame_counts(root: Path) -> dict[str, int]:
 
 def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> int | None:
     """rik's state layout of a dataset's ``features`` (info.json) for the robot of ``robot`` (None: the Hand-E): 2
-    (``observation.state`` of the robot in its layout, ``observation.environment_state`` of the front), 1 (one
+    (``observation.state`` of the robot in its layout, ``observation.environment_state`` of the front, with or
+    without the handle's shape), 1 (one
     14-number ``observation.state``, Hand-E exports made before the split), or None (not a rik layout)."""
     from rik.exporters.lerobot_frames import LAYOUT_1_STATE_NAMES
-    from rik.sim.observation import ENV_STATE_NAMES
+    from rik.sim.observation import ENV_STATE_NAMES, SHAPED_ENV_STATE_NAMES
     from rik.sim.robots.layout import robot_layout
 
     robot = robot or robot_layout(None)
@@ -114,7 +115,7 @@ def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> 
     def names(key: str) -> tuple[str, ...] | None:
         return tuple(features[key].get("names") or ()) if key in features else None
 
-    if names(OBS_STATE) == robot.state_names and names(OBS_ENV_STATE) == ENV_STATE_NAMES:
+    if names(OBS_STATE) == robot.state_names and names(OBS_ENV_STATE) in (ENV_STATE_NAMES, SHAPED_ENV_STATE_NAMES):
         return 2
     if names(OBS_STATE) == LAYOUT_1_STATE_NAMES and OBS_ENV_STATE not in features:
         return 1
@@ -126,7 +127,8 @@ def describe_layout(layout: int | None, robot: RobotLayout | None = None) -> str
     if layout == 2:
         who = "the robot's" if robot is None or robot.is_pose else f"robot {robot.robot_id}'s"
         n = 11 if robot is None else len(robot.state_names)
-        return f"2 (observation.state: {who} {n} numbers; observation.environment_state: the front's 13)"
+        return (f"2 (observation.state: {who} {n} numbers; observation.environment_state: the front's 13, and the "
+                "handle's shape's 11 where exported with --handle-shape)")
     if layout == 1:
         return ("1 (one 14-number observation.state, no observation.environment_state: an export made before the "
                 "state split; export the episodes again for layout 2)")

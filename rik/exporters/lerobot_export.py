@@ -173,7 +173,7 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
         shutil.rmtree(root)  # an unfinished shard is redone from scratch
     root.parent.mkdir(parents=True, exist_ok=True)
     ds = LeRobotDataset.create(repo_id=repo_id, fps=fps, features=features(cameras, spec.streams, spec.width,
-                                                                             spec.height, layout),
+                                                                             spec.height, layout, spec.handle_shape),
                                root=root / "ds", robot_type=layout.robot_type, use_videos=bool(spec.streams),
                                video_backend="pyav",
                                rgb_encoder=RGBEncoderConfig(vcodec=spec.codec,
@@ -194,7 +194,8 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
             assert episode is not None
             streams = source.streams if renders is None else render_streams(catalog, episode, spec, cameras,
                                                                             renders, variants)
-            task, frames, count = episode_frames(catalog, episode, streams, cameras, fps, variants)
+            task, frames, count = episode_frames(catalog, episode, streams, cameras, fps, variants,
+                                                 spec.handle_shape)
             for frame in frames:
                 ds.add_frame({**frame, TASK: task})
             extra.clear()
@@ -288,6 +289,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         if isinstance(old, dict) and isinstance(old.get("spec"), dict):
             old["spec"].setdefault("robot", "hand-e")  # plans written before robots were the Hand-E's
             old["spec"].setdefault("action_frame", "world")  # and before the handle frame
+            old["spec"].setdefault("handle_shape", False)  # and before the handle's shape
         if old != json.loads(json.dumps(plan)):
             raise RikError(f"{partial_dir}: the interrupted export there was of other episodes or settings; delete "
                            "it, or run it again with the same ones")
@@ -362,8 +364,8 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     publish(merged, out)
     shutil.rmtree(partial_dir, ignore_errors=True)
     return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
-                        sorted(features(cams, spec.streams, spec.width, spec.height, layout)), len(jobs), skipped,
-                        checks, robot, layout.robot_type)
+                        sorted(features(cams, spec.streams, spec.width, spec.height, layout, spec.handle_shape)),
+                        len(jobs), skipped, checks, robot, layout.robot_type)
 
 
 def order_stats(root: Path) -> None:

@@ -61,16 +61,17 @@ def _vector(names: Sequence[str]) -> dict[str, Any]:
 
 
 def features(cameras: Sequence[str], streams: Sequence[str], width: int, height: int,
-             layout: RobotLayout | None = None) -> dict[str, dict[str, Any]]:
-    """The LeRobot feature dict of an export of one robot's episodes (``layout``; None: the Hand-E's)."""
-    from rik.sim.observation import ENV_STATE_NAMES
+             layout: RobotLayout | None = None, handle_shape: bool = False) -> dict[str, dict[str, Any]]:
+    """The LeRobot feature dict of an export of one robot's episodes (``layout``; None: the Hand-E's), the front's
+    state followed by the handle's shape where ``handle_shape``."""
+    from rik.sim.observation import env_state_names
     from rik.sim.robots.layout import EE_NAMES, robot_layout
 
     layout = layout or robot_layout(None)
     out: dict[str, dict[str, Any]] = {OBS_STATE: _vector(layout.state_names)}
     if layout.ee_pose:
         out[EE_POSE] = _vector(EE_NAMES)
-    out[OBS_ENV_STATE] = _vector(ENV_STATE_NAMES)
+    out[OBS_ENV_STATE] = _vector(env_state_names(handle_shape))
     out[ACTION] = _vector(layout.action_names)
     for cam in cameras:
         for stream in streams:
@@ -186,18 +187,20 @@ def load_episode(catalog: Catalog, directory: Path, meta: EpisodeMeta | None = N
 
 
 def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[str, Path], cameras: Sequence[str],
-                   fps: int, variants: Path) -> tuple[str, Iterator[dict[str, np.ndarray]], int]:
+                   fps: int, variants: Path, handle_shape: bool = False
+                   ) -> tuple[str, Iterator[dict[str, np.ndarray]], int]:
     """(task, frame dicts for ``add_frame`` without the task, frame count) of one episode read by
     :func:`load_episode`, resampled to ``fps``, its images read from ``streams`` (stream kind -> finished stream
-    folder)."""
+    folder); the front's state followed by the handle's shape where ``handle_shape``."""
     from rik.render.streams import read_frame
-    from rik.sim.observation import GRASP_POINT, environment_state
+    from rik.sim.observation import GRASP_POINT, environment_state, handle_shape_state
 
     meta, layout, actions, targets = episode.meta, episode.layout, episode.actions, episode.targets
     scene = episode.recorded.scene(catalog, variants)
     recorded = episode.recorded.states
     picks = resample_indices(len(recorded), meta.fps, fps)
     task = task_text(catalog, meta, scene.front.kind)
+    shape = handle_shape_state(catalog, meta.handle) if handle_shape else None
 
     def frames() -> Iterator[dict[str, np.ndarray]]:
         for k in picks:
@@ -205,7 +208,7 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
             frame: dict[str, np.ndarray] = {OBS_STATE: layout.state(scene).astype(np.float32)}
             if layout.ee_pose:
                 frame[EE_POSE] = layout.ee(scene).astype(np.float32)
-            env_state = environment_state(scene)
+            env_state = environment_state(scene, shape)
             frame[OBS_ENV_STATE] = env_state.astype(np.float32)
             action = (layout.joint_action(targets[k], float(targets[k][-1])) if meta.action_kind == "joints"
                       else layout.action(actions[k], targets[k], env_state[GRASP_POINT]))

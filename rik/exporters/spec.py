@@ -58,6 +58,9 @@ class ExportSpec:
     action_frame: str = "world"
     """The Hand-E's ``action`` position: in the world (``world``) or from the handle's grasp point (``handle``,
     :data:`rik.sim.robots.layout.HANDLE_ACTION_NAMES`); an arm's joint action is always ``world``."""
+    handle_shape: bool = False
+    """Whether ``observation.environment_state`` ends with the handle's shape
+    (:data:`rik.sim.observation.HANDLE_SHAPE_NAMES`: its type, mount and grasp dimensions)."""
 
     def stream(self, kind: str) -> StreamSpec:
         """The image stream ``kind`` (``sim`` or ``rerendered``) at this export's size and quality."""

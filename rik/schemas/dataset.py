@@ -120,6 +120,9 @@ class DatasetSpec(Frozen):
     action_frame: Literal["world", "handle"] = "world"
     """The Hand-E's exported ``action`` position: in the world, or from the handle's grasp point (``handle``:
     ``target_dx``, ``target_dy``, ``target_dz``, the target minus the grasp point); arms' joint actions: world."""
+    handle_shape: bool = False
+    """Whether ``observation.environment_state`` ends with the handle's shape (its type, mount and grasp dimensions,
+    :data:`rik.sim.observation.HANDLE_SHAPE_NAMES`)."""
 
     @field_validator("resolution")
     @classmethod

@@ -7,7 +7,11 @@ Two state vectors, split as LeRobot's policies expect them (ACT and diffusion al
   gripper base's pose, the jaw opening, the point between its pads and the normal force its fingers feel;
 - the **front's state** (:data:`ENV_STATE_NAMES`, ``observation.environment_state``): the operated front's joint
   position and velocity and its opening, the handle's grasp point, orientation and the direction it moves in when
-  the front opens. The robot's state alone does not say where the handle is.
+  the front opens. The robot's state alone does not say where the handle is;
+- optionally, the **handle's shape** (:data:`HANDLE_SHAPE_NAMES`, appended to the front's state: ``rik
+  export-lerobot --handle-shape``, the environment's ``handle_shape=True``): its type, mount and the catalog's
+  grasp dimensions, constant through an episode. The front's state alone does not say whether the grasp point is
+  a knob's head, a bar or a lip.
 
 Images are uint8 HxWx3 of the :data:`CAMERAS`. Units are SI: m, rad, m/s or rad/s, N.
 """
@@ -33,6 +37,14 @@ handle's grasp point (m, world), its orientation (unit quaternion w, x, y, z wit
 direction in which the grasp point moves as the front opens (world)."""
 GRASP_POINT = slice(ENV_STATE_NAMES.index("grasp_x"), ENV_STATE_NAMES.index("grasp_z") + 1)
 """Where the handle's grasp point (m, world) sits in the front's state: ``environment_state(scene)[GRASP_POINT]``."""
+HANDLE_SHAPE_NAMES = ("handle_knob", "handle_two_point", "handle_finger_pull", "handle_edge_clip", "handle_inset",
+                      "handle_length", "handle_width", "handle_projection", "handle_grip_diameter",
+                      "handle_clearance_depth", "handle_clearance_width")
+"""The handle's shape: its type and mount as 0/1 flags (knob, two-point, finger pull; clipped on an edge, set into a
+recess), then the catalog's geometry (:class:`rik.schemas.handles.HandleGeometry`, m): length, width, projection,
+grip diameter, and the finger clearance's depth and width (0 where the catalog gives none)."""
+SHAPED_ENV_STATE_NAMES = ENV_STATE_NAMES + HANDLE_SHAPE_NAMES
+"""The front's state followed by the handle's shape (``--handle-shape``)."""
 CAMERAS = ("front", "wrist")
 """The scene's cameras: ``front`` looks at the base unit, ``wrist`` rides on the gripper."""
 STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
@@ -63,14 +75,33 @@ def robot_state(scene: SimScene) -> np.ndarray:
                            [scene.contact_summary()["normal_force"]]]).astype(np.float64)
 
 
-def environment_state(scene: SimScene) -> np.ndarray:
-    """The :data:`ENV_STATE_NAMES` of a scene, float64."""
+def env_state_names(handle_shape: bool) -> tuple[str, ...]:
+    """The names of the front's state, followed by the handle's shape where ``handle_shape``."""
+    return SHAPED_ENV_STATE_NAMES if handle_shape else ENV_STATE_NAMES
+
+
+def handle_shape_state(catalog: Catalog, handle_id: str) -> np.ndarray:
+    """The :data:`HANDLE_SHAPE_NAMES` of a catalog handle, float64 (flags 0/1, lengths m)."""
+    handle = catalog.handles[handle_id]
+    kind = catalog.handle_type(handle).value
+    g = handle.geometry
+    depth, width = (g.clearance.depth, g.clearance.width) if g.clearance is not None else (0.0, 0.0)
+    flags = [kind == "knob", kind == "two_point", kind == "finger_pull", handle.mount.kind == "edge_clip",
+             handle.mount.kind == "inset"]
+    return np.array([*map(float, flags), g.length, g.width, g.projection, g.grip_diameter, depth, width], np.float64)
+
+
+def environment_state(scene: SimScene, shape: np.ndarray | None = None) -> np.ndarray:
+    """The :data:`ENV_STATE_NAMES` of a scene, float64, followed by ``shape`` where given (the handle's,
+    :func:`handle_shape_state`)."""
     q, qd = scene.front_q()
     quat = scene.data.xquat[scene.front.handle_body].copy()
     if quat[0] < 0:
         quat = -quat
-    return np.concatenate([[q, qd, scene.opening()], scene.grasp_point(), quat,
-                           scene.pull_direction()]).astype(np.float64)
+    parts = [[q, qd, scene.opening()], scene.grasp_point(), quat, scene.pull_direction()]
+    if shape is not None:
+        parts.append(shape)
+    return np.concatenate(parts).astype(np.float64)
 
 
 def delta_to_absolute(target: np.ndarray, action: np.ndarray) -> np.ndarray:

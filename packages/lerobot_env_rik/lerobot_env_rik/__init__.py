@@ -16,7 +16,8 @@ action (``action_mode="joints"``: the joint targets and gripper in its export's 
 environment key                       dataset / policy feature
 ====================================  =====================================================================
 ``agent_pos``                         ``observation.state`` (the robot's state, in its layout)
-``environment_state``                 ``observation.environment_state`` (the front's)
+``environment_state``                 ``observation.environment_state`` (the front's; the handle's shape after it
+                                      with ``--env.handle_shape``, which follows the policy by default)
 ``ee_pose`` (Panda only)              ``observation.ee_pose`` (``ee.x`` .. ``ee.wz``, in the arm's base)
 ``pixels/front``                      ``observation.images.front``
 ``pixels/front_rerendered``           ``observation.images.front_rerendered``
@@ -46,10 +47,12 @@ import rik.envs.open_front  # noqa: F401  (registers rik/OpenFront-v0 with gymna
 from rik.sim.feature_keys import EE_POSE
 from rik.sim.robots.layout import EE_NAMES, RobotLayout, robot_layout
 
-__all__ = ["AUTO", "RikEnvConfig", "action_mode", "env_kwargs", "robot_layout_of"]
+__all__ = ["AUTO", "RikEnvConfig", "action_mode", "env_kwargs", "robot_layout_of", "shaped"]
 
 AUTO = "auto"
 """``--env.cameras=auto``: the cameras of the command line's policy."""
+SWITCH = (AUTO, "true", "false")
+"""The values of ``--env.handle_shape``."""
 
 
 def robot_layout_of(robot: str) -> RobotLayout:
@@ -97,26 +100,35 @@ class RikEnvConfig(EnvConfig):
     """The Hand-E's action position: ``world``, ``handle`` (from the handle's grasp point: an export made with
     ``--action-frame handle``), or ``auto``: the frame of the policy of ``--policy.path`` (its training data's
     statistics tell), ``world`` without one."""
+    handle_shape: str = AUTO
+    """Whether ``environment_state`` ends with the handle's shape (``true``: for a policy trained on an export made
+    with ``--handle-shape``; ``false``), or ``auto``: as the policy of ``--policy.path`` reads it (its input
+    width), ``false`` without one."""
     render_mode: str = "rgb_array"
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        from rik.sim.observation import ENV_STATE_NAMES, image_name
+        from rik.sim.observation import env_state_names, image_name
         from rik.sim.robots.layout import ACTION_FRAMES
 
         layout = robot_layout_of(self.robot)
         if self.action_frame not in (AUTO, *ACTION_FRAMES):
             raise ValueError(f"--env.action_frame={self.action_frame!r}: use one of {AUTO}, {', '.join(ACTION_FRAMES)}")
+        if self.handle_shape not in SWITCH:
+            raise ValueError(f"--env.handle_shape={self.handle_shape!r}: use one of {', '.join(SWITCH)}")
         _fit_policy(self, layout)
         if self.action_frame == AUTO:
             self.action_frame = "world"
+        if self.handle_shape == AUTO:
+            self.handle_shape = "false"
         if self.action_frame != "world" and not layout.is_pose:
             raise ValueError(f"--env.action_frame={self.action_frame}: robot {self.robot} acts with joint targets, "
                              "which have no handle frame (it is the Hand-E's pose action's)")
+        env_width = len(env_state_names(shaped(self)))
         self.features = {ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(len(layout.action_names),)),
                          "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(len(layout.state_names),)),
-                         "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(len(ENV_STATE_NAMES),))}
+                         "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(env_width,))}
         self.features_map = {ACTION: ACTION, "agent_pos": OBS_STATE, "environment_state": OBS_ENV_STATE}
         if layout.ee_pose:
             self.features["ee_pose"] = PolicyFeature(type=FeatureType.STATE, shape=(len(EE_NAMES),))
@@ -165,6 +177,8 @@ def _fit_policy(cfg: RikEnvConfig, layout: RobotLayout) -> None:
     needs = policy_needs(folder, allow_rerendered=True, layout=layout)
     if cfg.action_frame == AUTO:
         cfg.action_frame = needs.action_frame
+    if cfg.handle_shape == AUTO:
+        cfg.handle_shape = "true" if needs.handle_shape else "false"
     if cfg.cameras == AUTO:
         cfg.cameras = ",".join(needs.cameras)
         if needs.cameras:
@@ -194,6 +208,11 @@ def action_mode(cfg: RikEnvConfig) -> str:
     return "handle" if cfg.action_frame == "handle" else "absolute"
 
 
+def shaped(cfg: RikEnvConfig) -> bool:
+    """Whether a config's ``environment_state`` ends with the handle's shape."""
+    return cfg.handle_shape == "true"
+
+
 def env_kwargs(cfg: RikEnvConfig) -> dict:
     """The keyword arguments of ``rik.envs.open_front.OpenFrontEnv`` for a config."""
     from rik.episodes.draw import Draw
@@ -206,4 +225,4 @@ def env_kwargs(cfg: RikEnvConfig) -> dict:
             "streams": _names(cfg.streams) if cameras else (),
             "cameras": cameras or ("front",), "image_size": (cfg.observation_height, cfg.observation_width),
             "spp": cfg.spp, "episode_length": cfg.episode_length, "variants_dir": cfg.variants_dir,
-            "render_mode": cfg.render_mode}
+            "render_mode": cfg.render_mode, "handle_shape": shaped(cfg)}
