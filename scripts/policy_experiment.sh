@@ -23,7 +23,7 @@ SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, ma
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
 STAGES=${STAGES:-data train eval report}
-DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah}  # the data sets the data stage builds
+DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls}  # the data sets the data stage builds
 IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
 DEVICE=${DEVICE:-cpu}          # lerobot-train's --policy.device (cuda on a GPU machine)
 LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers (data-loading processes; 12 for images on a GPU)
@@ -86,12 +86,13 @@ if stage data; then
   build pla planned-above-360 variants               # the same seeds, planned_above: one way to hold each handle
   build pl-images planned-360-images variants        # the main data set with both cameras (IMAGES=1)
   # the main data set's episodes with the action in the handle frame (what examples/policies/planned-360-handle.yaml
-  # builds, without recording the same episodes again)
-  for pair in "plh pl" "plah pla"; do
-    set -- $pair
+  # builds, without recording the same episodes again), and with the handle's shape in the front's state
+  # (examples/policies/planned-360-shape.yaml)
+  for triple in "plh pl --action-frame=handle" "plah pla --action-frame=handle" "pls pl --handle-shape"; do
+    set -- $triple
     if [[ " $DATASETS " == *" $1 "* ]] && [ ! -d "ds-$1" ]; then
       "${RIK[@]}" export-lerobot "work-$2/episodes" --out "ds-$1" --repo-id "local/rik-$1" --streams none \
-        --outcomes S --variants variants --action-frame handle
+        --outcomes S --variants variants "$3"
     fi
   done
   # the CoACD demonstrations of exactly the episodes the hull data set holds (the ablation compares collision,
@@ -114,6 +115,9 @@ if stage train; then
   train act-plh plh $(( STEPS / 3 )) 0 "${ACT[@]}"   # the same recipe, the action from the handle's grasp point
   train act-pla pla $(( STEPS * 2 / 3 )) 0 "${ACT[@]}"  # the same recipe, planned_above's demonstrations
   train act-plah plah $(( STEPS / 3 )) 0 "${ACT[@]}"  # both changes
+  for seed in 0 1; do  # the same recipe and data, the handle's shape in the front's state; two training seeds
+    train "act-pls-s$seed" pls $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"
+  done
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
   if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
   # the image run (IMAGES=1): the same recipe with both cameras; ResNet-18 from scratch (no ImageNet weights
@@ -139,6 +143,9 @@ if stage eval; then
   done
   for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )) $(( STEPS * 2 / 3 )); do
     evaluate "$(checkpoint act-pla "$step")" "act-pla-$step"
+    for seed in 0 1; do  # rik eval reads the handle's shape from the policy's input width
+      evaluate "$(checkpoint "act-pls-s$seed" "$step")" "act-pls-s$seed-$step"
+    done
   done
   # the mean of a run's saved weights over a window fixed in advance (scripts/average_checkpoints.py): act-pl's last
   # third, and both demonstrators' SHORT_STEPS .. STEPS/3 and STEPS/3 .. 2 STEPS/3
@@ -149,7 +156,7 @@ if stage eval; then
     evaluate "$out" "$1-mean-$2-$3"
   }
   average act-pl $(( STEPS * 2 / 3 )) "$STEPS"
-  for run in act-pl act-pla; do
+  for run in act-pl act-pla act-pls-s0 act-pls-s1; do
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
     average "$run" $(( STEPS / 3 )) $(( STEPS * 2 / 3 ))
   done
