@@ -7,6 +7,8 @@ import functools
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from rik.episodes.operators import ScriptedGrasp
     from rik.registry.catalog import Catalog
     from rik.sim.scene import SimScene
@@ -41,3 +43,22 @@ def grasp_until_pull(scene: SimScene, max_steps: int, strategy: str = "grasp_ver
             break
         scene.step(op.act(scene))
     return op
+
+
+def act_config_folder(folder: Path, cameras: tuple[str, ...] = (), size: tuple[int, int] = (72, 96),
+                      env_width: int = 13) -> Path:
+    """A saved ACT config (LeRobot's own writer, no weights) in the new ``folder`` that reads the Hand-E's state, a
+    front's state ``env_width`` numbers wide and ``cameras`` at ``size`` (height, width)."""
+    from lerobot.configs import FeatureType, PolicyFeature
+    from lerobot.policies.act.configuration_act import ACTConfig
+
+    inputs = {"observation.state": PolicyFeature(type=FeatureType.STATE, shape=(11,)),
+              "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(env_width,))}
+    for camera in cameras:
+        inputs[f"observation.images.{camera}"] = PolicyFeature(type=FeatureType.VISUAL, shape=(3, *size))
+    config = ACTConfig(input_features=inputs,
+                       output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(7,))},
+                       device="cpu", push_to_hub=False)
+    folder.mkdir()
+    config._save_pretrained(folder)
+    return folder

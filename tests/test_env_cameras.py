@@ -8,26 +8,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from shared import act_config_folder
 
 # lerobot (torch, datasets, pandas: ~6 s) is imported by the tests that use it, not at collection, which every
 # xdist worker of every run pays, the everyday tier's included
-
-
-def _policy(folder: Path, cameras: tuple[str, ...], size: tuple[int, int] = (72, 96)) -> Path:
-    """A saved ACT config (LeRobot's own writer) that reads ``cameras`` at ``size`` (height, width) and the states."""
-    from lerobot.configs import FeatureType, PolicyFeature
-    from lerobot.policies.act.configuration_act import ACTConfig
-
-    inputs = {"observation.state": PolicyFeature(type=FeatureType.STATE, shape=(11,)),
-              "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(13,))}
-    for camera in cameras:
-        inputs[f"observation.images.{camera}"] = PolicyFeature(type=FeatureType.VISUAL, shape=(3, *size))
-    config = ACTConfig(input_features=inputs,
-                       output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(7,))},
-                       device="cpu", push_to_hub=False)
-    folder.mkdir()
-    config._save_pretrained(folder)
-    return folder
 
 
 def _env_config(**fields: object):
@@ -41,8 +25,8 @@ def _argv(monkeypatch: pytest.MonkeyPatch, *args: str) -> None:
     monkeypatch.setattr(sys, "argv", ["lerobot-eval", "--env.type=rik", *args])
 
 
-def test_auto_cameras_follow_the_command_lines_image_policy(monkeypatch, tmp_path: Path) -> None:
-    policy = _policy(tmp_path / "act", ("front", "wrist"))
+def test_auto_cameras_follow_the_command_lines_imageact_config_folder(monkeypatch, tmp_path: Path) -> None:
+    policy = act_config_folder(tmp_path / "act", ("front", "wrist"))
     _argv(monkeypatch, f"--policy.path={policy}")
     cfg = _env_config()
     assert cfg.cameras == "front,wrist" and cfg.streams == "sim"
@@ -52,7 +36,7 @@ def test_auto_cameras_follow_the_command_lines_image_policy(monkeypatch, tmp_pat
 
 
 def test_auto_cameras_are_none_for_a_state_policy_or_without_one(monkeypatch, tmp_path: Path) -> None:
-    _argv(monkeypatch, f"--policy.path={_policy(tmp_path / 'act', ())}")
+    _argv(monkeypatch, f"--policy.path={act_config_folder(tmp_path / 'act', ())}")
     assert _env_config().cameras == ""
     _argv(monkeypatch)
     cfg = _env_config()
@@ -60,7 +44,7 @@ def test_auto_cameras_are_none_for_a_state_policy_or_without_one(monkeypatch, tm
 
 
 def test_cameras_that_leave_out_the_policys_image_are_refused(monkeypatch, tmp_path: Path) -> None:
-    policy = _policy(tmp_path / "act", ("front",))
+    policy = act_config_folder(tmp_path / "act", ("front",))
     _argv(monkeypatch, f"--policy.path={policy}")
     with pytest.raises(ValueError, match=r"^--env.cameras='' --env.streams='sim': the policy in .*act reads "
                                          r"observation.images.front, which they do not render; leave --env.cameras "

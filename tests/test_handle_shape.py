@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from shared import BOW, builtin_catalog
+from shared import BOW, act_config_folder, builtin_catalog
 
 from rik.errors import RikError
 
@@ -93,21 +93,6 @@ def test_the_environment_appends_the_drawn_handles_shape(bow_variants: Path) -> 
         env.close()
 
 
-def _policy(folder: Path, env_width: int) -> Path:
-    """A saved ACT config (LeRobot's own writer) whose front's state is ``env_width`` numbers wide."""
-    from lerobot.configs import FeatureType, PolicyFeature
-    from lerobot.policies.act.configuration_act import ACTConfig
-
-    inputs = {"observation.state": PolicyFeature(type=FeatureType.STATE, shape=(11,)),
-              "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(env_width,))}
-    config = ACTConfig(input_features=inputs,
-                       output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(7,))},
-                       device="cpu", push_to_hub=False)
-    folder.mkdir()
-    config._save_pretrained(folder)
-    return folder
-
-
 def test_a_policys_input_width_says_whether_it_reads_the_handle_shape(tmp_path: Path,
                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     from lerobot_env_rik import RikEnvConfig, env_kwargs
@@ -115,8 +100,8 @@ def test_a_policys_input_width_says_whether_it_reads_the_handle_shape(tmp_path: 
     from rik.evaluation.evaluate import EvalSpec, env_config
     from rik.evaluation.load import policy_needs
 
-    plain, shaped, odd = _policy(tmp_path / "plain", 13), _policy(tmp_path / "shaped", 24), _policy(tmp_path / "odd",
-                                                                                                   20)
+    plain, shaped, odd = (act_config_folder(tmp_path / name, env_width=width)
+                          for name, width in (("plain", 13), ("shaped", 24), ("odd", 20)))
     assert policy_needs(plain).handle_shape is False and policy_needs(shaped).handle_shape is True
     with pytest.raises(RikError, match=r"^.*odd/config\.json: input 'observation\.environment_state' has shape \[20\]; "
                                        r"rik's environment supplies \[13\] \(or \[24\] with the handle's shape\)$"):
