@@ -50,9 +50,9 @@ def export_lerobot(
         action_frame: Annotated[str, typer.Option("--action-frame", help="The Hand-E's action position: world, "
                                                   "or handle (target minus the handle's grasp point: "
                                                   "target_dx, target_dy, target_dz).")] = "world",
-        handle_shape: Annotated[bool, typer.Option("--handle-shape", help="End observation.environment_state with "
-                                                   "the handle's shape: its type, mount and grasp dimensions "
-                                                   "(11 numbers).")] = False,
+        handle_shape: Annotated[str, typer.Option("--handle-shape", help="End observation.environment_state with "
+                                                  "the handle's shape: none; kind (its type and mount, 5 "
+                                                  "numbers); full (and its grasp dimensions, 11).")] = "none",
         resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted export into --out.")] = False,
         push_to_hub: Annotated[bool, typer.Option("--push-to-hub", help="Upload the finished dataset to the "
                                                   "Hugging Face Hub as --repo-id (needs a login).")] = False,

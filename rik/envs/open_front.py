@@ -10,8 +10,8 @@
   its export's ``observation.state`` holds it (the Hand-E's :data:`rik.sim.observation.ROBOT_STATE_NAMES`; an
   arm's joint positions and gripper, in its layout's names and units, e.g. the SO-100's degrees and gripper
   percent) and ``environment_state`` = the front's state (:mod:`rik.sim.observation`), float32, followed by the
-  handle's shape with ``handle_shape=True`` (:data:`rik.sim.observation.HANDLE_SHAPE_NAMES`; the export's
-  ``--handle-shape``); for a robot whose
+  handle's shape with ``handle_shape="kind"`` or ``"full"`` (:data:`rik.sim.observation.HANDLE_SHAPES`; the
+  export's ``--handle-shape``); for a robot whose
   layout has one (the Panda), ``ee_pose`` = its gripper frame in its base frame (``ee.x`` .. ``ee.wz``: m and a
   rotation vector, rad), float32; with image streams also ``pixels`` = ``{camera: uint8 HxWx3}`` (``front``,
   ``wrist``; ``front_rerendered`` for Mitsuba's stream);
@@ -46,6 +46,7 @@ import numpy as np
 from rik.errors import RikError
 from rik.sim.observation import (
     CAMERAS,
+    check_handle_shape,
     delta_to_absolute,
     env_state_names,
     environment_state,
@@ -84,10 +85,11 @@ class OpenFrontEnv(gym.Env):
                  cameras: tuple[str, ...] = CAMERAS, image_size: tuple[int, int] = (96, 128), spp: int = 16,
                  episode_length: int = EPISODE_LENGTH, variants_dir: str | Path = "variants",
                  render_mode: str | None = None, catalog_paths: tuple[str, ...] = (),
-                 handle_shape: bool = False) -> None:
+                 handle_shape: str = "none") -> None:
         from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, Draw
         from rik.registry.load import load_catalog
 
+        check_handle_shape(handle_shape, "handle_shape")
         if action_mode not in ACTION_MODES:
             raise RikError(f"action_mode '{action_mode}': use one of {', '.join(ACTION_MODES)}")
         if isinstance(episode_length, bool) or not isinstance(episode_length, int) or episode_length < 1:
@@ -114,8 +116,8 @@ class OpenFrontEnv(gym.Env):
             self._draw.check(self._catalog)
         self._variant, self._front = variant, front
         self.action_mode = action_mode
-        self.handle_shape = bool(handle_shape)
-        self._shape: np.ndarray | None = None  # the reset handle's shape (handle_shape=True)
+        self.handle_shape = handle_shape
+        self._shape: np.ndarray | None = None  # the reset handle's shape (handle_shape kind or full)
         self._streams = streams
         self._cameras, self._size, self._spp = cameras, image_size, spp
         self._max_episode_steps = episode_length
@@ -220,7 +222,8 @@ class OpenFrontEnv(gym.Env):
         self._opening = self._max_opening = self.scene.opening()
         self._steps = 0
         handle = self._catalog.handles[key.handle]
-        self._shape = handle_shape_state(self._catalog, key.handle) if self.handle_shape else None
+        self._shape = (handle_shape_state(self._catalog, key.handle, self.handle_shape)
+                       if self.handle_shape != "none" else None)
         self._episode = {"seed": episode_seed, "variant": key.id, "front": self.scene.front.id,
                          "handle_type": self._catalog.handle_type(handle).value, "preset": key.preset}
         self.task_description = instruction(self._catalog, key.handle, self.scene.front.kind)

@@ -116,7 +116,7 @@ def env_config(spec: EvalSpec) -> Any:
                         kinds=",".join(spec.kinds), cameras=",".join(needs["cameras"]),
                         streams=",".join(needs["streams"]) or "sim", observation_height=h, observation_width=w,
                         variants_dir=spec.variants, action_frame=spec.action_frame,
-                        handle_shape="true" if needs.get("handle_shape") else "false")
+                        handle_shape=needs.get("handle_shape", "none"))
 
 
 # ---- one worker's episodes ----------------------------------------------------------------------------------
@@ -133,11 +133,11 @@ def _state_stats(pre: Any, robot: str) -> dict[str, tuple[Any, Any, tuple[str, .
 
     from rik.registry.load import load_catalog
     from rik.sim.feature_keys import EE_POSE, OBS_ENV_STATE, OBS_STATE
-    from rik.sim.observation import ENV_STATE_NAMES, SHAPED_ENV_STATE_NAMES
+    from rik.sim.observation import HANDLE_SHAPES, env_state_names
     from rik.sim.robots.layout import EE_NAMES, robot_layout
 
     layout = robot_layout(load_catalog().robot(robot).as_arm)
-    names = {OBS_STATE: (tuple(layout.state_names),), OBS_ENV_STATE: (ENV_STATE_NAMES, SHAPED_ENV_STATE_NAMES),
+    names = {OBS_STATE: (tuple(layout.state_names),), OBS_ENV_STATE: tuple(env_state_names(s) for s in HANDLE_SHAPES),
              EE_POSE: (EE_NAMES,)}
     out = {}
     for step in getattr(pre, "steps", []):
@@ -380,13 +380,13 @@ def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
 
 def _spec_json(spec: EvalSpec) -> Any:
     """The spec as JSON data; without ``action_frame`` and the needs' where they are the world's, and the needs'
-    ``handle_shape`` where it is off (runs from before the handle frame and the handle's shape stay finished)."""
+    ``handle_shape`` where it is none (runs from before the handle frame and the handle's shape stay finished)."""
     data = json.loads(json.dumps(asdict(spec), default=list))
     if data.get("action_frame") in ("auto", "world"):
         del data["action_frame"]
     if data.get("needs", {}).get("action_frame") == "world":
         del data["needs"]["action_frame"]
-    if data.get("needs", {}).get("handle_shape") is False:
+    if data.get("needs", {}).get("handle_shape") == "none":
         del data["needs"]["handle_shape"]
     return data
 

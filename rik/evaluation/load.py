@@ -19,7 +19,14 @@ from typing import TYPE_CHECKING, Any
 from rik.errors import RikError
 from rik.evaluation.policy_files import CONFIG, PROCESSORS, member, parsed_config, read_json
 from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
-from rik.sim.observation import CAMERAS, ENV_STATE_NAMES, GRASP_POINT, SHAPED_ENV_STATE_NAMES, STREAM_SUFFIX
+from rik.sim.observation import (
+    CAMERAS,
+    GRASP_POINT,
+    HANDLE_SHAPES,
+    STREAM_SUFFIX,
+    env_state_names,
+    handle_shape_of_width,
+)
 
 if TYPE_CHECKING:
     from rik.sim.robots.layout import RobotLayout
@@ -39,9 +46,9 @@ class PolicyNeeds:
     """(height, width) of its images, px ((96, 128) when it takes none)."""
     action_frame: str = "world"
     """The frame of its pose action (:func:`trained_action_frame`); an arm's joint action: ``world``."""
-    handle_shape: bool = False
-    """Whether its ``observation.environment_state`` ends with the handle's shape (it was trained on an export made
-    with ``--handle-shape``: :data:`rik.sim.observation.SHAPED_ENV_STATE_NAMES` wide)."""
+    handle_shape: str = "none"
+    """What of the handle's shape ends its ``observation.environment_state`` (it was trained on an export made with
+    ``--handle-shape kind`` or ``full``; :data:`rik.sim.observation.HANDLE_SHAPES`), told by that input's width."""
 
 
 def policy_config(policy_dir: Path) -> dict[str, Any]:
@@ -83,9 +90,8 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
         raise RikError(f"{file}: output 'action' has shape {list(action.get('shape', ()))}; robot {robot} takes "
                        f"[{len(layout.action_names)}] ({hint})")
     env_width = tuple((inputs.get(OBS_ENV_STATE) or {}).get("shape", ()))
-    handle_shape = env_width == (len(SHAPED_ENV_STATE_NAMES),)  # trained with --handle-shape
-    widths = {OBS_STATE: len(layout.state_names),
-              OBS_ENV_STATE: len(SHAPED_ENV_STATE_NAMES if handle_shape else ENV_STATE_NAMES)}
+    handle_shape = (handle_shape_of_width(env_width[0]) if len(env_width) == 1 else None) or "none"
+    widths = {OBS_STATE: len(layout.state_names), OBS_ENV_STATE: len(env_state_names(handle_shape))}
     if layout.ee_pose:
         widths[EE_POSE] = len(EE_NAMES)
     for key, feature in inputs.items():
@@ -103,8 +109,9 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
                                f"[{widths[key]}] ({hint})")
             if shape != (widths[key],):
                 raise RikError(f"{file}: input '{key}' has shape {list(shape)}; rik's environment supplies "
-                               f"[{widths[key]}]" + (f" (or [{len(SHAPED_ENV_STATE_NAMES)}] with the handle's "
-                                                     "shape)" if key == OBS_ENV_STATE else ""))
+                               f"[{widths[key]}]" + (" (or " + " or ".join(
+                                   f"[{len(env_state_names(s))}]" for s in HANDLE_SHAPES if s != "none")
+                                   + " with the handle's shape)" if key == OBS_ENV_STATE else ""))
             continue
         camera, stream = _image_feature(key)
         if camera is None:
@@ -157,7 +164,7 @@ def trained_action_frame(policy_dir: Path) -> str:
         with safe_open(str(file), framework="numpy") as f:
             names = set(f.keys())
             for key, widths in ((ACTION, (len(POSE_ACTION_NAMES),)),
-                                (OBS_ENV_STATE, (len(ENV_STATE_NAMES), len(SHAPED_ENV_STATE_NAMES)))):
+                                (OBS_ENV_STATE, tuple(len(env_state_names(s)) for s in HANDLE_SHAPES))):
                 if f"{key}.mean" in names:
                     centre[key] = np.asarray(f.get_tensor(f"{key}.mean"), np.float64).reshape(-1)
                 elif {f"{key}.min", f"{key}.max"} <= names:

@@ -190,7 +190,7 @@ def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str,
     layout = robot_layout(robot.as_arm, spec.action_frame)
     images = [k for k, f in info["features"].items() if f.get("dtype") == "video"]
     sim_only = [k for k in images if not k.endswith("_rerendered")]
-    from rik.sim.observation import ENV_STATE_NAMES, HANDLE_SHAPE_NAMES, ROBOT_STATE_NAMES
+    from rik.sim.observation import ENV_STATE_NAMES, HANDLE_SHAPES, ROBOT_STATE_NAMES
 
     if images:
         streams = f"""- **Image streams:** {', '.join(f'`{k}`' for k in images)}. Keys without a suffix are MuJoCo's own
@@ -234,12 +234,15 @@ in your data loader.
   quaternion w, x, y, z with w >= 0, world) and the unit direction in which the grasp point moves as the front
   opens (world).
 """
-    if spec.handle_shape:
-        state_text += f"""- **The handle's shape** (`--handle-shape`: {len(HANDLE_SHAPE_NAMES)} more numbers at the end
-  of `observation.environment_state`, constant through an episode): {_names(HANDLE_SHAPE_NAMES)}: the handle's type
-  and mount as 0/1 flags, then the catalog's length, width, projection, grip diameter and finger clearance (depth,
-  width; 0 where none), m. rik's environment appends them with `handle_shape=True` (`--env.handle_shape=true`;
-  `rik eval` reads it from the policy's input width).
+    if spec.handle_shape != "none":
+        shape = HANDLE_SHAPES[spec.handle_shape]
+        what = ("the handle's type and mount as 0/1 flags, then the catalog's length, width, projection, grip "
+                "diameter and finger clearance (depth, width; 0 where none), m" if spec.handle_shape == "full"
+                else "the handle's type and mount as 0/1 flags")
+        state_text += f"""- **The handle's shape** (`--handle-shape {spec.handle_shape}`: {len(shape)} more numbers at
+  the end of `observation.environment_state`, constant through an episode): {_names(shape)}: {what}. rik's
+  environment appends them with `handle_shape="{spec.handle_shape}"`
+  (`--env.handle_shape={spec.handle_shape}`; `rik eval` and `auto` read it from the policy's input width).
 """
     state_text += action
     if checks.get("constant"):

@@ -289,7 +289,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         if isinstance(old, dict) and isinstance(old.get("spec"), dict):
             old["spec"].setdefault("robot", "hand-e")  # plans written before robots were the Hand-E's
             old["spec"].setdefault("action_frame", "world")  # and before the handle frame
-            old["spec"].setdefault("handle_shape", False)  # and before the handle's shape
+            old["spec"].setdefault("handle_shape", "none")  # and before the handle's shape
         if old != json.loads(json.dumps(plan)):
             raise RikError(f"{partial_dir}: the interrupted export there was of other episodes or settings; delete "
                            "it, or run it again with the same ones")

@@ -61,9 +61,9 @@ def _vector(names: Sequence[str]) -> dict[str, Any]:
 
 
 def features(cameras: Sequence[str], streams: Sequence[str], width: int, height: int,
-             layout: RobotLayout | None = None, handle_shape: bool = False) -> dict[str, dict[str, Any]]:
+             layout: RobotLayout | None = None, handle_shape: str = "none") -> dict[str, dict[str, Any]]:
     """The LeRobot feature dict of an export of one robot's episodes (``layout``; None: the Hand-E's), the front's
-    state followed by the handle's shape where ``handle_shape``."""
+    state followed by the handle's shape ``handle_shape`` (:data:`rik.sim.observation.HANDLE_SHAPES`)."""
     from rik.sim.observation import env_state_names
     from rik.sim.robots.layout import EE_NAMES, robot_layout
 
@@ -187,11 +187,11 @@ def load_episode(catalog: Catalog, directory: Path, meta: EpisodeMeta | None = N
 
 
 def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[str, Path], cameras: Sequence[str],
-                   fps: int, variants: Path, handle_shape: bool = False
+                   fps: int, variants: Path, handle_shape: str = "none"
                    ) -> tuple[str, Iterator[dict[str, np.ndarray]], int]:
     """(task, frame dicts for ``add_frame`` without the task, frame count) of one episode read by
     :func:`load_episode`, resampled to ``fps``, its images read from ``streams`` (stream kind -> finished stream
-    folder); the front's state followed by the handle's shape where ``handle_shape``."""
+    folder); the front's state followed by the handle's shape ``handle_shape``."""
     from rik.render.streams import read_frame
     from rik.sim.observation import GRASP_POINT, environment_state, handle_shape_state
 
@@ -200,7 +200,7 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
     recorded = episode.recorded.states
     picks = resample_indices(len(recorded), meta.fps, fps)
     task = task_text(catalog, meta, scene.front.kind)
-    shape = handle_shape_state(catalog, meta.handle) if handle_shape else None
+    shape = handle_shape_state(catalog, meta.handle, handle_shape) if handle_shape != "none" else None
 
     def frames() -> Iterator[dict[str, np.ndarray]]:
         for k in picks:

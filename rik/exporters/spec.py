@@ -58,9 +58,10 @@ class ExportSpec:
     action_frame: str = "world"
     """The Hand-E's ``action`` position: in the world (``world``) or from the handle's grasp point (``handle``,
     :data:`rik.sim.robots.layout.HANDLE_ACTION_NAMES`); an arm's joint action is always ``world``."""
-    handle_shape: bool = False
-    """Whether ``observation.environment_state`` ends with the handle's shape
-    (:data:`rik.sim.observation.HANDLE_SHAPE_NAMES`: its type, mount and grasp dimensions)."""
+    handle_shape: str = "none"
+    """What of the handle's shape ends ``observation.environment_state``
+    (:data:`rik.sim.observation.HANDLE_SHAPES`): ``none``, ``kind`` (its type and mount), ``full`` (and its grasp
+    dimensions)."""
 
     def stream(self, kind: str) -> StreamSpec:
         """The image stream ``kind`` (``sim`` or ``rerendered``) at this export's size and quality."""
@@ -123,6 +124,9 @@ def check_spec(spec: ExportSpec) -> None:
 
     if spec.action_frame not in ACTION_FRAMES:
         raise RikError(f"--action-frame {spec.action_frame}: use one of {', '.join(ACTION_FRAMES)}")
+    from rik.sim.observation import check_handle_shape
+
+    check_handle_shape(spec.handle_shape)
     if spec.codec not in CODECS:
         raise RikError(f"--codec: '{spec.codec}' is not offered (codecs: {', '.join(CODECS)})")
     if spec.repo_id.count("/") != 1 or not all(spec.repo_id.split("/")):

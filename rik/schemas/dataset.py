@@ -120,9 +120,9 @@ class DatasetSpec(Frozen):
     action_frame: Literal["world", "handle"] = "world"
     """The Hand-E's exported ``action`` position: in the world, or from the handle's grasp point (``handle``:
     ``target_dx``, ``target_dy``, ``target_dz``, the target minus the grasp point); arms' joint actions: world."""
-    handle_shape: bool = False
-    """Whether ``observation.environment_state`` ends with the handle's shape (its type, mount and grasp dimensions,
-    :data:`rik.sim.observation.HANDLE_SHAPE_NAMES`)."""
+    handle_shape: Literal["none", "kind", "full"] = "none"
+    """What of the handle's shape ends ``observation.environment_state`` (:data:`rik.sim.observation.HANDLE_SHAPES`):
+    ``kind`` its type and mount flags, ``full`` those and the catalog's grasp dimensions."""
 
     @field_validator("resolution")
     @classmethod

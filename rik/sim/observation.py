@@ -9,9 +9,10 @@ Two state vectors, split as LeRobot's policies expect them (ACT and diffusion al
   position and velocity and its opening, the handle's grasp point, orientation and the direction it moves in when
   the front opens. The robot's state alone does not say where the handle is;
 - optionally, the **handle's shape** (:data:`HANDLE_SHAPE_NAMES`, appended to the front's state: ``rik
-  export-lerobot --handle-shape``, the environment's ``handle_shape=True``): its type, mount and the catalog's
-  grasp dimensions, constant through an episode. The front's state alone does not say whether the grasp point is
-  a knob's head, a bar or a lip.
+  export-lerobot --handle-shape full``, the environment's ``handle_shape="full"``): its type, mount and the
+  catalog's grasp dimensions, constant through an episode; or its type and mount alone (``kind``: the first
+  :data:`HANDLE_KIND_WIDTH` of them). The front's state alone does not say whether the grasp point is a knob's
+  head, a bar or a lip.
 
 Images are uint8 HxWx3 of the :data:`CAMERAS`. Units are SI: m, rad, m/s or rad/s, N.
 """
@@ -21,6 +22,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from rik.errors import RikError
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -43,8 +46,11 @@ HANDLE_SHAPE_NAMES = ("handle_knob", "handle_two_point", "handle_finger_pull", "
 """The handle's shape: its type and mount as 0/1 flags (knob, two-point, finger pull; clipped on an edge, set into a
 recess), then the catalog's geometry (:class:`rik.schemas.handles.HandleGeometry`, m): length, width, projection,
 grip diameter, and the finger clearance's depth and width (0 where the catalog gives none)."""
-SHAPED_ENV_STATE_NAMES = ENV_STATE_NAMES + HANDLE_SHAPE_NAMES
-"""The front's state followed by the handle's shape (``--handle-shape``)."""
+HANDLE_KIND_WIDTH = 5
+"""The type and mount flags at the start of :data:`HANDLE_SHAPE_NAMES` (``--handle-shape kind``)."""
+HANDLE_SHAPES = {"none": (), "kind": HANDLE_SHAPE_NAMES[:HANDLE_KIND_WIDTH], "full": HANDLE_SHAPE_NAMES}
+"""``--handle-shape`` -> the handle's numbers it appends to the front's state: none (the default), its type and
+mount flags (``kind``), or those and the catalog's grasp dimensions (``full``)."""
 CAMERAS = ("front", "wrist")
 """The scene's cameras: ``front`` looks at the base unit, ``wrist`` rides on the gripper."""
 STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
@@ -75,20 +81,34 @@ def robot_state(scene: SimScene) -> np.ndarray:
                            [scene.contact_summary()["normal_force"]]]).astype(np.float64)
 
 
-def env_state_names(handle_shape: bool) -> tuple[str, ...]:
-    """The names of the front's state, followed by the handle's shape where ``handle_shape``."""
-    return SHAPED_ENV_STATE_NAMES if handle_shape else ENV_STATE_NAMES
+def env_state_names(handle_shape: str = "none") -> tuple[str, ...]:
+    """The names of the front's state, followed by those of the handle's shape ``handle_shape``
+    (:data:`HANDLE_SHAPES`)."""
+    return ENV_STATE_NAMES + HANDLE_SHAPES[handle_shape]
 
 
-def handle_shape_state(catalog: Catalog, handle_id: str) -> np.ndarray:
-    """The :data:`HANDLE_SHAPE_NAMES` of a catalog handle, float64 (flags 0/1, lengths m)."""
+def handle_shape_of_width(width: int) -> str | None:
+    """The ``handle_shape`` whose front's state is ``width`` numbers wide (None: no such width)."""
+    return next((name for name in HANDLE_SHAPES if len(env_state_names(name)) == width), None)
+
+
+def check_handle_shape(handle_shape: str, where: str = "--handle-shape") -> None:
+    """Refuse (one line) a ``handle_shape`` that is not one of :data:`HANDLE_SHAPES`."""
+    if handle_shape not in HANDLE_SHAPES:
+        raise RikError(f"{where} {handle_shape}: use one of {', '.join(HANDLE_SHAPES)}")
+
+
+def handle_shape_state(catalog: Catalog, handle_id: str, handle_shape: str = "full") -> np.ndarray:
+    """The numbers of the handle's shape ``handle_shape`` (:data:`HANDLE_SHAPES`) of a catalog handle, float64
+    (flags 0/1, lengths m)."""
     handle = catalog.handles[handle_id]
     kind = catalog.handle_type(handle).value
     g = handle.geometry
     depth, width = (g.clearance.depth, g.clearance.width) if g.clearance is not None else (0.0, 0.0)
     flags = [kind == "knob", kind == "two_point", kind == "finger_pull", handle.mount.kind == "edge_clip",
              handle.mount.kind == "inset"]
-    return np.array([*map(float, flags), g.length, g.width, g.projection, g.grip_diameter, depth, width], np.float64)
+    full = np.array([*map(float, flags), g.length, g.width, g.projection, g.grip_diameter, depth, width], np.float64)
+    return full[:len(HANDLE_SHAPES[handle_shape])]
 
 
 def environment_state(scene: SimScene, shape: np.ndarray | None = None) -> np.ndarray:

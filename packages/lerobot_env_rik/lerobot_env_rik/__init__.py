@@ -47,12 +47,10 @@ import rik.envs.open_front  # noqa: F401  (registers rik/OpenFront-v0 with gymna
 from rik.sim.feature_keys import EE_POSE
 from rik.sim.robots.layout import EE_NAMES, RobotLayout, robot_layout
 
-__all__ = ["AUTO", "RikEnvConfig", "action_mode", "env_kwargs", "robot_layout_of", "shaped"]
+__all__ = ["AUTO", "RikEnvConfig", "action_mode", "env_kwargs", "robot_layout_of"]
 
 AUTO = "auto"
 """``--env.cameras=auto``: the cameras of the command line's policy."""
-SWITCH = (AUTO, "true", "false")
-"""The values of ``--env.handle_shape``."""
 
 
 def robot_layout_of(robot: str) -> RobotLayout:
@@ -101,31 +99,31 @@ class RikEnvConfig(EnvConfig):
     ``--action-frame handle``), or ``auto``: the frame of the policy of ``--policy.path`` (its training data's
     statistics tell), ``world`` without one."""
     handle_shape: str = AUTO
-    """Whether ``environment_state`` ends with the handle's shape (``true``: for a policy trained on an export made
-    with ``--handle-shape``; ``false``), or ``auto``: as the policy of ``--policy.path`` reads it (its input
-    width), ``false`` without one."""
+    """What of the handle's shape ends ``environment_state``: ``none``, ``kind`` or ``full``, as the export the
+    policy was trained on (``--handle-shape``), or ``auto``: as the policy of ``--policy.path`` reads it (its input
+    width), ``none`` without one."""
     render_mode: str = "rgb_array"
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        from rik.sim.observation import env_state_names, image_name
+        from rik.sim.observation import HANDLE_SHAPES, env_state_names, image_name
         from rik.sim.robots.layout import ACTION_FRAMES
 
         layout = robot_layout_of(self.robot)
         if self.action_frame not in (AUTO, *ACTION_FRAMES):
             raise ValueError(f"--env.action_frame={self.action_frame!r}: use one of {AUTO}, {', '.join(ACTION_FRAMES)}")
-        if self.handle_shape not in SWITCH:
-            raise ValueError(f"--env.handle_shape={self.handle_shape!r}: use one of {', '.join(SWITCH)}")
+        if self.handle_shape not in (AUTO, *HANDLE_SHAPES):
+            raise ValueError(f"--env.handle_shape={self.handle_shape!r}: use one of {AUTO}, {', '.join(HANDLE_SHAPES)}")
         _fit_policy(self, layout)
         if self.action_frame == AUTO:
             self.action_frame = "world"
         if self.handle_shape == AUTO:
-            self.handle_shape = "false"
+            self.handle_shape = "none"
         if self.action_frame != "world" and not layout.is_pose:
             raise ValueError(f"--env.action_frame={self.action_frame}: robot {self.robot} acts with joint targets, "
                              "which have no handle frame (it is the Hand-E's pose action's)")
-        env_width = len(env_state_names(shaped(self)))
+        env_width = len(env_state_names(self.handle_shape))
         self.features = {ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(len(layout.action_names),)),
                          "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(len(layout.state_names),)),
                          "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(env_width,))}
@@ -178,7 +176,7 @@ def _fit_policy(cfg: RikEnvConfig, layout: RobotLayout) -> None:
     if cfg.action_frame == AUTO:
         cfg.action_frame = needs.action_frame
     if cfg.handle_shape == AUTO:
-        cfg.handle_shape = "true" if needs.handle_shape else "false"
+        cfg.handle_shape = needs.handle_shape
     if cfg.cameras == AUTO:
         cfg.cameras = ",".join(needs.cameras)
         if needs.cameras:
@@ -208,11 +206,6 @@ def action_mode(cfg: RikEnvConfig) -> str:
     return "handle" if cfg.action_frame == "handle" else "absolute"
 
 
-def shaped(cfg: RikEnvConfig) -> bool:
-    """Whether a config's ``environment_state`` ends with the handle's shape."""
-    return cfg.handle_shape == "true"
-
-
 def env_kwargs(cfg: RikEnvConfig) -> dict:
     """The keyword arguments of ``rik.envs.open_front.OpenFrontEnv`` for a config."""
     from rik.episodes.draw import Draw
@@ -225,4 +218,4 @@ def env_kwargs(cfg: RikEnvConfig) -> dict:
             "streams": _names(cfg.streams) if cameras else (),
             "cameras": cameras or ("front",), "image_size": (cfg.observation_height, cfg.observation_width),
             "spp": cfg.spp, "episode_length": cfg.episode_length, "variants_dir": cfg.variants_dir,
-            "render_mode": cfg.render_mode, "handle_shape": shaped(cfg)}
+            "render_mode": cfg.render_mode, "handle_shape": cfg.handle_shape}
