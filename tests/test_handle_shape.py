@@ -75,7 +75,7 @@ def test_an_export_with_the_handle_shape_appends_it_to_the_fronts_state(rik, kno
     assert not (tmp_path / "bad").exists() and not (tmp_path / "bad.partial").exists()
 
 
-def test_a_spec_without_the_handle_shape_keeps_its_hash() -> None:
+def test_a_spec_without_the_handle_shape_keeps_its_hash_and_a_bad_one_is_one_line(rik, tmp_path: Path) -> None:
     from rik.dataset.spec import spec_hash
     from rik.schemas.dataset import DatasetSpec
 
@@ -84,6 +84,13 @@ def test_a_spec_without_the_handle_shape_keeps_its_hash() -> None:
         DatasetSpec.model_validate({**base, "handle_shape": "none"}))
     assert spec_hash(DatasetSpec.model_validate(base)) != spec_hash(
         DatasetSpec.model_validate({**base, "handle_shape": "kind"}))
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(f"repo_id: local/x\nhandle_shape: true\nvariants:\n  ids: [{BOW}]\noperators:\n"
+                    "  - strategy: planned\nstreams: []\n")
+    r = rik("dataset", "build", str(spec), "--out", str(tmp_path / "ds"))
+    assert r.code == 2 and r.err.strip() == (f"rik: error: {spec}:2, field 'handle_shape': input should be 'none', "
+                                             "'kind' or 'full' (got True)")
+    assert not (tmp_path / "ds").exists()
 
 
 def test_the_environment_appends_the_drawn_handles_shape(bow_variants: Path) -> None:
