@@ -117,7 +117,7 @@ class OpenFrontEnv(gym.Env):
         self._variant, self._front = variant, front
         self.action_mode = action_mode
         self.handle_shape = handle_shape
-        self._shape: np.ndarray | None = None  # the reset handle's shape (handle_shape kind or full)
+        self._shape: np.ndarray | None = None  # the reset handle's shape (none: no numbers)
         self._streams = streams
         self._cameras, self._size, self._spp = cameras, image_size, spp
         self._max_episode_steps = episode_length
@@ -222,8 +222,7 @@ class OpenFrontEnv(gym.Env):
         self._opening = self._max_opening = self.scene.opening()
         self._steps = 0
         handle = self._catalog.handles[key.handle]
-        self._shape = (handle_shape_state(self._catalog, key.handle, self.handle_shape)
-                       if self.handle_shape != "none" else None)
+        self._shape = handle_shape_state(self._catalog, key.handle, self.handle_shape)
         self._episode = {"seed": episode_seed, "variant": key.id, "front": self.scene.front.id,
                          "handle_type": self._catalog.handle_type(handle).value, "preset": key.preset}
         self.task_description = instruction(self._catalog, key.handle, self.scene.front.kind)

@@ -133,11 +133,11 @@ def _state_stats(pre: Any, robot: str) -> dict[str, tuple[Any, Any, tuple[str, .
 
     from rik.registry.load import load_catalog
     from rik.sim.feature_keys import EE_POSE, OBS_ENV_STATE, OBS_STATE
-    from rik.sim.observation import HANDLE_SHAPES, env_state_names
+    from rik.sim.observation import ENV_STATE_LAYOUTS
     from rik.sim.robots.layout import EE_NAMES, robot_layout
 
     layout = robot_layout(load_catalog().robot(robot).as_arm)
-    names = {OBS_STATE: (tuple(layout.state_names),), OBS_ENV_STATE: tuple(env_state_names(s) for s in HANDLE_SHAPES),
+    names = {OBS_STATE: (tuple(layout.state_names),), OBS_ENV_STATE: tuple(ENV_STATE_LAYOUTS.values()),
              EE_POSE: (EE_NAMES,)}
     out = {}
     for step in getattr(pre, "steps", []):

@@ -21,8 +21,8 @@ from rik.evaluation.policy_files import CONFIG, PROCESSORS, member, parsed_confi
 from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 from rik.sim.observation import (
     CAMERAS,
+    ENV_STATE_LAYOUTS,
     GRASP_POINT,
-    HANDLE_SHAPES,
     STREAM_SUFFIX,
     env_state_names,
     handle_shape_of_width,
@@ -110,7 +110,7 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
             if shape != (widths[key],):
                 raise RikError(f"{file}: input '{key}' has shape {list(shape)}; rik's environment supplies "
                                f"[{widths[key]}]" + (" (or " + " or ".join(
-                                   f"[{len(env_state_names(s))}]" for s in HANDLE_SHAPES if s != "none")
+                                   f"[{len(names)}]" for s, names in ENV_STATE_LAYOUTS.items() if s != "none")
                                    + " with the handle's shape)" if key == OBS_ENV_STATE else ""))
             continue
         camera, stream = _image_feature(key)
@@ -164,7 +164,7 @@ def trained_action_frame(policy_dir: Path) -> str:
         with safe_open(str(file), framework="numpy") as f:
             names = set(f.keys())
             for key, widths in ((ACTION, (len(POSE_ACTION_NAMES),)),
-                                (OBS_ENV_STATE, tuple(len(env_state_names(s)) for s in HANDLE_SHAPES))):
+                                (OBS_ENV_STATE, tuple(len(names) for names in ENV_STATE_LAYOUTS.values()))):
                 if f"{key}.mean" in names:
                     centre[key] = np.asarray(f.get_tensor(f"{key}.mean"), np.float64).reshape(-1)
                 elif {f"{key}.min", f"{key}.max"} <= names:

@@ -107,7 +107,7 @@ def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> 
     without the handle's shape), 1 (one
     14-number ``observation.state``, Hand-E exports made before the split), or None (not a rik layout)."""
     from rik.exporters.lerobot_frames import LAYOUT_1_STATE_NAMES
-    from rik.sim.observation import HANDLE_SHAPES, env_state_names
+    from rik.sim.observation import ENV_STATE_LAYOUTS
     from rik.sim.robots.layout import robot_layout
 
     robot = robot or robot_layout(None)
@@ -115,7 +115,7 @@ def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> 
     def names(key: str) -> tuple[str, ...] | None:
         return tuple(features[key].get("names") or ()) if key in features else None
 
-    if names(OBS_STATE) == robot.state_names and names(OBS_ENV_STATE) in {env_state_names(s) for s in HANDLE_SHAPES}:
+    if names(OBS_STATE) == robot.state_names and names(OBS_ENV_STATE) in ENV_STATE_LAYOUTS.values():
         return 2
     if names(OBS_STATE) == LAYOUT_1_STATE_NAMES and OBS_ENV_STATE not in features:
         return 1

@@ -200,7 +200,7 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
     recorded = episode.recorded.states
     picks = resample_indices(len(recorded), meta.fps, fps)
     task = task_text(catalog, meta, scene.front.kind)
-    shape = handle_shape_state(catalog, meta.handle, handle_shape) if handle_shape != "none" else None
+    shape = handle_shape_state(catalog, meta.handle, handle_shape)
 
     def frames() -> Iterator[dict[str, np.ndarray]]:
         for k in picks:

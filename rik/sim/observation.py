@@ -51,6 +51,8 @@ HANDLE_KIND_WIDTH = 5
 HANDLE_SHAPES = {"none": (), "kind": HANDLE_SHAPE_NAMES[:HANDLE_KIND_WIDTH], "full": HANDLE_SHAPE_NAMES}
 """``--handle-shape`` -> the handle's numbers it appends to the front's state: none (the default), its type and
 mount flags (``kind``), or those and the catalog's grasp dimensions (``full``)."""
+ENV_STATE_LAYOUTS = {shape: ENV_STATE_NAMES + names for shape, names in HANDLE_SHAPES.items()}
+"""``--handle-shape`` -> the names of the front's state it gives: :data:`ENV_STATE_NAMES`, then the shape's."""
 CAMERAS = ("front", "wrist")
 """The scene's cameras: ``front`` looks at the base unit, ``wrist`` rides on the gripper."""
 STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
@@ -84,12 +86,12 @@ def robot_state(scene: SimScene) -> np.ndarray:
 def env_state_names(handle_shape: str = "none") -> tuple[str, ...]:
     """The names of the front's state, followed by those of the handle's shape ``handle_shape``
     (:data:`HANDLE_SHAPES`)."""
-    return ENV_STATE_NAMES + HANDLE_SHAPES[handle_shape]
+    return ENV_STATE_LAYOUTS[handle_shape]
 
 
 def handle_shape_of_width(width: int) -> str | None:
     """The ``handle_shape`` whose front's state is ``width`` numbers wide (None: no such width)."""
-    return next((name for name in HANDLE_SHAPES if len(env_state_names(name)) == width), None)
+    return next((shape for shape, names in ENV_STATE_LAYOUTS.items() if len(names) == width), None)
 
 
 def check_handle_shape(handle_shape: str, where: str = "--handle-shape") -> None:
@@ -100,7 +102,7 @@ def check_handle_shape(handle_shape: str, where: str = "--handle-shape") -> None
 
 def handle_shape_state(catalog: Catalog, handle_id: str, handle_shape: str = "full") -> np.ndarray:
     """The numbers of the handle's shape ``handle_shape`` (:data:`HANDLE_SHAPES`) of a catalog handle, float64
-    (flags 0/1, lengths m)."""
+    (flags 0/1, lengths m); ``none`` gives no numbers."""
     handle = catalog.handles[handle_id]
     kind = catalog.handle_type(handle).value
     g = handle.geometry
