@@ -158,7 +158,10 @@ if stage eval; then
     evaluate "$out" "$1-mean-$2-$3"
   }
   average act-pl $(( STEPS * 2 / 3 )) "$STEPS"
-  for run in act-plk-s0 act-plk-s1; do average "$run" "$SHORT_STEPS" $(( STEPS / 3 )); done
+  for run in act-plk-s0 act-plk-s1; do
+    evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
+    average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
+  done
   for run in act-pl act-pla act-pls-s0 act-pls-s1; do
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
     average "$run" $(( STEPS / 3 )) $(( STEPS * 2 / 3 ))
