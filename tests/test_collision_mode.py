@@ -158,3 +158,17 @@ def test_planned_above_hooks_from_above_first_and_is_as_blind_to_collision(folde
                                                                                                 "hook_below"}
     assert [p.key for p in preferred if p.mode == "hook_below"] == [p.key for p in every if p.mode == "hook_below"]
     assert preferred[0].mode == "hook_below"
+
+
+def test_planned_typed_takes_one_hook_side_per_handle_type(folders: dict[str, Path]) -> None:
+    """planned_typed puts the hooks of its type's side first (a two-point handle: from above, as planned_above does),
+    and plans on the visual mesh too; knobs keep planned's ranking by bite."""
+    from rik.episodes.operators import TYPED_HOOK_SIDES
+
+    assert TYPED_HOOK_SIDES == {"two_point": "above", "finger_pull": "below"}
+    typed = {mode: _plans(folders[mode] / BOW, "planned_typed") for mode in ("coacd", "hull")}
+    assert typed["coacd"] and typed["coacd"] == typed["hull"]
+    planned = [m for m, _, _ in _plans(folders["coacd"] / BOW, "planned") if m.startswith("hook")]
+    assert [m for m, _, _ in typed["coacd"] if m.startswith("hook")] == ["hook_above"] * 2 != planned  # planned: a
+    # hook from below among its two
+    assert typed["coacd"] == _plans(folders["coacd"] / BOW, "planned_above")  # the bow is a two-point handle
