@@ -135,3 +135,71 @@ def test_so_arm_holds_the_bow_with_both_jaws(smooth_variants: Path, robot: str) 
         weakest = {k: min(weakest[k], forces[k]) for k in weakest}
     assert weakest["fixed"] > 1.0 and weakest["moving"] > 1.0, (robot, weakest)
     assert scene.opening() > 0.05, (robot, scene.opening(), op.log)
+
+
+def _derived(scene: object) -> list[np.ndarray]:
+    """Every array of the scene's data that an operator or a recorder reads: the integration state and what
+    ``mj_step`` derives from it (positions of sites and bodies, contacts, forces, accelerations)."""
+    d = scene.data  # type: ignore[attr-defined]
+    return [scene.state(), d.site_xpos.copy(), d.xpos.copy(), d.xquat.copy(), d.qacc.copy(),  # type: ignore[attr-defined]
+            d.qfrc_constraint.copy(), d.contact.pos.copy(), d.sensordata.copy(), np.array([d.ncon, d.time])]
+
+
+@pytest.mark.parametrize("robot", SO_ARMS)
+def test_rehearsal_puts_a_grasp_that_holds_first_and_leaves_the_scene_as_it_was(smooth_variants: Path,
+                                                                                robot: str) -> None:
+    """A swinging-jaw arm's scripted operator tries its plans in the simulator before an attempt: a plan whose pads
+    close on air (the real plan moved 6 cm off the handle) is put behind the one that holds, and afterwards every
+    field of the scene's data is bit for bit what it was, so the episode goes on as if nothing had run."""
+    from dataclasses import replace
+
+    from rik.episodes.operators import make_operator
+    from rik.episodes.record import randomise_start
+
+    scene = build_scene(smooth_variants / SMOOTH_BOW, None, robot=CAT.robot(robot))
+    rng = np.random.default_rng(0)
+    randomise_start(scene, rng)
+    op = make_operator("grasp_vertical")
+    op.reset(scene, rng)  # its first attempt has started: the rehearsal runs from where its next one would
+    real = op.planner(scene)[0]
+    air = replace(real, tcp=real.tcp + np.array([0.0, 0.06, 0.0]), key="air")
+    before = _derived(scene)
+    order = op.rehearse_plans(scene, [air, real])
+    after = _derived(scene)
+    assert [p.key for p in order] == [real.key, "air"]
+    for a, b in zip(before, after, strict=True):
+        assert np.array_equal(a, b)
+    assert op.rehearse_plans(scene, [air]) == [air]  # nothing holds: the order stays
+
+
+def test_rehearsal_is_for_swinging_jaws_and_not_for_the_planned_strategies(smooth_variants: Path) -> None:
+    """The Hand-E's parallel jaws never rehearse (their episodes are what they were), and ``planned``, whose grasps
+    must not depend on the collision model (the fidelity ablation), does not rehearse on an arm either."""
+    from rik.episodes.operators import STRATEGIES
+
+    assert not any(STRATEGIES[s].make().rehearse for s in ("planned", "planned_above", "planned_typed"))
+    assert all(STRATEGIES[s].make().rehearse for s in ("grasp_vertical", "grasp_horizontal", "contact_rich"))
+    scene = build_scene(smooth_variants / SMOOTH_BOW, None)  # the Hand-E
+    op = grasp_until_pull(scene, 400, "contact_rich")
+    calls = []
+    op.rehearse_plans = lambda s, plans: calls.append(plans) or plans  # type: ignore[method-assign]
+    attempts = len(op.log)
+    op._start_plan(scene)  # the next plan, as a re-grasp starts it
+    assert calls == [] and len(op.log) == attempts + 1 and op.log[-1].startswith("attempt "), op.log
+
+
+def test_a_stall_past_a_success_stops_the_pull(smooth_variants: Path) -> None:
+    """A drawer whose stop sits at 93 % of its range: the Hand-E's hook pulls off the handle there (a slip; before
+    this rule the re-grasps that followed left the drawer at 84 %). Past S's 90 % the closed-loop strategy stops
+    instead of letting go for a re-grasp whose way in would push the front back."""
+    scene = build_scene(smooth_variants / SMOOTH_BOW, None)
+    lo, hi = scene.front.range
+    scene.model.jnt_range[int(scene.model.dof_jntid[scene.front.dof_adr]), 1] = lo + 0.93 * (hi - lo)
+    op = grasp_until_pull(scene, 400, "contact_rich")
+    for _ in range(30 * scene.control_fps):
+        if op.done:
+            break
+        scene.step(op.act(scene))
+    assert op.done and op.log[-1].endswith("% open, past a success: stop"), op.log
+    assert sum(line.startswith("attempt") for line in op.log) == 1
+    assert 0.90 <= scene.opening() < 0.95
