@@ -107,7 +107,7 @@ def test_rik_eval_and_lerobot_eval_run_the_same_episodes(loop: dict[str, Path], 
     far = [r for r in rows if r["stats_sd"] > 5.0]
     assert far, [r["stats_sd"] for r in rows]
     warning = next(line for line in r.out.splitlines() if line.startswith("warning: "))
-    assert f"in {len(far)} of 4 episodes the states fell more than 5 standard deviations" in warning
+    assert f"in {len(far)} of 4 episodes the states fell more than 5 standard deviations outside the range" in warning
 
 
 def _frames(path: Path) -> np.ndarray:
@@ -298,3 +298,25 @@ def test_eval_tables_several_operators_side_by_side_and_reuses_finished_runs(rik
     r = rik("eval", *args, "--label", "mine")
     assert r.code == 2 and r.err.strip() == ("rik: error: --label names one policy; with several, each is named by "
                                              "its type and training run")
+
+
+def test_out_of_stats_distance_counts_from_the_training_range() -> None:
+    """A nearly constant dimension with outliers (the gripper's yaw: 0.012 rad of deviation, starts up to 0.08 rad)
+    is no extrapolation inside its training range, however many deviations from its mean; beyond the range it is
+    measured from the range's end, in deviations; statistics without a range count from the mean."""
+    import torch
+
+    from rik.evaluation.evaluate import _worst_state
+
+    mean, std = np.array([0.0002, 0.5]), np.array([0.0115, 0.1])
+    low, high = np.array([-0.0799, 0.3]), np.array([0.0786, 0.7])
+    ranged = {"observation.state": (mean, std, low, high, ("yaw", "x"))}
+    states = torch.tensor([[[0.075, 0.5], [0.0, 0.6]]])  # yaw at 6.5 deviations from its mean, inside its range
+    assert _worst_state({"observation.state": states}, ranged, 1) == (0.0, "")
+    beyond = torch.tensor([[[0.0, 0.5], [0.0, 1.2]]])  # x 0.5 past its maximum: 5 deviations
+    worst, where = _worst_state({"observation.state": beyond}, ranged, 1)
+    assert where == "observation.state.x" and worst == pytest.approx(5.0)
+    no_range = {"observation.state": (mean, std, mean, mean, ("yaw", "x"))}
+    worst, where = _worst_state({"observation.state": states}, no_range, 1)
+    assert where == "observation.state.yaw" and worst == pytest.approx((0.075 - 0.0002) / 0.0115, rel=1e-5)
+    assert _worst_state({"observation.state": beyond}, ranged, 0) == (0.0, "")  # only up to the episode's last step

@@ -122,13 +122,17 @@ def env_config(spec: EvalSpec) -> Any:
 # ---- one worker's episodes ----------------------------------------------------------------------------------
 _CONTEXT: dict[str, Any] = {}
 OUT_OF_STATS_SD = 5.0
-"""An observation this many standard deviations of the training data from its mean is far outside what the policy
-was trained on (``rik eval`` warns; the dimension's standard deviation counts as at least 1e-6)."""
+"""An observation this many standard deviations of the training data beyond the range of that data (its minimum
+and maximum; from its mean where the statistics have no range) is far outside what the policy was trained on
+(``rik eval`` warns; the dimension's standard deviation counts as at least 1e-6). The range, not the mean: a
+dimension that is nearly constant with a few outliers (the gripper's yaw, turned level within a few steps of each
+start) has a small deviation, and a start inside the training starts' range is no extrapolation."""
 
 
-def _state_stats(pre: Any, robot: str) -> dict[str, tuple[Any, Any, tuple[str, ...]]]:
-    """The training data's mean and standard deviation of each state feature the policy normalises (from its
-    preprocessor's normaliser), with the dimensions' names: feature -> (mean, std, names)."""
+def _state_stats(pre: Any, robot: str) -> dict[str, tuple[Any, Any, Any, Any, tuple[str, ...]]]:
+    """The training data's mean, standard deviation, minimum and maximum of each state feature the policy
+    normalises (from its preprocessor's normaliser; the mean for both ends where there is no range), with the
+    dimensions' names: feature -> (mean, std, min, max, names)."""
     import numpy as np
 
     from rik.registry.load import load_catalog
@@ -147,24 +151,27 @@ def _state_stats(pre: Any, robot: str) -> dict[str, tuple[Any, Any, tuple[str, .
             if "mean" in feature and "std" in feature:
                 mean = np.asarray(feature["mean"], np.float64).reshape(-1)
                 std = np.maximum(np.asarray(feature["std"], np.float64).reshape(-1), 1e-6)
+                has_range = "min" in feature and "max" in feature
+                low = np.asarray(feature["min"], np.float64).reshape(-1) if has_range else mean
+                high = np.asarray(feature["max"], np.float64).reshape(-1) if has_range else mean
                 for dims in layouts:
-                    if len(mean) == len(dims):
-                        out[key] = (mean, std, dims)
+                    if len(mean) == len(dims) == len(low) == len(high):
+                        out[key] = (mean, std, low, high, dims)
     return out
 
 
-def _worst_state(observations: dict[str, Any], stats: dict[str, tuple[Any, Any, tuple[str, ...]]],
+def _worst_state(observations: dict[str, Any], stats: dict[str, tuple[Any, Any, Any, Any, tuple[str, ...]]],
                  last: int) -> tuple[float, str]:
-    """The largest distance of an episode's states from the training data, in its standard deviations, and the
-    dimension (``observation.environment_state.grasp_y``)."""
+    """The largest distance of an episode's states beyond the training data's range, in its standard deviations,
+    and the dimension (``observation.environment_state.grasp_y``); 0 inside the range."""
     import numpy as np
 
     worst, where = 0.0, ""
-    for key, (mean, std, dims) in stats.items():
+    for key, (mean, std, low, high, dims) in stats.items():
         if key not in observations:
             continue
         values = observations[key][0][:last + 1].double().numpy().reshape(-1, len(mean))
-        z = np.abs(values - mean) / std
+        z = np.maximum(np.maximum(values - high, low - values), 0.0) / std
         i = int(np.argmax(z.max(axis=0)))
         if float(z[:, i].max()) > worst:
             worst, where = float(z[:, i].max()), f"{key}.{dims[i]}"
@@ -172,15 +179,16 @@ def _worst_state(observations: dict[str, Any], stats: dict[str, tuple[Any, Any, 
 
 
 def out_of_stats_warning(label: str, rows: Sequence[dict[str, Any]]) -> str | None:
-    """One line when some episodes' states fell more than :data:`OUT_OF_STATS_SD` standard deviations from the
-    policy's training data (None otherwise, and for scripted operators)."""
+    """One line when some episodes' states fell more than :data:`OUT_OF_STATS_SD` standard deviations outside the
+    range of the policy's training data (None otherwise, and for scripted operators)."""
     far = [r for r in rows if isinstance(r.get("stats_sd"), int | float) and r["stats_sd"] > OUT_OF_STATS_SD]
     if not far:
         return None
     worst = max(far, key=lambda r: r["stats_sd"])
     return (f"{label}: in {len(far)} of {len(rows)} episodes the states fell more than {OUT_OF_STATS_SD:g} standard "
-            f"deviations from the policy's training data (worst: {worst['stats_dim']} at {worst['stats_sd']:.1f}, "
-            f"seed {worst['seed']}): its results there are extrapolation; train on data that covers those "
+            f"deviations outside the range of the policy's training data (worst: {worst['stats_dim']} at "
+            f"{worst['stats_sd']:.1f}, seed {worst['seed']}): its results there are extrapolation; train on data "
+            "that covers those "
             "handles and units")
 
 
