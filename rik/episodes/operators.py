@@ -186,8 +186,8 @@ class ScriptedGrasp:
         trial._begin(scene, self._cmd_tcp.copy(), self._angles.copy(), self._sag.copy())
         for _ in range(int(round(REHEARSAL_LIMIT * scene.control_fps))):
             scene.step(trial.act(scene))
-            if trial.done:
-                return bool(trial.log) and trial.log[-1].startswith("opened")
+            if trial.done:  # opened, stopped past a success, or let go (slip, stall, nothing planned)
+                return scene.opening() >= SUCCESS_OPENING
             if trial._phase == "pull" and trial._clock >= REHEARSAL_PULL:
                 return True
         return False
