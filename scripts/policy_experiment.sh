@@ -23,7 +23,7 @@ SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, ma
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
 STAGES=${STAGES:-data train eval report}
-DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls plk}  # the data sets the data stage builds
+DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls plk plt}  # the data sets the data stage builds
 IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
 DEVICE=${DEVICE:-cpu}          # lerobot-train's --policy.device (cuda on a GPU machine)
 LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers (data-loading processes; 12 for images on a GPU)
@@ -84,6 +84,7 @@ if stage data; then
   build pln planned-dart-360 variants                # the same episodes, DART-style
   build hull planned-hull-360 variants-hull          # the same episodes in hull variants (rejected ones left out)
   build pla planned-above-360 variants               # the same seeds, planned_above: one way to hold each handle
+  build plt planned-typed-360 variants               # the same seeds, planned_typed: one hook side per handle type
   build pl-images planned-360-images variants        # the main data set with both cameras (IMAGES=1)
   # the main data set's episodes with the action in the handle frame (what examples/policies/planned-360-handle.yaml
   # builds, without recording the same episodes again), and with the handle's shape in the front's state
@@ -112,9 +113,11 @@ if stage data; then
 fi
 if stage train; then
   train act-pl pl "$STEPS" 0 "${ACT[@]}"
+  train act-pl-s1 pl "$STEPS" 1 "${ACT[@]}"  # the main run again with training seed 1 (its mean of the last third)
   train act-pl-quarter pl-quarter $(( STEPS / 3 )) 0 "${ACT[@]}"
   train act-plh plh $(( STEPS / 3 )) 0 "${ACT[@]}"   # the same recipe, the action from the handle's grasp point
   train act-pla pla $(( STEPS * 2 / 3 )) 0 "${ACT[@]}"  # the same recipe, planned_above's demonstrations
+  train act-plt plt $(( STEPS * 2 / 3 )) 0 "${ACT[@]}"  # planned_typed's demonstrations
   train act-plah plah $(( STEPS / 3 )) 0 "${ACT[@]}"  # both changes
   for seed in 0 1; do  # the same recipe and data, the handle's shape in the front's state; two training seeds
     train "act-pls-s$seed" pls $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"
@@ -145,6 +148,7 @@ if stage eval; then
   done
   for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )) $(( STEPS * 2 / 3 )); do
     evaluate "$(checkpoint act-pla "$step")" "act-pla-$step"
+    evaluate "$(checkpoint act-plt "$step")" "act-plt-$step"
     for seed in 0 1; do  # rik eval reads the handle's shape from the policy's input width
       evaluate "$(checkpoint "act-pls-s$seed" "$step")" "act-pls-s$seed-$step"
     done
@@ -158,11 +162,12 @@ if stage eval; then
     evaluate "$out" "$1-mean-$2-$3"
   }
   average act-pl $(( STEPS * 2 / 3 )) "$STEPS"
+  average act-pl-s1 $(( STEPS * 2 / 3 )) "$STEPS"
   for run in act-plk-s0 act-plk-s1; do
     evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
   done
-  for run in act-pl act-pla act-pls-s0 act-pls-s1; do
+  for run in act-pl act-pla act-plt act-pls-s0 act-pls-s1; do
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
     average "$run" $(( STEPS / 3 )) $(( STEPS * 2 / 3 ))
   done
