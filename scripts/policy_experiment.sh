@@ -140,6 +140,7 @@ if stage eval; then
   evaluate strategy:planned planned
   for step in $(( STEPS / 10 )) $(( STEPS / 3 )) $(( STEPS * 2 / 3 )) "$STEPS"; do
     evaluate "$(checkpoint act-pl "$step")" "act-pl-$step"
+    evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
   done
   evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
   for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )); do  # rik eval reads its frame from its statistics
@@ -167,7 +168,7 @@ if stage eval; then
     evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
   done
-  for run in act-pl act-pla act-plt act-pls-s0 act-pls-s1; do
+  for run in act-pl act-pl-s1 act-pla act-plt act-pls-s0 act-pls-s1; do
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
     average "$run" $(( STEPS / 3 )) $(( STEPS * 2 / 3 ))
   done

@@ -168,21 +168,20 @@ class ScriptedGrasp:
         import mujoco
 
         saved = copy.copy(scene.data)
-        try:
-            for i, plan in enumerate(plans):
+        for i, plan in enumerate(plans):
+            try:
                 held = self._rehearsal_holds(scene, plan)
+            finally:
                 mujoco.mj_copyData(scene.data, scene.model, saved)
-                if held:
-                    return [plan, *plans[:i], *plans[i + 1:]]
-        finally:
-            mujoco.mj_copyData(scene.data, scene.model, saved)
+            if held:
+                return [plan, *plans[:i], *plans[i + 1:]]
         return plans
 
     def _rehearsal_holds(self, scene: SimScene, plan: GraspPlan) -> bool:
         """Whether ``plan``, run from the scene's present state as this operator would run it, still holds the
         handle after :data:`REHEARSAL_PULL` s of pull (or opened the front). Changes the scene."""
         trial = ScriptedGrasp(self.name, lambda _scene: [plan], closed_loop=True, regrasps=0, rehearse=False)
-        trial._offset, trial._noise_rng = self._offset, None
+        trial._offset = self._offset
         trial._begin(scene, self._cmd_tcp.copy(), self._angles.copy(), self._sag.copy())
         for _ in range(int(round(REHEARSAL_LIMIT * scene.control_fps))):
             scene.step(trial.act(scene))

@@ -188,8 +188,7 @@ def out_of_stats_warning(label: str, rows: Sequence[dict[str, Any]]) -> str | No
     return (f"{label}: in {len(far)} of {len(rows)} episodes the states fell more than {OUT_OF_STATS_SD:g} standard "
             f"deviations outside the range of the policy's training data (worst: {worst['stats_dim']} at "
             f"{worst['stats_sd']:.1f}, seed {worst['seed']}): its results there are extrapolation; train on data "
-            "that covers those "
-            "handles and units")
+            "that covers those handles and units")
 
 
 def _context(spec: EvalSpec) -> dict[str, Any]:
