@@ -116,11 +116,23 @@ def test_stats_and_demo(rik, tmp_path, monkeypatch) -> None:
     assert numbers["pairings"] == {"total": 1079, "fit": 1079}
     assert numbers["by_type"]["two_point"] == {"designs": 17, "handles": 34}
     monkeypatch.chdir(tmp_path)  # the demo writes into the working directory: here, not the repository
-    demo = rik("demo", "--res", "64")  # the README's `rik demo` renders at 128 px: the same code, a quarter the pixels
-    assert "observation.images.front (3, 64, 64)" in demo.out
+    # the README's `rik demo` records 2 episodes and renders them at 128 px: the same code, less work
+    demo = rik("demo", "--res", "32", "--episodes", "1")
+    assert "observation.images.front (3, 32, 32)" in demo.out and "dataset datasets/rik-demo: 1 episode" in demo.out
     assert demo.code == 0 and "1079 of 1079" in demo.out
     assert {"variants", "episodes", "renders", "datasets", "sysid-data", "sysid-report", "sysid-catalog"} <= {
         p.name for p in tmp_path.iterdir()}
+
+
+def test_demo_refuses_a_size_its_video_encoder_cannot_take_before_any_work(rik, tmp_path, monkeypatch) -> None:
+    """``rik demo --res 16`` once rendered for half a minute and then died in the export (AV1 takes frames 25 px
+    wide or more, rik.exporters.spec.MIN_WIDTH): the option now stops it at once, writing nothing."""
+    from rik.exporters.spec import MIN_WIDTH
+
+    monkeypatch.chdir(tmp_path)
+    r = rik("demo", "--res", str(MIN_WIDTH["libsvtav1"] - 1))
+    assert r.code == 2 and "--res" in r.out + r.err and "25<=x<=1024" in r.out + r.err, r.out + r.err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_catalog_commands_import_nothing_heavy(tmp_path) -> None:

@@ -222,6 +222,9 @@ def test_quit_discards_and_sessions_take_new_ids(display: str, variants: Path, t
         t = Teleop(display, out, variants)
         try:
             t.hold("a", 0.3)
+            # as a person does, save once the window says it records: on a starved machine the hold and Enter
+            # can arrive in one poll of events, Enter first, before any step was recorded ("nothing recorded yet")
+            assert t.settled()["state"] == "recording"
             t.press("Return")
             ids.append(t.line("saved ").split("saved ", 1)[1].split(":")[0])
             t.quit()

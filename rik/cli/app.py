@@ -54,15 +54,19 @@ app.command("serve")(serve.serve)
 
 
 @app.command()
-def demo(res: Annotated[int, typer.Option("--res", min=16, max=1024, help="Image size of the rendered streams "
-                                           "and the dataset's videos, px (square). 64 takes about half the time.")]
-         = rerender.DEMO_RES, catalog_paths: CatalogOption = None) -> None:
+def demo(res: Annotated[int, typer.Option("--res", min=25, max=1024, help="Image size of the rendered streams "
+                                           "and the dataset's videos, px (square; 25 at least, the narrowest frame "
+                                           "the dataset's AV1 encoder takes). 64 takes about half the time.")]
+         = rerender.DEMO_RES,
+         episodes: Annotated[int, typer.Option("--episodes", min=1, max=100, help="Scripted episodes to record, "
+                                               "render and export (seeds 0, 1, ...).")] = 2,
+         catalog_paths: CatalogOption = None) -> None:
     """The main job on built-in defaults: validate the catalog and print its summary, then build a sample of
     assets (one handle of each type and a chest of drawers), measure their collision fidelity and run the finger
-    test on the two-point handle, then build and check three MuJoCo variants into variants/, record two
-    scripted contact-rich episodes of the first into episodes/ (checked to replay exactly), render them into
-    renders/ (the MuJoCo stream and its Mitsuba re-render, checked to align, side by side in a picture), export
-    them to a LeRobot v3.0 dataset in datasets/rik-demo and load it back with LeRobotDataset; finally find the
+    test on the two-point handle, then build and check three MuJoCo variants into variants/, record two (or
+    ``--episodes``) scripted contact-rich episodes of the first into episodes/ (checked to replay exactly), render
+    them into renders/ (the MuJoCo stream and its Mitsuba re-render, checked to align, side by side in a picture),
+    export them to a LeRobot v3.0 dataset in datasets/rik-demo and load it back with LeRobotDataset; finally find the
     hidden effect in simulated measurements of a drawer (sysid-data/, report in sysid-report/) and make the fitted
     joint a preset (sysid-catalog/)."""
     from rik.registry.index import catalog_index
@@ -71,9 +75,9 @@ def demo(res: Annotated[int, typer.Option("--res", min=16, max=1024, help="Image
     catalog.print_summary(catalog_stats(catalog_index(overlays(catalog_paths))))
     assets.print_demo_assets(overlays(catalog_paths))
     variants.print_demo_variants(overlays(catalog_paths))
-    episodes = variants.print_demo_episode(overlays(catalog_paths))
-    rerender.print_demo_renders(overlays(catalog_paths), episodes, res=res)
-    export.print_demo_export(overlays(catalog_paths), episodes, res=res)
+    recorded = variants.print_demo_episode(overlays(catalog_paths), episodes=episodes)
+    rerender.print_demo_renders(overlays(catalog_paths), recorded, res=res)
+    export.print_demo_export(overlays(catalog_paths), recorded, res=res)
     sysid.print_demo_sysid(overlays(catalog_paths))
 
 
