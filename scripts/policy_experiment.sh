@@ -64,6 +64,15 @@ train() {  # train RUN DATASET STEPS SEED POLICY_FLAGS...: a policy, every hyper
     --wandb.enable=false --num_workers="$LOADERS" --seed="$seed" "$@" > "train-$run.log" 2>&1
   echo "$run $steps steps $((SECONDS - start)) s" >> train-times.txt
 }
+resume() {  # resume RUN STEPS: a run trained on from its last checkpoint to STEPS (its optimizer state, data order, flags)
+  local last
+  last=$(ls "runs/$1/checkpoints" | grep -E '^[0-9]+$' | sort -n | tail -n 1)
+  [ "$((10#$last))" -ge "$2" ] && return
+  local start=$SECONDS
+  uv run --project "$REPO" --locked lerobot-train --config_path="runs/$1/checkpoints/last/pretrained_model/train_config.json" \
+    --resume=true --steps="$2" > "train-$1-resume-$2.log" 2>&1
+  echo "$1 resumed to $2 steps $((SECONDS - start)) s" >> train-times.txt
+}
 evaluate() {  # evaluate OPERATOR LABEL [VARIANTS]: the test split, seeds 1000.., PER_CELL episodes per cell
   local out="eval/$2-test${3:+-${3#variants-}}"
   [ -f "$out/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2" --split test --seed 1000 \
@@ -114,6 +123,7 @@ fi
 if stage train; then
   train act-pl pl "$STEPS" 0 "${ACT[@]}"
   train act-pl-s1 pl "$STEPS" 1 "${ACT[@]}"  # the main run again with training seed 1 (its mean of the last third)
+  resume act-pl-s1 $(( STEPS * 5 / 3 ))       # and on past STEPS: is STEPS the flat end of the curve?
   train act-pl-quarter pl-quarter $(( STEPS / 3 )) 0 "${ACT[@]}"
   train act-plh plh $(( STEPS / 3 )) 0 "${ACT[@]}"   # the same recipe, the action from the handle's grasp point
   train act-pla pla $(( STEPS * 2 / 3 )) 0 "${ACT[@]}"  # the same recipe, planned_above's demonstrations
@@ -164,6 +174,11 @@ if stage eval; then
   }
   average act-pl $(( STEPS * 2 / 3 )) "$STEPS"
   average act-pl-s1 $(( STEPS * 2 / 3 )) "$STEPS"
+  for step in $(( STEPS * 4 / 3 )) $(( STEPS * 5 / 3 )); do  # act-pl-s1 past STEPS
+    evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
+  done
+  average act-pl-s1 "$STEPS" $(( STEPS * 4 / 3 ))
+  average act-pl-s1 $(( STEPS * 4 / 3 )) $(( STEPS * 5 / 3 ))
   for run in act-plk-s0 act-plk-s1; do
     evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
