@@ -1,10 +1,14 @@
-"""What many test files share: the built-in catalog, loaded once per test process, and the ids of the demo's
-variant. Session fixtures that build from them live in ``conftest.py``."""
+"""What many test files share: the built-in catalog, loaded once per test process, the ids of the demo's variant,
+and a way to run ``rik`` in this process from a module fixture. Session fixtures that build from them live in
+``conftest.py``."""
 
 from __future__ import annotations
 
 import functools
+import sys
 from typing import TYPE_CHECKING
+
+import pytest
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -62,3 +66,18 @@ def act_config_folder(folder: Path, cameras: tuple[str, ...] = (), size: tuple[i
     folder.mkdir()
     config._save_pretrained(folder)
     return folder
+
+
+def cli(*args: str, cwd: Path | None = None) -> None:
+    """Run ``rik ARGS...`` in this process (as the ``rik`` fixture does, for module fixtures; from ``cwd`` where
+    given); it must succeed."""
+    from rik.cli.app import main
+
+    with pytest.MonkeyPatch.context() as mp:
+        if cwd is not None:
+            mp.chdir(cwd)
+        mp.setattr(sys, "argv", ["rik", *args])
+        try:
+            main()
+        except SystemExit as exc:
+            assert exc.code in (0, None), f"rik {' '.join(args)} exited with {exc.code}"

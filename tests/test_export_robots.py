@@ -6,11 +6,11 @@ Panda's ``observation.ee_pose`` is its gripper frame in its base frame; a datase
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import cli
 from so_follower import so_follower_motors
 
 from rik.registry import load_catalog
@@ -20,18 +20,6 @@ pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "
 CAT = load_catalog()
 BOW = "drawer-chest-80__two_point-bow-128__normal"
 REPO = "local/rik-robots"
-
-
-def cli(*args: str) -> None:
-    """Run ``rik ARGS...`` in this process (as the ``rik`` fixture does, for module fixtures); it must succeed."""
-    from rik.cli.app import main
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(sys, "argv", ["rik", *args])
-        try:
-            main()
-        except SystemExit as exc:
-            assert exc.code in (0, None), f"rik {' '.join(args)} exited with {exc.code}"
 
 
 def recorded(root: Path, variants: Path, robot: str, strategy: str) -> Path:

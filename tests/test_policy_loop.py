@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from shared import builtin_catalog
+from shared import builtin_catalog, cli
 
 pytestmark = pytest.mark.slow  # end-to-end runs: out of the everyday tier (-m "not slow")
 
@@ -28,20 +28,6 @@ def _run(*cmd: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     return subprocess.run(list(cmd), cwd=cwd, env=env, capture_output=True, text=True, timeout=900)
 
 
-def _rik_here(*args: str, cwd: Path) -> int:
-    """``rik ARGS...`` through its real entry point in this process, from ``cwd``; its exit code."""
-    from rik.cli.app import main
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.chdir(cwd)
-        mp.setattr(sys, "argv", ["rik", *args])
-        try:
-            main()
-        except SystemExit as exc:
-            return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
-    return 0
-
-
 @pytest.fixture(scope="module")
 def loop(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """Two scripted demonstrations on the train split, exported state-only, and an ACT policy trained on them for
@@ -49,10 +35,10 @@ def loop(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     root = tmp_path_factory.mktemp("loop")
     variants = root / "variants"
     # rik's own commands in this process (its imports are warm: two fresh processes cost the suite ~8 CPU-s)
-    assert _rik_here("record", "--split", "train", *DRAW, "--episodes", "2", "-s", "contact_rich", "--out",
-                     "episodes", "--variants", str(variants), cwd=root) == 0
-    assert _rik_here("export-lerobot", "episodes", "--out", "dataset", "--repo-id", "local/loop", "--streams", "none",
-                     "--variants", str(variants), cwd=root) == 0
+    cli("record", "--split", "train", *DRAW, "--episodes", "2", "-s", "contact_rich", "--out", "episodes",
+        "--variants", str(variants), cwd=root)
+    cli("export-lerobot", "episodes", "--out", "dataset", "--repo-id", "local/loop", "--streams", "none",
+        "--variants", str(variants), cwd=root)
     res = _run(str(BIN / "lerobot-train"), "--dataset.repo_id=local/loop", "--dataset.root=dataset",
                "--policy.type=act", "--policy.push_to_hub=false", "--policy.device=cpu",
                "--policy.pretrained_backbone_weights=null", "--policy.dim_model=32", "--policy.dim_feedforward=64",
