@@ -23,7 +23,7 @@ SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, ma
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
 STAGES=${STAGES:-data train eval report}
-DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls plk plt}  # the data sets the data stage builds
+DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls plk plt plg}  # the data sets the data stage builds
 IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
 DEVICE=${DEVICE:-cpu}          # lerobot-train's --policy.device (cuda on a GPU machine)
 LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers (data-loading processes; 12 for images on a GPU)
@@ -97,9 +97,10 @@ if stage data; then
   build pl-images planned-360-images variants        # the main data set with both cameras (IMAGES=1)
   # the main data set's episodes with the action in the handle frame (what examples/policies/planned-360-handle.yaml
   # builds, without recording the same episodes again), and with the handle's shape in the front's state
-  # (examples/policies/planned-360-shape.yaml; plk: its type and mount flags alone)
+  # (examples/policies/planned-360-shape.yaml; plk: its type and mount flags alone), and with the action and the
+  # grasp point measured from the gripper (examples/policies/planned-360-gripper.yaml)
   for triple in "plh pl --action-frame=handle" "plah pla --action-frame=handle" "pls pl --handle-shape=full" \
-                "plk pl --handle-shape=kind"; do
+                "plk pl --handle-shape=kind" "plg pl --action-frame=gripper"; do
     set -- $triple
     if [[ " $DATASETS " == *" $1 "* ]] && [ ! -d "ds-$1" ]; then
       "${RIK[@]}" export-lerobot "work-$2/episodes" --out "ds-$1" --repo-id "local/rik-$1" --streams none \
@@ -132,6 +133,7 @@ if stage train; then
   for seed in 0 1; do  # the same recipe and data, the handle's shape in the front's state; two training seeds
     train "act-pls-s$seed" pls $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"
     train "act-plk-s$seed" plk $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # its type and mount flags alone
+    train "act-plg-s$seed" plg $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"  # the action and grasp point from the gripper
   done
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
   if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
@@ -162,6 +164,7 @@ if stage eval; then
     evaluate "$(checkpoint act-plt "$step")" "act-plt-$step"
     for seed in 0 1; do  # rik eval reads the handle's shape from the policy's input width
       evaluate "$(checkpoint "act-pls-s$seed" "$step")" "act-pls-s$seed-$step"
+      evaluate "$(checkpoint "act-plg-s$seed" "$step")" "act-plg-s$seed-$step"  # gripper frame: its input width
     done
   done
   # the mean of a run's saved weights over a window fixed in advance (scripts/average_checkpoints.py): act-pl's last
@@ -183,7 +186,7 @@ if stage eval; then
     evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
   done
-  for run in act-pl act-pl-s1 act-pla act-plt act-pls-s0 act-pls-s1; do
+  for run in act-pl act-pl-s1 act-pla act-plt act-pls-s0 act-pls-s1 act-plg-s0 act-plg-s1; do
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
     average "$run" $(( STEPS / 3 )) $(( STEPS * 2 / 3 ))
   done

@@ -127,8 +127,8 @@ def test_a_policys_input_width_says_which_handle_shape_it_reads(tmp_path: Path,
                               for name, width in (("plain", 13), ("kind", 18), ("full", 24), ("odd", 20)))
     assert [policy_needs(p).handle_shape for p in (plain, kind, full)] == ["none", "kind", "full"]
     with pytest.raises(RikError, match=r"^.*odd/config\.json: input 'observation\.environment_state' has shape \[20\]; "
-                                       r"rik's environment supplies \[13\] \(or \[18\] or \[24\] with the handle's "
-                                       r"shape\)$"):
+                                       r"rik's environment supplies \[13\] \(or \[18\] or \[24\] or \[16\] or \[21\] or "
+                                       r"\[27\] with the handle's shape or the grasp point from the gripper\)$"):
         policy_needs(odd)
     assert RikEnvConfig().features["environment_state"].shape == (13,)  # auto, no policy: none
     assert RikEnvConfig(handle_shape="kind").features["environment_state"].shape == (18,)

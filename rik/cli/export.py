@@ -47,9 +47,11 @@ def export_lerobot(
         outcomes: Annotated[str, typer.Option("--outcomes", help="Export only episodes with these outcomes, "
                                               "comma-separated (S: the successful demonstrations; F failed, P "
                                               "partly opened).")] = "F,P,S",
-        action_frame: Annotated[str, typer.Option("--action-frame", help="The Hand-E's action position: world, "
-                                                  "or handle (target minus the handle's grasp point: "
-                                                  "target_dx, target_dy, target_dz).")] = "world",
+        action_frame: Annotated[str, typer.Option("--action-frame", help="The Hand-E's action position: world; "
+                                                  "handle (target minus the handle's grasp point: "
+                                                  "target_dx, target_dy, target_dz); or gripper (target minus the "
+                                                  "gripper base's position, with the grasp point from the gripper "
+                                                  "in observation.environment_state).")] = "world",
         handle_shape: Annotated[str, typer.Option("--handle-shape", help="End observation.environment_state with "
                                                   "the handle's shape: none; kind (its type and mount, 5 "
                                                   "numbers); full (and its grasp dimensions, 11).")] = "none",

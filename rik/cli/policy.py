@@ -57,8 +57,9 @@ def eval_policy(
         variants: Annotated[Path, typer.Option("--variants", help="Directory of built variants.")] = Path("variants"),
         robot: RobotOpt = DEFAULT_ROBOT,
         action_frame: Annotated[str, typer.Option("--action-frame", help="A Hand-E policy's action position: "
-                                                  "world, handle (an export made with --action-frame handle), or "
-                                                  "auto: what its training statistics say.")] = "auto",
+                                                  "world, handle or gripper (an export made with --action-frame "
+                                                  "handle or gripper), or auto: what its inputs and training "
+                                                  "statistics say.")] = "auto",
         catalog: CatalogOption = None) -> None:
     """Evaluate a policy on rik's benchmark: episodes drawn from a split, F/P/S per handle type x preset (the
     paper's Table 3) with Wilson intervals, per-episode rows, videos and lerobot-eval's eval_info.json. A policy

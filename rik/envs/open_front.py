@@ -21,7 +21,10 @@
   ``absolute``, the target pose itself (x, y, z m; pitch, yaw, roll rad) and the gripper command, as rik's
   episodes and the Hand-E's LeRobot exports record them; ``handle``, the same with the position measured from the
   handle's grasp point now (``environment_state``'s ``grasp_x`` .. ``grasp_z``; the export's
-  ``--action-frame handle``); all three drive any robot (an arm through its IK); or, for an
+  ``--action-frame handle``); ``gripper``, measured from the gripper base's position now (``agent_pos``'s ``x``,
+  ``y``, ``z``; the export's ``--action-frame gripper``), whose ``environment_state`` also holds the grasp point
+  from the gripper base (:data:`rik.sim.observation.GRIPPER_GRASP_NAMES`, before the handle's shape); all four
+  drive any robot (an arm through its IK); or, for an
   arm only, ``joints``: its layout's action vector, the numbers (and units) an arm's export writes as ``action``
   (the servos' joint targets and the gripper's goal, e.g. the SO-100's degrees and percent open), applied joint by
   joint (:meth:`rik.sim.scene.SimScene.step_joints`);
@@ -64,10 +67,11 @@ ENV_ID = "rik/OpenFront-v0"
 DEFAULT_VARIANT = "drawer-chest-80__two_point-bow-128__normal"
 EPISODE_LENGTH = 400
 """Control steps of an episode before it is truncated: 20 s at 20 Hz; scripted demonstrations take up to 232."""
-ACTION_MODES = ("delta", "absolute", "handle", "joints")
+ACTION_MODES = ("delta", "absolute", "handle", "gripper", "joints")
 DEFAULT_ROBOT = "hand-e"
-HANDLE_LAYOUT = robot_layout(None, "handle")
-"""The pose layout whose action is measured from the handle's grasp point (``action_mode="handle"``)."""
+FRAME_LAYOUTS = {frame: robot_layout(None, frame) for frame in ("handle", "gripper")}
+"""The pose layouts whose action is measured from the handle's grasp point or the gripper base (``action_mode``
+``handle``, ``gripper``)."""
 SCENE_CACHE = 16
 """Compiled scenes kept per environment (a split draws many variants)."""
 
@@ -107,7 +111,7 @@ class OpenFrontEnv(gym.Env):
         if action_mode == "joints" and self.layout.is_pose:
             arms = ", ".join(r for r, e in self._catalog.robots.items() if e.as_arm is not None)
             raise RikError(f"action_mode 'joints': robot {robot} takes a target pose (action_mode 'delta', "
-                           f"'absolute' or 'handle'); joint actions are for arms ({arms})")
+                           f"'absolute', 'handle' or 'gripper'); joint actions are for arms ({arms})")
         self._variants = Path(variants_dir)
         self._draw = None
         if split is not None or variant is None:
@@ -117,6 +121,7 @@ class OpenFrontEnv(gym.Env):
         self._variant, self._front = variant, front
         self.action_mode = action_mode
         self.handle_shape = handle_shape
+        self._from_gripper = action_mode == "gripper"  # the grasp point from the gripper in environment_state
         self._shape: np.ndarray | None = None  # the reset handle's shape (none: no numbers)
         self._streams = streams
         self._cameras, self._size, self._spp = cameras, image_size, spp
@@ -140,8 +145,8 @@ class OpenFrontEnv(gym.Env):
         self.task_description = ""
         spaces: dict[str, gym.Space[Any]] = {
             "agent_pos": gym.spaces.Box(-np.inf, np.inf, (len(self.layout.state_names),), np.float32),
-            "environment_state": gym.spaces.Box(-np.inf, np.inf, (len(env_state_names(self.handle_shape)),),
-                                                 np.float32)}
+            "environment_state": gym.spaces.Box(
+                -np.inf, np.inf, (len(env_state_names(self.handle_shape, self._from_gripper)),), np.float32)}
         if self.layout.ee_pose:
             spaces["ee_pose"] = gym.spaces.Box(-np.inf, np.inf, (len(EE_NAMES),), np.float32)
         if self._streams:
@@ -234,7 +239,8 @@ class OpenFrontEnv(gym.Env):
 
     def _obs(self) -> dict[str, Any]:
         obs: dict[str, Any] = {"agent_pos": self.layout.state(self.scene).astype(np.float32),
-                               "environment_state": environment_state(self.scene, self._shape).astype(np.float32)}
+                               "environment_state": environment_state(self.scene, self._shape,
+                                                                      self._from_gripper).astype(np.float32)}
         if self.layout.ee_pose:
             obs["ee_pose"] = self.layout.ee(self.scene).astype(np.float32)
         if self._streams:
@@ -267,8 +273,9 @@ class OpenFrontEnv(gym.Env):
                 if a.shape != (7,) or not np.all(np.isfinite(a)):
                     raise RikError(f"action {a.tolist()}: an {self.action_mode} action is 7 finite numbers (target "
                                    "x, y, z m; pitch, yaw, roll rad; gripper 0..1)")
-                if self.action_mode == "handle":  # the target from the handle's grasp point, as the policy saw it
-                    a = HANDLE_LAYOUT.world_action(a, self.scene.grasp_point())
+                if self.action_mode in FRAME_LAYOUTS:  # the target from the handle or the gripper, as the policy
+                    frame = FRAME_LAYOUTS[self.action_mode]  # saw them
+                    a = frame.world_action(a, frame.frame_origin(self.scene))
                 absolute = np.concatenate([a[:6], [float(np.clip(a[6], 0.0, 1.0))]])
             self._target = absolute[:6]
             self.scene.step(absolute)

@@ -24,8 +24,8 @@ from rik.sim.observation import (
     ENV_STATE_LAYOUTS,
     GRASP_POINT,
     STREAM_SUFFIX,
+    env_layout_of_width,
     env_state_names,
-    handle_shape_of_width,
 )
 
 if TYPE_CHECKING:
@@ -48,7 +48,8 @@ class PolicyNeeds:
     """The frame of its pose action (:func:`trained_action_frame`); an arm's joint action: ``world``."""
     handle_shape: str = "none"
     """What of the handle's shape ends its ``observation.environment_state`` (it was trained on an export made with
-    ``--handle-shape kind`` or ``full``; :data:`rik.sim.observation.HANDLE_SHAPES`), told by that input's width."""
+    ``--handle-shape kind`` or ``full``; :data:`rik.sim.observation.HANDLE_SHAPES`), told by that input's width
+    (as is the ``gripper`` action frame, whose environment state holds the grasp point from the gripper)."""
 
 
 def policy_config(policy_dir: Path) -> dict[str, Any]:
@@ -90,8 +91,9 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
         raise RikError(f"{file}: output 'action' has shape {list(action.get('shape', ()))}; robot {robot} takes "
                        f"[{len(layout.action_names)}] ({hint})")
     env_width = tuple((inputs.get(OBS_ENV_STATE) or {}).get("shape", ()))
-    handle_shape = (handle_shape_of_width(env_width[0]) if len(env_width) == 1 else None) or "none"
-    widths = {OBS_STATE: len(layout.state_names), OBS_ENV_STATE: len(env_state_names(handle_shape))}
+    handle_shape, from_gripper = (env_layout_of_width(env_width[0]) if len(env_width) == 1 else None) or ("none",
+                                                                                                       False)
+    widths = {OBS_STATE: len(layout.state_names), OBS_ENV_STATE: len(env_state_names(handle_shape, from_gripper))}
     if layout.ee_pose:
         widths[EE_POSE] = len(EE_NAMES)
     for key, feature in inputs.items():
@@ -110,8 +112,10 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
             if shape != (widths[key],):
                 raise RikError(f"{file}: input '{key}' has shape {list(shape)}; rik's environment supplies "
                                f"[{widths[key]}]" + (" (or " + " or ".join(
-                                   f"[{len(names)}]" for s, names in ENV_STATE_LAYOUTS.items() if s != "none")
-                                   + " with the handle's shape)" if key == OBS_ENV_STATE else ""))
+                                   f"[{len(names)}]" for s, names in ENV_STATE_LAYOUTS.items()
+                                   if s != ("none", False))
+                                   + " with the handle's shape or the grasp point from the gripper)"
+                                   if key == OBS_ENV_STATE else ""))
             continue
         camera, stream = _image_feature(key)
         if camera is None:
@@ -133,8 +137,8 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
     if OBS_STATE not in inputs:
         raise RikError(f"{file}: the policy takes no 'observation.state'; rik's policies read the robot's state")
     return PolicyNeeds(config["type"], tuple(dict.fromkeys(cameras)), tuple(dict.fromkeys(streams)),
-                       size or (96, 128), trained_action_frame(Path(policy_dir)) if layout.is_pose else "world",
-                       handle_shape)
+                       size or (96, 128), ("gripper" if from_gripper else trained_action_frame(Path(policy_dir)))
+                       if layout.is_pose else "world", handle_shape)
 
 
 def trained_action_frame(policy_dir: Path) -> str:

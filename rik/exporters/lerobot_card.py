@@ -222,6 +222,14 @@ in your data loader.
                       "pitch, yaw, roll (rad) and the gripper command (0 open, 1 closed). rik's environment takes it "
                       "with `action_mode=\"handle\"` (`--env.action_frame=handle`; `auto` reads it from the "
                       "policy's training statistics).\n")
+        if layout.action_frame == "gripper":
+            action = ("- **`action`** (in the gripper frame, `--action-frame gripper`): the commanded target position "
+                      "of the gripper base less the gripper base's position of the same step's `observation.state` "
+                      "(`target_from_gripper_x`, `_y`, `_z`: m, world axes), its pitch, yaw, roll (rad) and the "
+                      "gripper command (0 open, 1 closed); `observation.environment_state` holds the handle's grasp "
+                      "point from the gripper base too (`grasp_from_gripper_x`, `_y`, `_z`, m). rik's environment "
+                      "takes it with `action_mode=\"gripper\"` (`--env.action_frame=gripper`; `auto` reads it from "
+                      "the policy's environment-state width).\n")
         state = f"""- **`observation.state`** (the robot's state, {len(ROBOT_STATE_NAMES)} numbers, rik's state layout
   {checks.get('layout', 2)}): {_names(ROBOT_STATE_NAMES)}: the gripper base's position (m, world) and pitch, yaw,
   roll (rad), the jaw opening (m), the pads' centre (m, world) and the fingers' normal force on the front (N).

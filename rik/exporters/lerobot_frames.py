@@ -63,7 +63,8 @@ def _vector(names: Sequence[str]) -> dict[str, Any]:
 def features(cameras: Sequence[str], streams: Sequence[str], width: int, height: int,
              layout: RobotLayout | None = None, handle_shape: str = "none") -> dict[str, dict[str, Any]]:
     """The LeRobot feature dict of an export of one robot's episodes (``layout``; None: the Hand-E's), the front's
-    state followed by the handle's shape ``handle_shape`` (:data:`rik.sim.observation.HANDLE_SHAPES`)."""
+    state followed by the grasp point from the gripper (a gripper-frame layout's) and the handle's shape
+    ``handle_shape`` (:data:`rik.sim.observation.HANDLE_SHAPES`)."""
     from rik.sim.observation import env_state_names
     from rik.sim.robots.layout import EE_NAMES, robot_layout
 
@@ -71,7 +72,7 @@ def features(cameras: Sequence[str], streams: Sequence[str], width: int, height:
     out: dict[str, dict[str, Any]] = {OBS_STATE: _vector(layout.state_names)}
     if layout.ee_pose:
         out[EE_POSE] = _vector(EE_NAMES)
-    out[OBS_ENV_STATE] = _vector(env_state_names(handle_shape))
+    out[OBS_ENV_STATE] = _vector(env_state_names(handle_shape, layout.action_frame == "gripper"))
     out[ACTION] = _vector(layout.action_names)
     for cam in cameras:
         for stream in streams:
@@ -191,9 +192,10 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
                    ) -> tuple[str, Iterator[dict[str, np.ndarray]], int]:
     """(task, frame dicts for ``add_frame`` without the task, frame count) of one episode read by
     :func:`load_episode`, resampled to ``fps``, its images read from ``streams`` (stream kind -> finished stream
-    folder); the front's state followed by the handle's shape ``handle_shape``."""
+    folder); the front's state followed by the grasp point from the gripper (a gripper-frame layout's) and the
+    handle's shape ``handle_shape``."""
     from rik.render.streams import read_frame
-    from rik.sim.observation import GRASP_POINT, environment_state, handle_shape_state
+    from rik.sim.observation import environment_state, handle_shape_state
 
     meta, layout, actions, targets = episode.meta, episode.layout, episode.actions, episode.targets
     scene = episode.recorded.scene(catalog, variants)
@@ -208,10 +210,10 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
             frame: dict[str, np.ndarray] = {OBS_STATE: layout.state(scene).astype(np.float32)}
             if layout.ee_pose:
                 frame[EE_POSE] = layout.ee(scene).astype(np.float32)
-            env_state = environment_state(scene, shape)
+            env_state = environment_state(scene, shape, layout.action_frame == "gripper")
             frame[OBS_ENV_STATE] = env_state.astype(np.float32)
             action = (layout.joint_action(targets[k], float(targets[k][-1])) if meta.action_kind == "joints"
-                      else layout.action(actions[k], targets[k], env_state[GRASP_POINT]))
+                      else layout.action(actions[k], targets[k], layout.frame_origin(scene)))
             frame[ACTION] = action.astype(np.float32)
             for stream, folder in streams.items():
                 for cam in cameras:

@@ -56,8 +56,10 @@ class ExportSpec:
     outcomes: tuple[str, ...] = ("F", "P", "S")
     """Outcomes of the episodes exported (``("S",)``: the successful demonstrations only); the others are left out."""
     action_frame: str = "world"
-    """The Hand-E's ``action`` position: in the world (``world``) or from the handle's grasp point (``handle``,
-    :data:`rik.sim.robots.layout.HANDLE_ACTION_NAMES`); an arm's joint action is always ``world``."""
+    """The Hand-E's ``action`` position: in the world (``world``), from the handle's grasp point (``handle``,
+    :data:`rik.sim.robots.layout.HANDLE_ACTION_NAMES`) or from the gripper base (``gripper``,
+    :data:`rik.sim.robots.layout.GRIPPER_ACTION_NAMES`, with the grasp point from the gripper in the environment
+    state); an arm's joint action is always ``world``."""
     handle_shape: str = "none"
     """What of the handle's shape ends ``observation.environment_state``
     (:data:`rik.sim.observation.HANDLE_SHAPES`): ``none``, ``kind`` (its type and mount), ``full`` (and its grasp

@@ -117,9 +117,11 @@ class DatasetSpec(Frozen):
     outcomes: tuple[Literal["F", "P", "S"], ...] = Field(default=("F", "P", "S"), min_length=1)
     """Outcomes of the episodes exported into the dataset: ``[S]`` keeps the successful demonstrations only (every
     episode is recorded, and counted in the build's outcomes, either way)."""
-    action_frame: Literal["world", "handle"] = "world"
-    """The Hand-E's exported ``action`` position: in the world, or from the handle's grasp point (``handle``:
-    ``target_dx``, ``target_dy``, ``target_dz``, the target minus the grasp point); arms' joint actions: world."""
+    action_frame: Literal["world", "handle", "gripper"] = "world"
+    """The Hand-E's exported ``action`` position: in the world, from the handle's grasp point (``handle``:
+    ``target_dx``, ``target_dy``, ``target_dz``, the target minus the grasp point) or from the gripper base
+    (``gripper``: the target minus the gripper base's position, with the grasp point from the gripper in
+    ``observation.environment_state``); arms' joint actions: world."""
     handle_shape: Literal["none", "kind", "full"] = "none"
     """What of the handle's shape ends ``observation.environment_state`` (:data:`rik.sim.observation.HANDLE_SHAPES`):
     ``kind`` its type and mount flags, ``full`` those and the catalog's grasp dimensions."""

@@ -51,8 +51,14 @@ HANDLE_KIND_WIDTH = 5
 HANDLE_SHAPES = {"none": (), "kind": HANDLE_SHAPE_NAMES[:HANDLE_KIND_WIDTH], "full": HANDLE_SHAPE_NAMES}
 """``--handle-shape`` -> the handle's numbers it appends to the front's state: none (the default), its type and
 mount flags (``kind``), or those and the catalog's grasp dimensions (``full``)."""
-ENV_STATE_LAYOUTS = {shape: ENV_STATE_NAMES + names for shape, names in HANDLE_SHAPES.items()}
-"""``--handle-shape`` -> the names of the front's state it gives: :data:`ENV_STATE_NAMES`, then the shape's."""
+GRIPPER_GRASP_NAMES = ("grasp_from_gripper_x", "grasp_from_gripper_y", "grasp_from_gripper_z")
+"""The handle's grasp point less the gripper base's position (m, world axes): what a policy whose action is measured
+from the gripper (``--action-frame gripper``) reads after the front's state, so that where to go and how far are one
+input away from each other."""
+ENV_STATE_LAYOUTS = {(shape, from_gripper): ENV_STATE_NAMES + (GRIPPER_GRASP_NAMES if from_gripper else ()) + names
+                     for from_gripper in (False, True) for shape, names in HANDLE_SHAPES.items()}
+"""(``--handle-shape``, grasp point from the gripper) -> the names of the front's state: :data:`ENV_STATE_NAMES`,
+then :data:`GRIPPER_GRASP_NAMES` where asked, then the shape's. Every layout has its own width."""
 CAMERAS = ("front", "wrist")
 """The scene's cameras: ``front`` looks at the base unit, ``wrist`` rides on the gripper."""
 STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
@@ -83,15 +89,16 @@ def robot_state(scene: SimScene) -> np.ndarray:
                            [scene.contact_summary()["normal_force"]]]).astype(np.float64)
 
 
-def env_state_names(handle_shape: str = "none") -> tuple[str, ...]:
-    """The names of the front's state, followed by those of the handle's shape ``handle_shape``
-    (:data:`HANDLE_SHAPES`)."""
-    return ENV_STATE_LAYOUTS[handle_shape]
+def env_state_names(handle_shape: str = "none", from_gripper: bool = False) -> tuple[str, ...]:
+    """The names of the front's state, followed by the grasp point from the gripper (``from_gripper``:
+    :data:`GRIPPER_GRASP_NAMES`) and those of the handle's shape ``handle_shape`` (:data:`HANDLE_SHAPES`)."""
+    return ENV_STATE_LAYOUTS[(handle_shape, from_gripper)]
 
 
-def handle_shape_of_width(width: int) -> str | None:
-    """The ``handle_shape`` whose front's state is ``width`` numbers wide (None: no such width)."""
-    return next((shape for shape, names in ENV_STATE_LAYOUTS.items() if len(names) == width), None)
+def env_layout_of_width(width: int) -> tuple[str, bool] | None:
+    """(``handle_shape``, grasp point from the gripper) of the front's state that is ``width`` numbers wide (None:
+    no such width)."""
+    return next((key for key, names in ENV_STATE_LAYOUTS.items() if len(names) == width), None)
 
 
 def check_handle_shape(handle_shape: str, where: str = "--handle-shape") -> None:
@@ -113,14 +120,17 @@ def handle_shape_state(catalog: Catalog, handle_id: str, handle_shape: str = "fu
     return full[:len(HANDLE_SHAPES[handle_shape])]
 
 
-def environment_state(scene: SimScene, shape: np.ndarray | None = None) -> np.ndarray:
-    """The :data:`ENV_STATE_NAMES` of a scene, float64, followed by ``shape`` where given (the handle's,
+def environment_state(scene: SimScene, shape: np.ndarray | None = None, from_gripper: bool = False) -> np.ndarray:
+    """The :data:`ENV_STATE_NAMES` of a scene, float64, followed by the grasp point from the gripper base
+    (``from_gripper``: :data:`GRIPPER_GRASP_NAMES`, m) and ``shape`` where given (the handle's,
     :func:`handle_shape_state`)."""
     q, qd = scene.front_q()
     quat = scene.data.xquat[scene.front.handle_body].copy()
     if quat[0] < 0:
         quat = -quat
     parts = [[q, qd, scene.opening()], scene.grasp_point(), quat, scene.pull_direction()]
+    if from_gripper:
+        parts.append(scene.grasp_point() - scene.pose()[:3])
     if shape is not None:
         parts.append(shape)
     return np.concatenate(parts).astype(np.float64)

@@ -16,8 +16,9 @@ action (``action_mode="joints"``: the joint targets and gripper in its export's 
 environment key                       dataset / policy feature
 ====================================  =====================================================================
 ``agent_pos``                         ``observation.state`` (the robot's state, in its layout)
-``environment_state``                 ``observation.environment_state`` (the front's; the handle's shape after it
-                                      with ``--env.handle_shape``, which follows the policy by default)
+``environment_state``                 ``observation.environment_state`` (the front's; the grasp point from the
+                                      gripper after it with ``--env.action_frame=gripper``, then the handle's shape
+                                      with ``--env.handle_shape``; both follow the policy by default)
 ``ee_pose`` (Panda only)              ``observation.ee_pose`` (``ee.x`` .. ``ee.wz``, in the arm's base)
 ``pixels/front``                      ``observation.images.front``
 ``pixels/front_rerendered``           ``observation.images.front_rerendered``
@@ -96,8 +97,10 @@ class RikEnvConfig(EnvConfig):
     """Folder of built variants (missing ones are built there)."""
     action_frame: str = AUTO
     """The Hand-E's action position: ``world``, ``handle`` (from the handle's grasp point: an export made with
-    ``--action-frame handle``), or ``auto``: the frame of the policy of ``--policy.path`` (its training data's
-    statistics tell), ``world`` without one."""
+    ``--action-frame handle``), ``gripper`` (from the gripper base: ``--action-frame gripper``; the environment
+    state then holds the grasp point from the gripper too), or ``auto``: the frame of the policy of
+    ``--policy.path`` (its environment state's width, else its training data's statistics tell), ``world`` without
+    one."""
     handle_shape: str = AUTO
     """What of the handle's shape ends ``environment_state``: ``none``, ``kind`` or ``full``, as the export the
     policy was trained on (``--handle-shape``), or ``auto``: as the policy of ``--policy.path`` reads it (its input
@@ -122,8 +125,8 @@ class RikEnvConfig(EnvConfig):
             self.handle_shape = "none"
         if self.action_frame != "world" and not layout.is_pose:
             raise ValueError(f"--env.action_frame={self.action_frame}: robot {self.robot} acts with joint targets, "
-                             "which have no handle frame (it is the Hand-E's pose action's)")
-        env_width = len(env_state_names(self.handle_shape))
+                             f"which have no {self.action_frame} frame (it is the Hand-E's pose action's)")
+        env_width = len(env_state_names(self.handle_shape, self.action_frame == "gripper"))
         self.features = {ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(len(layout.action_names),)),
                          "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(len(layout.state_names),)),
                          "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(env_width,))}
@@ -200,10 +203,10 @@ def _fit_policy(cfg: RikEnvConfig, layout: RobotLayout) -> None:
 
 def action_mode(cfg: RikEnvConfig) -> str:
     """The environment's ``action_mode`` for a config: an arm's ``joints``; the Hand-E's ``absolute`` target pose,
-    or ``handle`` where its action frame is the handle's."""
+    or ``handle`` / ``gripper`` where its action is measured from the handle or the gripper."""
     if not robot_layout_of(cfg.robot).is_pose:
         return "joints"
-    return "handle" if cfg.action_frame == "handle" else "absolute"
+    return cfg.action_frame if cfg.action_frame in ("handle", "gripper") else "absolute"
 
 
 def env_kwargs(cfg: RikEnvConfig) -> dict:

@@ -3,10 +3,12 @@ environment and ``rik eval`` so that a policy trained on an export runs in the e
 
 - the Hand-E (``layout: pose``): the robot's state of :data:`rik.sim.observation.ROBOT_STATE_NAMES` and the
   recorded action (target pose and gripper command, :data:`POSE_ACTION_NAMES`), its position either in the world
-  (``action_frame="world"``, the default) or from the handle's grasp point (``"handle"``,
+  (``action_frame="world"``, the default), from the handle's grasp point (``"handle"``,
   :data:`HANDLE_ACTION_NAMES`: the target minus the grasp point of the same step's
-  ``observation.environment_state``, world axes), which leaves a policy millimetres to learn near the handle
-  where the world frame leaves it a fraction of the whole workspace;
+  ``observation.environment_state``, world axes) or from the gripper base's own position (``"gripper"``,
+  :data:`GRIPPER_ACTION_NAMES`: the target minus the same step's position in ``observation.state``, world axes; its
+  ``observation.environment_state`` then also holds the grasp point from the gripper), which leave a policy
+  millimetres to learn near the handle where the world frame leaves it a fraction of the whole workspace;
 - an arm (``layout: joints``): its joint positions in ``observation.state`` and the joint targets its servos were
   given in ``action``, named and scaled as the catalog's ``lerobot.joints`` say (rad or deg, from the model's 0 or
   from the middle of the joint's range as LeRobot's calibration counts; the gripper as a closure fraction, 0 open
@@ -35,8 +37,15 @@ POSE_ACTION_NAMES = ("target_x", "target_y", "target_z", "target_pitch", "target
 HANDLE_ACTION_NAMES = ("target_dx", "target_dy", "target_dz", "target_pitch", "target_yaw", "target_roll", "gripper")
 """The Hand-E's action in the handle frame: the target position minus the handle's grasp point (m, world axes; the
 grasp point of the same step's ``observation.environment_state``), then as :data:`POSE_ACTION_NAMES`."""
-ACTION_FRAMES = ("world", "handle")
-"""Where a pose action's position is measured from: the world's origin, or the handle's grasp point."""
+GRIPPER_ACTION_NAMES = ("target_from_gripper_x", "target_from_gripper_y", "target_from_gripper_z", "target_pitch",
+                        "target_yaw", "target_roll", "gripper")
+"""The Hand-E's action in the gripper frame: the target position minus the gripper base's position of the same step
+(m, world axes; ``observation.state``'s ``x``, ``y``, ``z``), then as :data:`POSE_ACTION_NAMES`."""
+FRAME_ACTION_NAMES = {"world": POSE_ACTION_NAMES, "handle": HANDLE_ACTION_NAMES, "gripper": GRIPPER_ACTION_NAMES}
+"""A pose action's frame -> its names."""
+ACTION_FRAMES = tuple(FRAME_ACTION_NAMES)
+"""Where a pose action's position is measured from: the world's origin, the handle's grasp point or the gripper
+base."""
 EE_NAMES = ("ee.x", "ee.y", "ee.z", "ee.wx", "ee.wy", "ee.wz")
 HAND_E_ROBOT_TYPE = "rik_hand_e"
 
@@ -71,25 +80,34 @@ class RobotLayout:
         return self._in_units(drive.joint_positions(scene), drive.closure(scene))
 
     # ---- action ---------------------------------------------------------------------------------------------
-    def action(self, pose_action: np.ndarray, targets: np.ndarray, grasp_point: np.ndarray | None = None
+    def frame_origin(self, scene: SimScene) -> np.ndarray:
+        """Where this layout's pose action measures its position from in ``scene`` now (m, world): the origin, the
+        handle's grasp point or the gripper base's position."""
+        if self.action_frame == "handle":
+            return scene.grasp_point()
+        if self.action_frame == "gripper":
+            return np.asarray(scene.pose()[:3], np.float64)
+        return np.zeros(3)
+
+    def action(self, pose_action: np.ndarray, targets: np.ndarray, origin: np.ndarray | None = None
                ) -> np.ndarray:
-        """``action`` of a recorded row: the pose action itself for the Hand-E (in the handle frame: its position
-        less ``grasp_point``, m, world); for an arm its servos' joint targets (``robot_targets``, rad) and the
-        gripper command (``pose_action[6]``, 0 open .. 1 closed)."""
+        """``action`` of a recorded row: the pose action itself for the Hand-E, its position less ``origin`` (m,
+        world: :meth:`frame_origin` of the same step) in the handle or the gripper frame; for an arm its servos'
+        joint targets (``robot_targets``, rad) and the gripper command (``pose_action[6]``, 0 open .. 1 closed)."""
         if self.robot is None:
             out = np.array(pose_action, np.float64)
-            if self.action_frame == "handle":
-                assert grasp_point is not None, "a handle-frame action needs the step's grasp point"
-                out[:3] -= np.asarray(grasp_point, np.float64)
+            if self.action_frame != "world":
+                assert origin is not None, f"a {self.action_frame}-frame action needs the step's frame origin"
+                out[:3] -= np.asarray(origin, np.float64)
             return out
         return self.joint_action(targets, float(pose_action[6]))
 
-    def world_action(self, action: np.ndarray, grasp_point: np.ndarray) -> np.ndarray:
+    def world_action(self, action: np.ndarray, origin: np.ndarray) -> np.ndarray:
         """The inverse of :meth:`action` for the Hand-E: the world-frame pose action (target pose m, rad; gripper)
-        of an ``action`` in this layout's frame, given the handle's grasp point now (m, world)."""
+        of an ``action`` in this layout's frame, given its frame's origin now (:meth:`frame_origin`, m, world)."""
         out = np.array(action, np.float64)
-        if self.action_frame == "handle":
-            out[:3] += np.asarray(grasp_point, np.float64)
+        if self.action_frame != "world":
+            out[:3] += np.asarray(origin, np.float64)
         return out
 
     def joint_action(self, targets: np.ndarray, grip: float) -> np.ndarray:
@@ -152,17 +170,17 @@ def _grip_from_unit(value: float, unit: str) -> float:
 
 def robot_layout(robot: Robot | None, action_frame: str = "world") -> RobotLayout:
     """The layout of a catalog robot (None, or a floating one: the Hand-E's pose layout), its pose action in
-    ``action_frame`` (:data:`ACTION_FRAMES`; only a pose layout has a handle frame)."""
+    ``action_frame`` (:data:`ACTION_FRAMES`; only a pose layout has a handle or a gripper frame)."""
     if action_frame not in ACTION_FRAMES:
         raise RikError(f"action frame '{action_frame}': use one of {', '.join(ACTION_FRAMES)}")
     if robot is None or robot.lerobot.layout == "pose":
         robot_type = HAND_E_ROBOT_TYPE if robot is None else robot.lerobot.robot_type
-        pose_names = HANDLE_ACTION_NAMES if action_frame == "handle" else POSE_ACTION_NAMES
-        return RobotLayout("hand-e" if robot is None else robot.id, robot_type, ROBOT_STATE_NAMES, pose_names,
+        return RobotLayout("hand-e" if robot is None else robot.id, robot_type, ROBOT_STATE_NAMES,
+                           FRAME_ACTION_NAMES[action_frame],
                            False, action_frame=action_frame)
     if action_frame != "world":
         raise RikError(f"action frame '{action_frame}': robot {robot.id} acts with joint targets, which have no "
-                       "handle frame (it is the Hand-E's pose action's)")
+                       f"{action_frame} frame (it is the Hand-E's pose action's)")
     names = tuple(j.name for j in robot.lerobot.joints)
     return RobotLayout(robot.id, robot.lerobot.robot_type, names, names, robot.lerobot.ee_pose,
                        tuple((j.joint, j.unit) for j in robot.lerobot.joints),
@@ -171,9 +189,9 @@ def robot_layout(robot: Robot | None, action_frame: str = "world") -> RobotLayou
 
 
 def action_frame_of(names: list[str] | tuple[str, ...]) -> str:
-    """The frame of a pose action from its names (a dataset's ``action`` names): ``handle`` for
-    :data:`HANDLE_ACTION_NAMES`, else ``world``."""
-    return "handle" if tuple(names) == HANDLE_ACTION_NAMES else "world"
+    """The frame of a pose action from its names (a dataset's ``action`` names, :data:`FRAME_ACTION_NAMES`;
+    ``world`` for any others)."""
+    return next((frame for frame, known in FRAME_ACTION_NAMES.items() if tuple(names) == known), "world")
 
 
 def joint_zero(robot: Robot, joint: str) -> float:
