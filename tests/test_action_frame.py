@@ -79,7 +79,9 @@ def test_a_gripper_frame_export_is_the_recorded_action_less_the_gripper_and_adds
     assert info["features"]["action"]["names"] == list(GRIPPER_ACTION_NAMES)
     names = info["features"]["observation.environment_state"]["names"]
     assert names[front:front + 3] == list(GRIPPER_GRASP_NAMES) and names[front + 3] == "handle_knob"
-    assert "in the gripper frame, `--action-frame gripper`" in (tmp_path / "gripper" / "README.md").read_text()
+    card = (tmp_path / "gripper" / "README.md").read_text()
+    assert "in the gripper frame, `--action-frame gripper`" in card
+    assert "**The grasp point from the gripper** (`--action-frame gripper`: 3 more numbers after" in card
 
 
 def test_the_handle_and_gripper_action_modes_drive_the_gripper_as_the_absolute_one(bow_variants: Path) -> None:

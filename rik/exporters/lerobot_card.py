@@ -190,7 +190,7 @@ def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str,
     layout = robot_layout(robot.as_arm, spec.action_frame)
     images = [k for k, f in info["features"].items() if f.get("dtype") == "video"]
     sim_only = [k for k in images if not k.endswith("_rerendered")]
-    from rik.sim.observation import ENV_STATE_NAMES, HANDLE_SHAPES, ROBOT_STATE_NAMES
+    from rik.sim.observation import ENV_STATE_NAMES, GRIPPER_GRASP_NAMES, HANDLE_SHAPES, ROBOT_STATE_NAMES
 
     if images:
         streams = f"""- **Image streams:** {', '.join(f'`{k}`' for k in images)}. Keys without a suffix are MuJoCo's own
@@ -241,6 +241,13 @@ in your data loader.
   or rad/s), its opening (fraction of the range), the handle's grasp point (m, world), its orientation (unit
   quaternion w, x, y, z with w >= 0, world) and the unit direction in which the grasp point moves as the front
   opens (world).
+"""
+    if layout.action_frame == "gripper":
+        before = ", before the handle's shape" if spec.handle_shape != "none" else ""
+        count = len(GRIPPER_GRASP_NAMES)
+        state_text += f"""- **The grasp point from the gripper** (`--action-frame gripper`: {count} more numbers after
+  the front's state{before}): {_names(GRIPPER_GRASP_NAMES)}: the handle's grasp point less the gripper base's
+  position (m, world axes).
 """
     if spec.handle_shape != "none":
         shape = HANDLE_SHAPES[spec.handle_shape]
