@@ -1,6 +1,6 @@
 """The arms in rik's scenes: exact replay of their episodes, the measured grip forces the catalog states, joint torques
-capped at the catalog's figures, the pose interface shared with the Hand-E, the checks, a handle out of reach, and
-episodes recorded before robots existed."""
+capped at the catalog's figures, the pose interface shared with the Hand-E, a five-joint arm's IK meeting the position
+first, the checks, a handle out of reach, and episodes recorded before robots existed."""
 
 from __future__ import annotations
 
@@ -17,8 +17,11 @@ from rik.episodes.episode import COLUMNS_2, META, STATES, meta_digest, read_epis
 from rik.episodes.record import record_one
 from rik.episodes.replay import verify_episode
 from rik.sim.build import build_scene
+from rik.sim.pose import gripper_rotation
+from rik.sim.robots.arm import Placement
 from rik.sim.robots.checks import reach_profile, run_checks
-from rik.sim.robots.reach import reachable_opening
+from rik.sim.robots.ik import FEW_JOINTS_ORIENTATION_COST, ArmIK
+from rik.sim.robots.reach import REACH_TOLERANCE, reachable_opening
 
 CAT = builtin_catalog()
 ARMS = ("panda-2f85", "so100", "so101")
@@ -120,6 +123,27 @@ def test_arm_takes_the_hand_es_target_pose(variants: Path, robot: str) -> None:
     pose = scene.pose()
     assert np.linalg.norm(pose[:3] - target[:3]) < 0.01, (pose, target)
     assert abs(pose[5] - target[5]) < 0.05
+
+
+def test_a_five_joint_arm_meets_the_position_first() -> None:
+    """Where a five-joint arm cannot meet a whole pose, its IK's position-first steps (the planner's fallback) give up
+    orientation for position within the reach tolerance: the SO-100 at its mount before the chest's 300 mm edge lip
+    (bench seed 10008), the fingers tilted 15 degrees from above, the drawer closed. Weighing orientation at 0.2 per
+    rad alone it ends 5.2 mm from this pose (0.02 rad), out of reach. A pose it meets keeps its usual weights, and a
+    seven-joint arm weighs both alike."""
+    entry = CAT.robot("so100")
+    ik = ArmIK(entry, Placement(np.array([0.0, 0.402, 0.486]), 0.0))
+    rotation = gripper_rotation(np.radians([15.0, 0.0, 90.0]))
+    _, dp, da = ik.solve(np.array([0.0, 0.0469, 0.7842]), rotation)
+    assert dp > REACH_TOLERANCE[0], (dp, da)  # the usual steps: out of reach
+    _, dp, da = ik.solve(np.array([0.0, 0.0469, 0.7842]), rotation, position_first=True)
+    assert dp <= REACH_TOLERANCE[0] and da <= REACH_TOLERANCE[1], (dp, da)
+    assert ik.frame_task.cost[3:] == pytest.approx([FEW_JOINTS_ORIENTATION_COST] * 3)  # put back after the step
+    # 3 cm nearer its base the usual step meets the position: the orientation is met as well as before
+    _, dp, da = ik.solve(np.array([0.0, 0.0769, 0.7842]), rotation, position_first=True)
+    assert dp <= REACH_TOLERANCE[0] and da < 0.01, (dp, da)
+    panda = ArmIK(CAT.robot("panda-2f85"), Placement(np.zeros(3), 0.0))
+    assert panda.frame_task.cost == pytest.approx([1.0] * 6) and panda.position_first_cost is None
 
 
 def test_checks_measure_reach_torque_and_grip(variants: Path) -> None:

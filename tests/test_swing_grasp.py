@@ -1,5 +1,6 @@
 """The grasp planner for a fixed and a swinging jaw (the SO arms): the frame it turns the gripper to, where it puts
-the fixed pad relative to the handle, and an episode on the demo's bow drawer under the smooth preset in which
+the fixed pad relative to the handle, the plans only a five-joint arm's position-first reach check reaches put
+after every other, and an episode on the demo's bow drawer under the smooth preset in which
 both pads hold the handle while the drawer opens."""
 
 from __future__ import annotations
@@ -12,9 +13,11 @@ import numpy as np
 import pytest
 from shared import BOW, builtin_catalog, grasp_until_pull
 
+from rik.episodes.operators import ScriptedGrasp
 from rik.episodes.record import variant_dir
+from rik.sim import grasp
 from rik.sim.build import build_scene
-from rik.sim.grasp import FIXED_GAP, swing_frame, swing_plans
+from rik.sim.grasp import FIXED_GAP, GraspPlan, pinch_plan, swing_frame, swing_plans
 from rik.sim.pose import angles_of, gripper_rotation
 from rik.sim.probe import front_face_y, handle_extent, ray
 
@@ -113,6 +116,43 @@ def _jaw_forces(scene: object) -> dict[str, float]:
                 mujoco.mj_contactForce(m, d, i, w)
                 forces[bodies[ours]] += abs(float(w[0]))
     return forces
+
+
+def test_position_first_plans_come_after_every_other(smooth_variants: Path, monkeypatch: pytest.MonkeyPatch
+                                                   ) -> None:
+    """The planner's fallback for a five-joint arm: the plans its usual reach check keeps stay as they were (set,
+    order, reach) and the plans only its position-first check reaches follow them, ranked alike, within the limit;
+    the operator tries them after every other plan (the pinch too). The arm's reach is faked: tilt 0 from below
+    reaches 60 %, from above 90 %; every other plan only with position-first steps, 80 % (bench seed 10008:
+    swing_above tilt 15 was out of reach by a fraction of a millimetre)."""
+    scene = build_scene(smooth_variants / SMOOTH_BOW, None, robot=CAT.robot("so100"))
+    usual = {"swing_below_0": 0.6, "swing_above_0": 0.9}
+    asked: list[tuple[str, bool]] = []
+
+    def fake_reach(_scene: object, plan: GraspPlan, position_first: bool = False) -> float:
+        asked.append((plan.key, position_first))
+        return 0.8 if position_first else usual.get(plan.key, -1.0)
+
+    monkeypatch.setattr(grasp, "plan_reach", fake_reach)
+    plans = swing_plans(scene, ("below", "above"), limit=20)
+    assert [p.key for p in plans[:2]] == ["swing_above_0", "swing_below_0"], plans
+    assert [p.detail for p in plans[:2]] == ["tilt 0 deg, reaches 90%", "tilt 0 deg, reaches 60%"]
+    assert not any(p.position_first for p in plans[:2]) and all(p.position_first for p in plans[2:])
+    tilts = [float(p.detail.split()[1]) for p in plans[2:]]
+    assert tilts and tilts == sorted(tilts, reverse=True), plans  # steeper first among equals
+    assert all(p.detail.endswith("reaches 80% position first") for p in plans[2:])
+    # position-first steps only for the plans the usual check drops
+    assert {k for k, first in asked if first} == {p.key for p in plans[2:]}
+    assert [p.key for p in swing_plans(scene, ("below", "above"), limit=2)] == ["swing_above_0", "swing_below_0"]
+    assert [p.key for p in swing_plans(scene, ("below", "above"), limit=3)] == [p.key for p in plans[:3]]
+    pinch = pinch_plan(scene, vertical=True)
+    op = ScriptedGrasp("t", lambda _scene: [*plans, pinch], rehearse=False)
+    op.reset(scene, np.random.default_rng(0))
+    assert op._plan.key == "swing_above_0"
+    op._start_plan(scene)  # as a re-grasp does: the next untried plan is the usual one, then the pinch
+    op._start_plan(scene)
+    op._start_plan(scene)
+    assert op._tried == ["swing_above_0", "swing_below_0", pinch.key, plans[2].key], op._tried
 
 
 @pytest.mark.slow

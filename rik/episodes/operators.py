@@ -137,6 +137,8 @@ class ScriptedGrasp:
     # phases: approach (motions) -> close -> pull -> [release -> retreat -> approach ...]
     def _start_plan(self, scene: SimScene) -> None:
         plans = [p for p in self.planner(scene) if p.key not in self._tried]
+        # a plan only the position-first reach check reaches after every other, in its order (the sort is stable)
+        plans.sort(key=lambda p: p.position_first)
         if self.rehearse and self._correct_sag and len(plans) > 1:
             plans = self.rehearse_plans(scene, plans)
         if not plans:

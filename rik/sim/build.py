@@ -160,7 +160,7 @@ def build_scene(variant_dir: Path, front: str | None = None, gripper: GripperSpe
     effects = front_effects(model, info["fronts"])
     if arm:
         assert robot is not None and robot.gripper.body is not None
-        ik = ArmIK(robot, where, orientation_cost=1.0 if len(robot.joint_names) >= 6 else 0.2)
+        ik = ArmIK(robot, where)
         drive = arm_drive(model, robot, ik, where, control_fps)
         hand = ROBOT_PREFIX + robot.gripper.body
         hand_bodies = {b for b in range(model.nbody) if _descends(model, b, name2id(mujoco.mjtObj.mjOBJ_BODY, hand))}

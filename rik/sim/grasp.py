@@ -49,6 +49,9 @@ class GraspPlan:
     detail: str = ""
     key: str = ""
     """Plans with the same key are one way of grasping; a re-grasp tries another."""
+    position_first: bool = False
+    """Reached only by the arm's position-first reach check (:func:`swing_plans`): the scripted operator tries it after
+    every other plan."""
 
 
 def pinch_plan(scene: SimScene, vertical: bool, geometry: str = "collision") -> GraspPlan:
@@ -125,8 +128,12 @@ def swing_plans(scene: SimScene, sides: tuple[str, ...] = ("below", "above"), li
     the robot's own geometry). The handle's cross-section is its bounding box from its far side (a ray from the
     front's surface at the grasp point) to its outer face. Up to ``limit`` plans, those the arm can follow furthest
     along the pull first (:func:`plan_reach`; every reach from a success's opening on counts alike), then the
-    steeper, then in the order of ``sides``. None for a gripper
-    with parallel jaws."""
+    steeper, then in the order of ``sides``. Where fewer than ``limit`` are kept, the plans dropped as out of reach
+    that the arm's position-first IK steps reach (:meth:`rik.sim.robots.ik.ArmIK.step`: a five-joint arm gives up
+    orientation within the reach tolerance) follow, ranked alike among themselves and marked
+    :attr:`GraspPlan.position_first`: after every plan of the usual reach, whose set, order and reach they leave as
+    they were (ranked among them, a steeper plan that reaches further this way came first and slipped over the
+    pull, docs/benchmark.md). None for a gripper with parallel jaws."""
     g = scene.gripper
     if g.fixed_jaw is None:
         return []
@@ -168,19 +175,30 @@ def swing_plans(scene: SimScene, sides: tuple[str, ...] = ("below", "above"), li
             plans.append(GraspPlan(f"swing_{side}", tcp, angles, -fingers, f"tilt {tilt_deg:.0f} deg",
                                    f"swing_{side}_{tilt_deg:.0f}"))
     reach = [plan_reach(scene, p) for p in plans]
-    # not even the closed handle: none; past a success's opening a further reach gains nothing, a steeper tilt
-    # (first among equals: the sort is stable) holds by more than friction
-    order = sorted((i for i in range(len(plans)) if reach[i] >= 0.0),
-                   key=lambda i: -min(round(reach[i], 2), SUCCESS_OPENING))
-    return [_with_detail(plans[i], f"reaches {reach[i]:.0%}") for i in order[:limit]]
+    kept = [_with_detail(plans[i], f"reaches {reach[i]:.0%}") for i in _ranked(reach)][:limit]
+    missed = [i for i in range(len(plans)) if reach[i] < 0.0]
+    if len(kept) == limit or not missed:
+        return kept
+    # the fallback: only for the plans dropped, and ranked after every plan kept, so it cannot reorder them
+    first = [plan_reach(scene, plans[i], position_first=True) for i in missed]
+    return kept + [replace(_with_detail(plans[missed[j]], f"reaches {first[j]:.0%} position first"),
+                           position_first=True) for j in _ranked(first)][:limit - len(kept)]
+
+
+def _ranked(reach: list[float]) -> list[int]:
+    """Indices of the plans whose ``reach`` (fraction of the front's range) is at least the closed front, furthest
+    first: past a success's opening a further reach gains nothing, and among equals the earlier (a steeper tilt,
+    which holds by more than friction; the sort is stable) first."""
+    return sorted((i for i in range(len(reach)) if reach[i] >= 0.0),
+                  key=lambda i: -min(round(reach[i], 2), SUCCESS_OPENING))
 
 
 def _with_detail(plan: GraspPlan, words: str) -> GraspPlan:
     return replace(plan, detail=f"{plan.detail}, {words}".strip(", "))
 
 
-def plan_reach(scene: SimScene, plan: GraspPlan) -> float:
+def plan_reach(scene: SimScene, plan: GraspPlan, position_first: bool = False) -> float:
     """The largest opening up to which the scene's robot can hold ``plan``'s grasp as the front opens (the pads kept
-    where they are on the handle, the gripper's angles kept): the drive's :meth:`hold_reach`; -1: not even the
-    closed one."""
-    return scene.robot_drive.hold_reach(scene, plan.tcp - scene.grasp_point(), plan.angles)
+    where they are on the handle, the gripper's angles kept): the drive's :meth:`hold_reach` (``position_first``:
+    with the arm's position-first IK steps); -1: not even the closed one."""
+    return scene.robot_drive.hold_reach(scene, plan.tcp - scene.grasp_point(), plan.angles, position_first)

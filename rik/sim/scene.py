@@ -80,10 +80,13 @@ class Drive(Protocol):
         """The natural pinch of the operated handle at each opening (fraction of the front's range) and what holding
         ``force`` N there asks of the robot (see :mod:`rik.sim.robots.checks`); the scene is left as it was."""
 
-    def hold_reach(self, scene: SimScene, offset: np.ndarray, angles: np.ndarray) -> float:
+    def hold_reach(self, scene: SimScene, offset: np.ndarray, angles: np.ndarray,
+                   position_first: bool = False) -> float:
         """The largest opening (fraction of the front's range, from its opening now) up to which the robot keeps its
         gripper frame at the handle's grasp point plus ``offset`` (m, world) with the gripper's ``angles`` (rad) as
-        the front opens; -1 when not even the first; the scene is left as it was."""
+        the front opens; -1 when not even the first; the scene is left as it was. ``position_first``: an arm of
+        fewer than six joints may give up orientation (within the reach tolerance) for position
+        (:meth:`rik.sim.robots.ik.ArmIK.step`), the planner's fallback for grasps it misses otherwise."""
 
     def reach_checks(self, scene: SimScene, force: float) -> list[CheckResult]:
         """The ``reach`` and ``torque_headroom`` checks of this robot holding the front's resistance ``force`` N."""

@@ -142,7 +142,8 @@ class FloatingDrive:
         """The base's servos reach every pose in the scene: every grasp is met exactly."""
         return [ReachPoint(o, 0.0, 0.0, (), 0.0, "") for o in openings]
 
-    def hold_reach(self, scene: SimScene, offset: np.ndarray, angles: np.ndarray) -> float:
+    def hold_reach(self, scene: SimScene, offset: np.ndarray, angles: np.ndarray,
+                   position_first: bool = False) -> float:
         """The base's servos hold any grasp over the whole opening: 1."""
         return 1.0
 
@@ -295,8 +296,9 @@ class ArmDrive:
     def reach(self, scene: SimScene, openings: tuple[float, ...], force: float) -> list[ReachPoint]:
         return _arm_reach_profile(scene, self, openings, force)
 
-    def hold_reach(self, scene: SimScene, offset: np.ndarray, angles: np.ndarray) -> float:
-        return _arm_hold_reach(scene, self, offset, angles)
+    def hold_reach(self, scene: SimScene, offset: np.ndarray, angles: np.ndarray,
+                   position_first: bool = False) -> float:
+        return _arm_hold_reach(scene, self, offset, angles, position_first)
 
     def reach_checks(self, scene: SimScene, force: float) -> list[CheckResult]:
         return _arm_reach_checks(scene, self, force)
@@ -331,9 +333,11 @@ HOLD_STEPS = tuple(np.round(np.linspace(0.0, 1.0, 11), 2))
 """Openings at which :func:`_arm_hold_reach` solves the arm, fractions of the front's range."""
 
 
-def _arm_hold_reach(scene: SimScene, drive: ArmDrive, offset: np.ndarray, angles: np.ndarray) -> float:
+def _arm_hold_reach(scene: SimScene, drive: ArmDrive, offset: np.ndarray, angles: np.ndarray,
+                    position_first: bool = False) -> float:
     """:meth:`Drive.hold_reach` of an arm: from the front's opening now on, each of :data:`HOLD_STEPS` solved by its
-    IK from the previous one's posture, the gripper frame at the grasp point plus ``offset`` (m, world) with
+    IK from the previous one's posture (with position-first steps where ``position_first``:
+    :meth:`rik.sim.robots.ik.ArmIK.step`), the gripper frame at the grasp point plus ``offset`` (m, world) with
     ``angles``, met within :data:`rik.sim.robots.reach.REACH_TOLERANCE`; the largest opening met, -1 for none. The
     scene is left as it was."""
     saved = scene.state()
@@ -347,7 +351,7 @@ def _arm_hold_reach(scene: SimScene, drive: ArmDrive, offset: np.ndarray, angles
             set_opening(scene, float(opening))
             pose = base_for_tcp(scene.gripper, scene.grasp_point() + offset, angles)
             position, rotation = drive._frame_target(scene, pose)
-            q, dp, da = drive.ik.solve(position, rotation, q)
+            q, dp, da = drive.ik.solve(position, rotation, q, position_first=position_first)
             if dp > REACH_TOLERANCE[0] or da > REACH_TOLERANCE[1]:
                 break
             best = float(opening)
