@@ -123,7 +123,7 @@ def test_pose_actions_drive_an_arm_and_joint_actions_are_refused_for_the_hand_e(
     with pytest.raises(RikError) as err:
         gym.make("rik/OpenFront-v0", variant=VARIANT, variants_dir=str(variants), action_mode="joints")
     assert str(err.value) == ("action_mode 'joints': robot hand-e takes a target pose (action_mode 'delta', "
-                              "'absolute' or 'handle'); joint actions are for arms (panda-2f85, so100, so101)")
+                              "'absolute', 'handle' or 'gripper'); joint actions are for arms (panda-2f85, so100, so101)")
     with pytest.raises(RikError, match=r"^no robot 'so10' in the catalog; did you mean 'so101' or 'so100'\? \(the catalog's robots: hand-e, panda-2f85, so100, so101\)$"):
         gym.make("rik/OpenFront-v0", variant=VARIANT, variants_dir=str(variants), robot="so10")
 
