@@ -134,6 +134,7 @@ if stage train; then
     train "act-pls-s$seed" pls $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"
     train "act-plk-s$seed" plk $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # its type and mount flags alone
     train "act-plg-s$seed" plg $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"  # the action and grasp point from the gripper
+    resume "act-plg-s$seed" "$STEPS"  # trained on after its comparison at 2/3 STEPS
   done
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
   if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
@@ -185,6 +186,10 @@ if stage eval; then
   for run in act-plk-s0 act-plk-s1; do
     evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
+  done
+  for run in act-plg-s0 act-plg-s1; do
+    evaluate "$(checkpoint "$run" "$STEPS")" "$run-$STEPS"
+    average "$run" $(( STEPS * 2 / 3 )) "$STEPS"
   done
   for run in act-pl act-pl-s1 act-pla act-plt act-pls-s0 act-pls-s1 act-plg-s0 act-plg-s1; do
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
