@@ -57,7 +57,7 @@ from rik.sim.observation import (
     image_name,
 )
 from rik.sim.outcome import SUCCESS_OPENING, classify
-from rik.sim.robots.layout import EE_NAMES, RobotLayout, robot_layout
+from rik.sim.robots.layout import ACTION_FRAMES, EE_NAMES, RobotLayout, robot_layout
 from rik.sim.scene import CONTROL_FPS, SimScene
 
 if TYPE_CHECKING:
@@ -67,11 +67,11 @@ ENV_ID = "rik/OpenFront-v0"
 DEFAULT_VARIANT = "drawer-chest-80__two_point-bow-128__normal"
 EPISODE_LENGTH = 400
 """Control steps of an episode before it is truncated: 20 s at 20 Hz; scripted demonstrations take up to 232."""
-ACTION_MODES = ("delta", "absolute", "handle", "gripper", "joints")
 DEFAULT_ROBOT = "hand-e"
-FRAME_LAYOUTS = {frame: robot_layout(None, frame) for frame in ("handle", "gripper")}
-"""The pose layouts whose action is measured from the handle's grasp point or the gripper base (``action_mode``
-``handle``, ``gripper``)."""
+FRAME_LAYOUTS = {frame: robot_layout(None, frame) for frame in ACTION_FRAMES if frame != "world"}
+"""The pose layouts whose action is measured from somewhere other than the world's origin (the handle's grasp point,
+the gripper base): each is an ``action_mode`` of its own name."""
+ACTION_MODES = ("delta", "absolute", *FRAME_LAYOUTS, "joints")
 SCENE_CACHE = 16
 """Compiled scenes kept per environment (a split draws many variants)."""
 

@@ -206,7 +206,7 @@ def action_mode(cfg: RikEnvConfig) -> str:
     or ``handle`` / ``gripper`` where its action is measured from the handle or the gripper."""
     if not robot_layout_of(cfg.robot).is_pose:
         return "joints"
-    return cfg.action_frame if cfg.action_frame in ("handle", "gripper") else "absolute"
+    return "absolute" if cfg.action_frame == "world" else cfg.action_frame
 
 
 def env_kwargs(cfg: RikEnvConfig) -> dict:

@@ -53,10 +53,10 @@ and 0.05 rad at this weight)."""
 class ArmIK:
     """The IK of one arm at one placement (see the module docstring)."""
 
-    def __init__(self, robot: Robot, where: Placement, orientation_cost: float | None = None) -> None:
-        """``orientation_cost``: the frame task's weight of orientation (per rad, against 1 per m of position);
-        default: 1, or :data:`FEW_JOINTS_ORIENTATION_COST` (with position-first steps,
-        :data:`POSITION_FIRST_ORIENTATION_COST`) for an arm of fewer than :data:`FULL_POSE_JOINTS` joints."""
+    def __init__(self, robot: Robot, where: Placement) -> None:
+        """The frame task weighs orientation at 1 per rad against 1 per m of position, or at
+        :data:`FEW_JOINTS_ORIENTATION_COST` (with position-first steps, :data:`POSITION_FIRST_ORIENTATION_COST`) for
+        an arm of fewer than :data:`FULL_POSE_JOINTS` joints."""
         import mink
         import mujoco
 
@@ -72,16 +72,14 @@ class ArmIK:
         if self.model.nq != len(self.joints):  # pragma: no cover - robot_spec removes every other joint
             raise AssertionError(f"the IK model of {robot.id} has {self.model.nq} coordinates")
         few = len(self.joints) < FULL_POSE_JOINTS
-        if orientation_cost is None:
-            orientation_cost = FEW_JOINTS_ORIENTATION_COST if few else 1.0
-        self.orientation_cost = orientation_cost
+        self.orientation_cost = FEW_JOINTS_ORIENTATION_COST if few else 1.0
         self.position_first_cost: float | None = POSITION_FIRST_ORIENTATION_COST if few else None
         """The orientation's weight of a position-first step (:meth:`step`); None: none."""
         self.configuration = mink.Configuration(self.model)
         self._fk = mujoco.MjData(self.model)
         self._site = self.model.site(ROBOT_PREFIX + TCP_SITE).id
         self.frame_task = mink.FrameTask(ROBOT_PREFIX + TCP_SITE, "site", position_cost=1.0,
-                                         orientation_cost=orientation_cost, lm_damping=1e-6)
+                                         orientation_cost=self.orientation_cost, lm_damping=1e-6)
         self.posture = mink.PostureTask(self.model, cost=POSTURE_COST)
         self.home = np.array(robot.mount.home, float)
         self.posture.set_target(self.home)
