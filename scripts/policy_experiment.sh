@@ -23,7 +23,7 @@ SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, ma
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
 STAGES=${STAGES:-data train eval report}
-DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls plk plt plg}  # the data sets the data stage builds
+DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls plk plt plg plgc}  # the data sets the data stage builds
 IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
 DEVICE=${DEVICE:-cpu}          # lerobot-train's --policy.device (cuda on a GPU machine)
 LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers (data-loading processes; 12 for images on a GPU)
@@ -95,6 +95,12 @@ if stage data; then
   build pla planned-above-360 variants               # the same seeds, planned_above: one way to hold each handle
   build plt planned-typed-360 variants               # the same seeds, planned_typed: one hook side per handle type
   build pl-images planned-360-images variants        # the main data set with both cameras (IMAGES=1)
+  # the joint side of the fidelity ablation: plg's spec recorded in variants whose joint friction creeps (MuJoCo's
+  # default impedance) instead of holding
+  if [[ " $DATASETS " == *" plgc "* ]] && [ ! -f variants-creep/joint_friction.json ]; then
+    "${RIK[@]}" variants build drawer-chest-80__two_point-bow-128__normal --joint-friction creeping --out variants-creep
+  fi
+  build plgc planned-360-gripper variants-creep
   # the main data set's episodes with the action in the handle frame (what examples/policies/planned-360-handle.yaml
   # builds, without recording the same episodes again), and with the handle's shape in the front's state
   # (examples/policies/planned-360-shape.yaml; plk: its type and mount flags alone), and with the action and the
@@ -135,6 +141,7 @@ if stage train; then
     train "act-plk-s$seed" plk $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # its type and mount flags alone
     train "act-plg-s$seed" plg $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"  # the action and grasp point from the gripper
     resume "act-plg-s$seed" "$STEPS"  # trained on after its comparison at 2/3 STEPS
+    train "act-plgc-s$seed" plgc $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # plg's recipe on demonstrations whose joints creep
   done
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
   if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
@@ -186,6 +193,13 @@ if stage eval; then
   for run in act-plk-s0 act-plk-s1; do
     evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
     average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
+  done
+  # the joint side of the fidelity ablation at STEPS/3: each arm in held joints (the highest fidelity) and creeping ones
+  evaluate strategy:planned planned variants-creep
+  for seed in 0 1; do
+    evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))"
+    evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))" variants-creep
+    evaluate "$(checkpoint "act-plg-s$seed" $(( STEPS / 3 )))" "act-plg-s$seed-$(( STEPS / 3 ))" variants-creep
   done
   for run in act-plg-s0 act-plg-s1; do
     evaluate "$(checkpoint "$run" "$STEPS")" "$run-$STEPS"

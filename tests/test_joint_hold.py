@@ -95,3 +95,57 @@ def test_the_model_before_issue_31_fails_the_hold_test(high_variants: Path, vari
     before = front(high_variants, variant, before=True)
     assert moved(before, 0.9) > 10 * HOLD_BOUND[variant]
     assert moved(front(high_variants, variant, before=True), 1.1) > OPEN_BOUND[variant]
+
+
+def test_a_creeping_folder_builds_mujocos_default_friction(high_variants: Path, tmp_path: Path) -> None:
+    """``--joint-friction creeping`` (the fidelity ablation's other side) builds exactly the model before issue 31:
+    the same creep under the same push, its mode in the report, the model's text and the folder's marker."""
+    import json
+
+    from shared import builtin_catalog
+
+    from rik.combinator.build import build_variants, spec_hash
+    from rik.registry.ids import parse_variant_id
+
+    key = parse_variant_id(builtin_catalog(), DRAWER)
+    creep = tmp_path / "variants-creep"
+    [result] = build_variants(builtin_catalog(), [key], creep, joint_friction="creeping")
+    assert result.status == "built", result
+    assert json.loads((creep / "joint_friction.json").read_text(encoding="utf-8")) == {"joint_friction": "creeping"}
+    assert json.loads((creep / DRAWER / "report.json").read_text(encoding="utf-8"))["joint_friction"] == "creeping"
+    assert '"joint_friction":"creeping"' in (creep / DRAWER / "model.xml").read_text(encoding="utf-8")
+    assert not (high_variants / "joint_friction.json").exists()  # a held folder needs no marker
+    assert spec_hash(builtin_catalog(), key, joint_friction="creeping") != spec_hash(builtin_catalog(), key)
+    crept = moved(front(creep, DRAWER), 0.9)
+    assert crept > 10 * HOLD_BOUND[DRAWER]
+    assert crept == pytest.approx(moved(front(high_variants, DRAWER, before=True), 0.9), rel=1e-9)
+
+
+def test_joint_friction_modes_are_checked_and_episodes_keep_theirs(rik, knob_recording: Path, tmp_path: Path) -> None:
+    """A bad mode, a folder of the other mode, and an episode replayed in variants of the other mode: one line each."""
+    import shutil
+
+    from conftest import SHORT_KNOB
+
+    out = tmp_path / "v"
+    r = rik("variants", "build", SHORT_KNOB, "--joint-friction", "sticky", "--out", str(out))
+    assert r.code == 2 and not out.exists()
+    assert r.err.strip() == "rik: error: --joint-friction 'sticky': not a joint-friction mode; valid modes are held, " \
+                            "creeping"
+    r = rik("variants", "build", SHORT_KNOB, "--joint-friction", "creeping", "--out", str(out))
+    assert r.code == 0 and "joint friction: creeping" in r.out, r.err
+    r = rik("variants", "build", SHORT_KNOB, "--joint-friction", "held", "--out", str(out))
+    assert r.code == 2
+    assert r.err.strip() == f"rik: error: {out}: this folder holds creeping joint friction variants, not held (its " \
+                            "joint_friction.json); build --joint-friction held variants into another --out folder"
+    (out / "joint_friction.json").write_text('{"joint_friction": 1}', encoding="utf-8")
+    r = rik("variants", "build", SHORT_KNOB, "--out", str(out))
+    assert r.code == 2 and r.err.strip() == f"rik: error: {out / 'joint_friction.json'}: field joint_friction 1: " \
+                                            "not a joint-friction mode; valid modes are held, creeping"
+    (out / "joint_friction.json").write_text('{"joint_friction": "creeping"}', encoding="utf-8")
+    [episode] = [d for d in (knob_recording / "episodes").iterdir() if (d / "meta.json").is_file()]
+    copy = shutil.copytree(episode, tmp_path / "episodes" / episode.name)
+    r = rik("replay", str(copy), "--variants", str(out))
+    assert r.code == 2
+    assert r.err.strip() == f"rik: error: {copy / 'meta.json'}: field 'joint_friction': held, but {out} holds variants " \
+                            "whose joint friction is creeping (pass --variants with a held folder)"

@@ -159,15 +159,21 @@ def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g
               help="Handle collision: coacd (its CoACD hulls) or hull (its single convex hull, the baseline). "
                    "Default: the --out folder's mode (its collision.json), coacd for a new folder. Keep hull "
                    "builds in their own folder.")] = None,
+          joint_friction: Annotated[str | None, typer.Option(
+              "--joint-friction", metavar="held|creeping", show_default=False,
+              help="How the fronts' joint friction holds: held (rik's: a front loaded below breakaway stays put) or "
+                   "creeping (MuJoCo's default impedance: it creeps at mm/s; the fidelity ablation's other side). "
+                   "Default: the --out folder's mode (its joint_friction.json), held for a new folder.")] = None,
           catalog: CatalogOption = None) -> None:
     """Build variants into --out/<id>/ (model.xml, scene.xml, meshes/, report.json); valid ones are skipped."""
-    from rik.combinator.build import MANIFEST, build_variants, resolve_collision
+    from rik.combinator.build import JOINT_FRICTION, MANIFEST, build_variants, resolve_collision
     from rik.paths import check_folder
     from rik.registry.ids import parse_variant_id
     from rik.registry.load import load_catalog
 
     check_folder(out, "--out")
     collision = resolve_collision(out, collision)  # a bad mode or a folder of the other mode: fail first
+    joint_friction = JOINT_FRICTION.resolve(out, joint_friction)
     cat = load_catalog(overlays(catalog))
     filters = any((base, handle_type, handle, preset))
     if ids and (everything or filters):
@@ -191,13 +197,15 @@ def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g
                 progress.console.print(f"{built} assets built into the cache first")
 
         results = build_variants(cat, keys, out, workers=workers, overlays=overlays(catalog), force=force,
-                                 on_result=advance, on_assets=assets_done, collision=collision)
+                                 on_result=advance, on_assets=assets_done, collision=collision,
+                                 joint_friction=joint_friction)
     rejected = [r for r in results if r.status == "rejected"]
     counts = {s: sum(r.status == s for r in results) for s in ("built", "skipped")}
     for r in rejected:
         con.print(f"[red]rejected[/] {r.id}: check {r.failed_check}: {r.reason}")
     con.print(f"{len(results)} variants: {counts['built'] + counts['skipped']} valid ({counts['built']} built, "
-              f"{counts['skipped']} already valid), {len(rejected)} rejected; handle collision: {collision}. "
+              f"{counts['skipped']} already valid), {len(rejected)} rejected; handle collision: {collision}, joint "
+              f"friction: {joint_friction}. "
               f"Manifest: {out / MANIFEST}")
     if rejected:
         if len(results) == 1:

@@ -11,7 +11,10 @@ A folder holds variants of one collision mode (:data:`rik.combinator.mjcf.COLLIS
 handle collides as its CoACD hulls, the default) or ``hull`` (as its single convex hull). The mode is part of a
 variant's spec hash and its report, and ``<out>/collision.json`` names the folder's mode, so anything that
 builds into the folder later (``rik record --variants``, ``rik bench`` ...) rebuilds with that mode. A folder
-without the marker is a ``coacd`` folder (every folder written before modes existed).
+without the marker is a ``coacd`` folder (every folder written before modes existed). Likewise a folder holds one
+joint-friction mode (:data:`rik.joints.mjcf.JOINT_FRICTION_MODES`): ``held`` (the default) or ``creeping``
+(MuJoCo's default friction impedance, the other side of the fidelity ablation), named by
+``<out>/joint_friction.json``. Both are :class:`FolderMode` s.
 """
 
 from __future__ import annotations
@@ -48,8 +51,6 @@ VARIANT_FILES = frozenset({"model.xml", "scene.xml", "meshes", "report.json"})
 VARIANT_FOLDER = MadeFolder("a variant rik built", lambda d: json_object(d / "report.json") is not None
                             and holds_only(d, VARIANT_FILES), "choose another --out")
 """A variant's folder: rebuilt, it is replaced, and only if it is a variant (its report.json, nothing else)."""
-COLLISION_MARKER = "collision.json"
-"""``<out>/collision.json``: ``{"collision": "<mode>"}``, the collision mode of every variant in ``<out>``."""
 COMBINATOR_DIR = Path(__file__).parent
 JOINTS_DIR = COMBINATOR_DIR.parent / "joints"
 """rik.joints: the joint model's MJCF mapping and laws, part of what decides a variant's files."""
@@ -112,9 +113,10 @@ def _code_digest() -> str:
     return source_digest(sorted(COMBINATOR_DIR.glob("*.py")) + sorted(JOINTS_DIR.glob("*.py")))
 
 
-def spec_identity(catalog: Catalog, key: VariantKey, collision: str = "coacd") -> dict[str, object]:
-    """Everything that decides a variant's files: the catalog entries, the asset keys, the collision mode, the
-    combinator's code and the library versions."""
+def spec_identity(catalog: Catalog, key: VariantKey, collision: str = "coacd",
+                  joint_friction: str = "held") -> dict[str, object]:
+    """Everything that decides a variant's files: the catalog entries, the asset keys, the collision and
+    joint-friction modes, the combinator's code and the library versions."""
     from rik.assets.build import asset_key
 
     unit, handle = catalog.base_unit(key.base), catalog.handle(key.handle)
@@ -125,59 +127,118 @@ def spec_identity(catalog: Catalog, key: VariantKey, collision: str = "coacd") -
             "preset": catalog.preset(key.preset).model_dump(mode="json"),
             "finishes": [catalog.finishes[f].model_dump(mode="json") for f in finishes],
             "assets": [asset_key(catalog, key.handle), asset_key(catalog, key.base)], "collision": collision,
+            "joint_friction": joint_friction,
             "code": _code_digest(), "versions": _versions()}
 
 
-def spec_hash(catalog: Catalog, key: VariantKey, collision: str = "coacd") -> str:
+def spec_hash(catalog: Catalog, key: VariantKey, collision: str = "coacd", joint_friction: str = "held") -> str:
     from rik.assets.cache import content_key
 
-    return content_key(spec_identity(catalog, key, collision))
+    return content_key(spec_identity(catalog, key, collision, joint_friction))
 
 
-# ---- collision mode of a folder ---------------------------------------------------------------------------------
+def folder_spec_hash(catalog: Catalog, key: VariantKey, out: Path) -> str:
+    """The spec hash a variant built into the folder ``out`` has (in the folder's modes)."""
+    return spec_hash(catalog, key, resolve_collision(out), JOINT_FRICTION.resolve(out))
+
+
+# ---- modes of a folder ------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class FolderMode:
+    """A build mode every variant of a folder shares, named by a marker file ``<out>/<marker>``
+    (``{"<field>": "<mode>"}``), so that anything building into the folder later builds in its mode."""
+
+    marker: str
+    field: str
+    modes: tuple[str, ...]
+    default: str
+    option: str
+    """The command-line option that chooses it (for messages)."""
+    always_mark: bool = False
+    """Write the marker for the default mode too (collision: every folder built since modes exist has one)."""
+
+    def check(self, mode: str, what: str | None = None) -> str:
+        """``mode`` when it is one of :attr:`modes`, else a :class:`RikError` naming the valid ones."""
+        if mode not in self.modes:
+            raise RikError(f"{what or self.option} {mode!r}: not a {self.field.replace('_', '-')} mode; valid modes "
+                           f"are {', '.join(self.modes)}")
+        return mode
+
+    def of_folder(self, out: Path) -> str | None:
+        """The mode the folder's marker names; without it the default when the folder holds variants (written
+        before the mode existed), None when it holds none."""
+        marker = out / self.marker
+        if not marker.exists():
+            return self.default if next(out.glob("*/report.json"), None) is not None else None
+        try:
+            mode = json.loads(marker.read_text(encoding="utf-8"))[self.field]
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise RikError(f"{marker}: unreadable {self.field.replace('_', ' ')} marker ({type(exc).__name__}); it "
+                           f"must hold " + " or ".join(f'{{"{self.field}": "{m}"}}' for m in self.modes)) from None
+        return self.check(mode, f"{marker}: field {self.field}")
+
+    def resolve(self, out: Path, mode: str | None = None) -> str:
+        """The mode to build into ``out`` with: ``mode`` when given (it must match the folder's marker, if any),
+        else the folder's (the default for a folder without a marker)."""
+        marked = self.of_folder(out)
+        if mode is None:
+            return marked or self.default
+        self.check(mode)
+        if marked is not None and marked != mode:
+            raise RikError(f"{out}: this folder holds {marked} {self.field.replace('_', ' ')} variants, not {mode} "
+                           f"(its {self.marker}); build {self.option} {mode} variants into another --out folder")
+        return mode
+
+    def mark(self, out: Path, mode: str) -> None:
+        """Write the marker naming the folder's mode where the folder does not say it yet (a mode that is not
+        always marked needs no marker for its default)."""
+        from rik.paths import write_atomic
+
+        said = self.of_folder(out) if self.always_mark or (out / self.marker).exists() else self.default
+        if said != mode:
+            out.mkdir(parents=True, exist_ok=True)
+            write_atomic(out / self.marker, json.dumps({self.field: mode}) + "\n")
+
+
+def _collision_mode() -> FolderMode:
+    from rik.combinator.mjcf import COLLISION_MODES, DEFAULT_COLLISION
+
+    return FolderMode("collision.json", "collision", COLLISION_MODES, DEFAULT_COLLISION, "--collision",
+                      always_mark=True)
+
+
+def _joint_friction_mode() -> FolderMode:
+    from rik.joints.mjcf import DEFAULT_JOINT_FRICTION, JOINT_FRICTION_MODES
+
+    return FolderMode("joint_friction.json", "joint_friction", tuple(JOINT_FRICTION_MODES), DEFAULT_JOINT_FRICTION,
+                      "--joint-friction")
+
+
+COLLISION = _collision_mode()
+"""``<out>/collision.json``: the handles' collision mode of every variant in ``<out>``."""
+JOINT_FRICTION = _joint_friction_mode()
+"""``<out>/joint_friction.json``: how the fronts' joint friction holds in every variant of ``<out>``."""
+COLLISION_MARKER = COLLISION.marker
+
+
 def check_collision(mode: str, what: str = "--collision") -> str:
     """``mode`` when it is a collision mode, else a :class:`RikError` naming the valid ones."""
-    from rik.combinator.mjcf import COLLISION_MODES
-
-    if mode not in COLLISION_MODES:
-        raise RikError(f"{what} {mode!r}: not a collision mode; valid modes are {', '.join(COLLISION_MODES)}")
-    return mode
+    return COLLISION.check(mode, what)
 
 
 def folder_collision(out: Path) -> str | None:
-    """The collision mode recorded in ``<out>/collision.json``; without it ``coacd`` when the folder holds
-    variants (written before modes existed), None when it holds none."""
-    marker = out / COLLISION_MARKER
-    if not marker.exists():
-        return "coacd" if next(out.glob("*/report.json"), None) is not None else None
-    try:
-        mode = json.loads(marker.read_text(encoding="utf-8"))["collision"]
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise RikError(f"{marker}: unreadable collision marker ({type(exc).__name__}); it must hold "
-                       '{"collision": "coacd"} or {"collision": "hull"}') from None
-    return check_collision(mode, f"{marker}: field collision")
+    """The collision mode recorded in ``<out>/collision.json`` (:meth:`FolderMode.of_folder`)."""
+    return COLLISION.of_folder(out)
 
 
 def resolve_collision(out: Path, collision: str | None = None) -> str:
-    """The collision mode to build into ``out`` with: ``collision`` when given (it must match the folder's
-    marker, if any), else the folder's mode (``coacd`` for a folder without a marker)."""
-    marked = folder_collision(out)
-    if collision is None:
-        return marked or "coacd"
-    check_collision(collision)
-    if marked is not None and marked != collision:
-        raise RikError(f"{out}: this folder holds {marked} collision variants, not {collision} (its "
-                       f"{COLLISION_MARKER}); build --collision {collision} variants into another --out folder")
-    return collision
+    """The collision mode to build into ``out`` with (:meth:`FolderMode.resolve`)."""
+    return COLLISION.resolve(out, collision)
 
 
 def mark_collision(out: Path, collision: str) -> None:
     """Write ``<out>/collision.json`` naming the folder's mode (only when absent or different)."""
-    from rik.paths import write_atomic
-
-    if folder_collision(out) != collision:
-        out.mkdir(parents=True, exist_ok=True)
-        write_atomic(out / COLLISION_MARKER, json.dumps({"collision": collision}) + "\n")
+    COLLISION.mark(out, collision)
 
 
 # ---- assemble and check -----------------------------------------------------------------------------------------
@@ -197,15 +258,16 @@ def _asset(catalog: Catalog, asset_id: str, cache: AssetCache) -> Asset:
 
 
 def assemble_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None = None,
-                     stop_at_failure: bool = True, collision: str = "coacd") -> CheckedVariant:
-    """Assemble a variant's spec in memory (handles colliding as ``collision`` says) and run the checks of its
-    geometry (nothing compiled yet)."""
+                     stop_at_failure: bool = True, collision: str = "coacd",
+                     joint_friction: str = "held") -> CheckedVariant:
+    """Assemble a variant's spec in memory (handles colliding as ``collision`` says, joint friction holding as
+    ``joint_friction`` says) and run the checks of its geometry (nothing compiled yet)."""
     from rik.assets.cache import AssetCache
     from rik.combinator.mjcf import variant_spec
 
     cache = cache or AssetCache()
     variant = variant_spec(catalog, key, _asset(catalog, key.handle, cache), _asset(catalog, key.base, cache),
-                           collision)
+                           collision, joint_friction)
     checks: list[CheckResult] = []
     for check in GEOMETRY_CHECKS:
         checks.append(check(catalog, variant))
@@ -215,11 +277,12 @@ def assemble_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None
 
 
 def check_variant(catalog: Catalog, key: VariantKey, cache: AssetCache | None = None,
-                  stop_at_failure: bool = True, collision: str = "coacd") -> CheckedVariant:
+                  stop_at_failure: bool = True, collision: str = "coacd",
+                  joint_friction: str = "held") -> CheckedVariant:
     """Assemble a variant in memory and run its checks (geometry first, then the compiled model's)."""
     import mujoco
 
-    assembled = assemble_variant(catalog, key, cache, stop_at_failure, collision)
+    assembled = assemble_variant(catalog, key, cache, stop_at_failure, collision, joint_friction)
     variant, checks = assembled.variant, assembled.checks
     if assembled.failed is not None and stop_at_failure:
         return assembled
@@ -349,19 +412,22 @@ def is_current(directory: Path, digest: str) -> bool:
 
 
 def build_variant(catalog: Catalog, key: VariantKey, out: Path = DEFAULT_OUT, cache: AssetCache | None = None,
-                  force: bool = False, collision: str | None = None) -> VariantResult:
+                  force: bool = False, collision: str | None = None,
+                  joint_friction: str | None = None) -> VariantResult:
     """Build one variant into ``out/<id>`` unless it is already there and current; a variant that fails a check
-    is not written (the result says which check and why). ``collision``: the handle's collision mode, by
-    default the folder's (:func:`resolve_collision`)."""
+    is not written (the result says which check and why). ``collision`` and ``joint_friction``: the folder's
+    modes by default (:data:`COLLISION`, :data:`JOINT_FRICTION`)."""
     t0 = time.perf_counter()
     collision = resolve_collision(out, collision)
-    digest = spec_hash(catalog, key, collision)
+    joint_friction = JOINT_FRICTION.resolve(out, joint_friction)
+    digest = spec_hash(catalog, key, collision, joint_friction)
     directory = out / key.id
     if not force and is_current(directory, digest):
         return VariantResult(key.id, "skipped", digest, time.perf_counter() - t0)
     check_replaceable(directory, VARIANT_FOLDER)  # before any work: a folder there that is no variant stays
     mark_collision(out, collision)
-    checked = check_variant(catalog, key, cache, collision=collision)
+    JOINT_FRICTION.mark(out, joint_friction)
+    checked = check_variant(catalog, key, cache, collision=collision, joint_friction=joint_friction)
     failed = checked.failed
     if failed is not None:
         return VariantResult(key.id, "rejected", digest, time.perf_counter() - t0, failed.name, failed.reason)
@@ -373,11 +439,12 @@ def build_variant(catalog: Catalog, key: VariantKey, out: Path = DEFAULT_OUT, ca
 
 # ---- many variants ----------------------------------------------------------------------------------------------
 def _build_one(catalog: Catalog, variant: str, out: Path, cache_root: Path, force: bool,
-               collision: str) -> VariantResult:
+               collision: str, joint_friction: str) -> VariantResult:
     from rik.assets.cache import AssetCache
     from rik.registry.ids import parse_variant_id
 
-    return build_variant(catalog, parse_variant_id(catalog, variant), out, AssetCache(cache_root), force, collision)
+    return build_variant(catalog, parse_variant_id(catalog, variant), out, AssetCache(cache_root), force, collision,
+                         joint_friction)
 
 
 def check_manifest(out: Path) -> None:
@@ -435,15 +502,16 @@ def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEF
                    overlays: Sequence[Path] = (), cache: AssetCache | None = None, force: bool = False,
                    on_result: Callable[[VariantResult], None] | None = None,
                    on_assets: Callable[[int], None] | None = None,
-                   collision: str | None = None) -> list[VariantResult]:
+                   collision: str | None = None, joint_friction: str | None = None) -> list[VariantResult]:
     """Build many variants (in ``workers`` processes), then record them in the manifest. Their assets are
-    built first (once each, also in parallel). ``on_result`` is called as each variant finishes. ``collision``:
-    the handles' collision mode, by default the folder's (:func:`resolve_collision`)."""
+    built first (once each, also in parallel). ``on_result`` is called as each variant finishes. ``collision`` and
+    ``joint_friction``: the folder's modes by default (:data:`COLLISION`, :data:`JOINT_FRICTION`)."""
     from rik.assets.build import build_assets
     from rik.assets.cache import AssetCache
     from rik.assets.workers import map_ids
 
     collision = resolve_collision(out, collision)
+    joint_friction = JOINT_FRICTION.resolve(out, joint_friction)
     check_manifest(out)
     cache = cache or AssetCache()
     needed = list(dict.fromkeys([k.handle for k in keys] + [k.base for k in keys]))
@@ -451,7 +519,9 @@ def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEF
     if on_assets:
         on_assets(sum(r.status != "cached" for r in assets))
     mark_collision(out, collision)
-    fn = functools.partial(_build_one, out=out.resolve(), cache_root=cache.root, force=force, collision=collision)
+    JOINT_FRICTION.mark(out, joint_friction)
+    fn = functools.partial(_build_one, out=out.resolve(), cache_root=cache.root, force=force, collision=collision,
+                           joint_friction=joint_friction)
     done: dict[str, VariantResult] = {}
     pending: list[VariantResult] = []
     order = sorted(keys, key=lambda k: (k.handle, k.base, k.preset))  # handle by handle: each loads once

@@ -11,9 +11,11 @@ from typing import TYPE_CHECKING, Any
 
 from rik.combinator.build import (
     DEFAULT_OUT,
+    JOINT_FRICTION,
     assemble_variant,
     check_collision,
     check_variant,
+    folder_spec_hash,
     is_current,
     make_report,
     materialise,
@@ -76,7 +78,8 @@ def validate_variant(catalog: Catalog, target: str, out: Path = DEFAULT_OUT) -> 
         if (out / key.id / "model.xml").is_file():
             file = out / key.id / "model.xml"
         else:
-            checked = check_variant(catalog, key, stop_at_failure=False, collision=resolve_collision(out))
+            checked = check_variant(catalog, key, stop_at_failure=False, collision=resolve_collision(out),
+                                    joint_friction=JOINT_FRICTION.resolve(out))
             return Validation(key, checked.checks, "memory", [f"{out / key.id} does not exist: checked in memory"])
     try:
         model = mujoco.MjModel.from_xml_path(str(file))
@@ -87,11 +90,14 @@ def validate_variant(catalog: Catalog, target: str, out: Path = DEFAULT_OUT) -> 
     directory = file.parent
     notes = []
     collision = check_collision(info.get("collision", "coacd"), f"{file}: rik.variant field collision")
-    if not is_current(directory, spec_hash(catalog, key, collision)):
+    joint_friction = JOINT_FRICTION.check(info.get("joint_friction", JOINT_FRICTION.default),
+                                          f"{file}: rik.variant field joint_friction")
+    if not is_current(directory, spec_hash(catalog, key, collision, joint_friction)):
         notes.append(f"{directory} is stale or damaged: its report's spec hash or file hashes differ from what the "
                      "catalog builds now (rik variants build rebuilds it)")
     # the layout and the geometry checks
-    assembled = assemble_variant(catalog, key, stop_at_failure=False, collision=collision)
+    assembled = assemble_variant(catalog, key, stop_at_failure=False, collision=collision,
+                                 joint_friction=joint_friction)
     loaded = CheckResult("compiles", True, f"{file.name} loads with mujoco.MjModel.from_xml_path")
     ctx = ModelContext(assembled.variant, assembled.variant.unit, model, mujoco.MjData(model))
     return Validation(key, [*assembled.checks, loaded, *run_model_checks(ctx, stop_at_failure=False)], "files",
@@ -113,10 +119,11 @@ def render_variant(catalog: Catalog, key: VariantKey, png: Path, *, out: Path = 
     directory = out / key.id
     with tempfile.TemporaryDirectory(prefix="rik-show-") as tmp:
         if not (directory / "scene.xml").is_file():
-            collision = resolve_collision(out)
-            checked = check_variant(catalog, key, stop_at_failure=False, collision=collision)
+            collision, joint_friction = resolve_collision(out), JOINT_FRICTION.resolve(out)
+            checked = check_variant(catalog, key, stop_at_failure=False, collision=collision,
+                                    joint_friction=joint_friction)
             directory = Path(tmp) / key.id
-            materialise(checked, directory, make_report(catalog, checked, spec_hash(catalog, key, collision), 0.0),
+            materialise(checked, directory, make_report(catalog, checked, folder_spec_hash(catalog, key, out), 0.0),
                         Path(tmp))
         model = mujoco.MjModel.from_xml_path(str(directory / "scene.xml"))
         model.vis.global_.offwidth, model.vis.global_.offheight = max(width, 64), max(height, 64)

@@ -16,7 +16,9 @@ Layout of a model (MuJoCo Menagerie's conventions):
   (``effect.model_dump()``), which rik's simulator applies each step (:class:`rik.joints.runtime.RuntimeEffects`).
 
 The handle's collision is its CoACD hulls (collision mode ``coacd``, the default) or its single convex hull
-(mode ``hull``: the baseline of the fidelity ablation); base-unit parts are the same in both modes.
+(mode ``hull``: the baseline of the fidelity ablation); base-unit parts are the same in both modes. The fronts'
+joint friction holds (mode ``held``, the default) or creeps as MuJoCo's defaults let it (``creeping``: the other
+side of that ablation; :data:`rik.joints.mjcf.JOINT_FRICTION_MODES`).
 
 Boards are box geoms (exact). Handle meshes are written as STL files under ``meshes/`` and referenced by
 relative paths. Masses and inertias are explicit: boards from their volume and a density per finish kind,
@@ -32,7 +34,13 @@ from typing import TYPE_CHECKING, Any
 
 from rik.assets.base_units import Panel
 from rik.combinator.placement import HandlePlacement, front_motion, place_handle
-from rik.joints.mjcf import add_effect_actuators, add_front_joint, add_joint_classes, joint_model
+from rik.joints.mjcf import (
+    DEFAULT_JOINT_FRICTION,
+    add_effect_actuators,
+    add_front_joint,
+    add_joint_classes,
+    joint_model,
+)
 from rik.registry.geometry import vec3
 from rik.registry.ids import VariantKey
 
@@ -92,6 +100,8 @@ class VariantModel:
     """Inset handles: the recess cut into each front, (x0, y0, x1, y1) in the mount frame and its depth, m."""
     collision: str = DEFAULT_COLLISION
     """The handle's collision mode (:data:`COLLISION_MODES`)."""
+    joint_friction: str = DEFAULT_JOINT_FRICTION
+    """How the fronts' joint friction holds (:data:`rik.joints.mjcf.JOINT_FRICTION_MODES`)."""
 
     @property
     def hulls(self) -> int:
@@ -100,6 +110,7 @@ class VariantModel:
     def info(self) -> dict[str, Any]:
         return {"id": self.key.id, "base_unit": self.key.base, "handle": self.key.handle,
                 "handle_type": self.handle_type, "preset": self.key.preset, "collision": self.collision,
+                "joint_friction": self.joint_friction,
                 "fronts": [{"id": f.id, "kind": f.kind, "motion": f.motion, "joint": f.id,
                             "handle_body": f"{f.id}/handle", "grasp_site": f"{f.id}/grasp",
                             "placement": f.placement.rule, "edge": f.placement.edge,
@@ -298,9 +309,10 @@ def _mesh_inertial(catalog: Catalog, asset: Asset, part_name: str, finish: str) 
 
 
 def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_asset: Asset,
-                 collision: str = DEFAULT_COLLISION) -> VariantModel:
+                 collision: str = DEFAULT_COLLISION, joint_friction: str = DEFAULT_JOINT_FRICTION) -> VariantModel:
     """The MjSpec of one variant (not compiled), its handles colliding as ``collision`` says
-    (:data:`COLLISION_MODES`)."""
+    (:data:`COLLISION_MODES`), its fronts' friction holding as ``joint_friction`` says
+    (:data:`rik.joints.mjcf.JOINT_FRICTION_MODES`)."""
     import mujoco
     import numpy as np
 
@@ -324,7 +336,7 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
     classes["visual"].geom.conaffinity = 0
     classes["visual"].geom.group = 2
     classes["collision"].geom.group = 3
-    joint_classes = add_joint_classes(spec, preset, catalog.joint_types(unit))
+    joint_classes = add_joint_classes(spec, preset, catalog.joint_types(unit), joint_friction)
     joint_models = {t.value: joint_model(preset.for_joint(t), t) for t in catalog.joint_types(unit)}
 
     files: dict[str, bytes] = {}
@@ -381,7 +393,8 @@ def variant_spec(catalog: Catalog, key: VariantKey, handle_asset: Asset, base_as
                        size=[0.004, 0.004, 0.004], rgba=[1.0, 0.2, 0.2, 0.6])
         fronts.append(FrontLayout(front.id, front.kind, front_motion(front), placement, front.joint.range,
                                   jmodel.runtime_effects))
-    model = VariantModel(key, spec, files, vertices, fronts, handle_type.value, bounds, unit, recess, collision)
+    model = VariantModel(key, spec, files, vertices, fronts, handle_type.value, bounds, unit, recess, collision,
+                         joint_friction)
     spec.add_text(name="rik.variant", data=json.dumps(model.info(), separators=(",", ":")))
     return model
 

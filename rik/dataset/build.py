@@ -515,7 +515,8 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
     result.constant = checks.get("constant", {})
     data = {"format": 1, "spec_hash": plan.spec_hash, "source": plan.source,
             "spec": plan.spec.model_dump(mode="json"), "versions": library_versions("mujoco", "lerobot", "mitsuba"),
-            "collision": plan.collision, "variants": plan.variants, "rejected_variants": plan.rejected,
+            "collision": plan.collision,
+            "joint_friction": plan.joint_friction, "variants": plan.variants, "rejected_variants": plan.rejected,
             "counts": {**plan.summary(), "frames": result.dataset_frames, "fps": fps},
             "outcomes": result.outcomes, "export": export_settings(plan.spec),
             "files": file_checksums(merged)}

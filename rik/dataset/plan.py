@@ -73,10 +73,11 @@ class Plan:
     source: str
     """The spec's file, as messages name it."""
     variants: dict[str, str]
-    """Variant id -> its content hash (the combinator's spec hash, with the collision mode)."""
+    """Variant id -> its content hash (the combinator's spec hash, with the collision and joint-friction modes)."""
     rejected: dict[str, str]
     """Selected pairings whose variant fails a check -> the reason; left out."""
     collision: str
+    joint_friction: str
     episodes: list[EpisodeUnit] = field(default_factory=list)
     renders: list[RenderUnit] = field(default_factory=list)
     shards: list[ShardUnit] = field(default_factory=list)
@@ -230,7 +231,7 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
               workers: int = 1, overlays: Sequence[Path] = ()) -> Plan:
     """Expand ``spec``: select its variants, build the ones missing into ``variants_dir`` (their checks decide
     which can be simulated), and lay out its units. Bad input raises one line naming ``source`` and the field."""
-    from rik.combinator.build import rejected_variants, resolve_collision, spec_hash
+    from rik.combinator.build import JOINT_FRICTION, folder_spec_hash, rejected_variants, resolve_collision
     from rik.registry.ids import parse_variant_id
 
     check_robot(catalog, spec, source)
@@ -250,8 +251,8 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
         raise RikError(f"{source}, field 'variants': every selected variant fails its checks (the first, "
                        f"{first[0]}: {first[1]})")
     keys = {v: parse_variant_id(catalog, v) for v in kept}
-    plan = Plan(spec, hash_of_spec(spec), source, {v: spec_hash(catalog, k, collision) for v, k in keys.items()},
-                rejected, collision)
+    hashes = {v: folder_spec_hash(catalog, k, variants_dir) for v, k in keys.items()}
+    plan = Plan(spec, hash_of_spec(spec), source, hashes, rejected, collision, JOINT_FRICTION.resolve(variants_dir))
     if drawn:
         lay_out_units(plan, {}, [d for d in drawn if d[0] not in rejected])
     else:

@@ -241,6 +241,7 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
         meta = EpisodeMeta(
             id=episode, variant=info["id"], base_unit=info["base_unit"], handle=info["handle"],
             handle_type=info["handle_type"], preset=info["preset"], collision=info.get("collision", "coacd"),
+            joint_friction=info.get("joint_friction", "held"),
             front=s.front.id, operator=operator,
             operator_kind=operator_kind, seed=seed, fps=s.control_fps, timestep=float(s.model.opt.timestep),
             steps=recorder.steps, state_size=len(table.column("state")[0]), outcome=classify(s.opening()),

@@ -55,6 +55,11 @@ def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: Episo
     if collision != meta.collision:
         raise EpisodeError(f"{Path(directory) / 'meta.json'}: field 'collision': {meta.collision}, but {variants} "
                            f"holds {collision} collision variants (pass --variants with a {meta.collision} folder)")
+    friction = scene.info.get("joint_friction", "held")
+    if friction != meta.joint_friction:
+        raise EpisodeError(f"{Path(directory) / 'meta.json'}: field 'joint_friction': {meta.joint_friction}, but "
+                           f"{variants} holds variants whose joint friction is {friction} (pass --variants with a "
+                           f"{meta.joint_friction} folder)")
     import mujoco
 
     size = mujoco.mj_stateSize(scene.model, mujoco.mjtState.mjSTATE_INTEGRATION)

@@ -72,6 +72,18 @@ form is clamped at two time steps, :data:`rik.combinator.mjcf.TIMESTEP`; MuJoCo'
 at d = 0.9999 is another 5 times smaller: what remains is proportional to the load over the joint's inertia, and
 the lightest fronts, the flaps (0.15 kg·m² about their hinge, a fifth of a door's), held at 90 % of the high
 preset's 12 N·m crept at 0.00104 °/s with 5 ms and 0.00083 °/s with 4 ms (benchmarks/joint_fidelity.py)."""
+MUJOCO_FRICTION_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
+"""MuJoCo's default ``solimpfriction``: what a joint gets when nothing sets it."""
+MUJOCO_FRICTION_SOLREF = (0.02, 1.0)
+"""MuJoCo's default ``solreffriction`` (a 20 ms time constant)."""
+JOINT_FRICTION_MODES: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {
+    "held": (FRICTION_SOLIMP, FRICTION_SOLREF),
+    "creeping": (MUJOCO_FRICTION_SOLIMP, MUJOCO_FRICTION_SOLREF)}
+"""How a front's joint friction holds (``solimpfriction``, ``solreffriction``): ``held`` (rik's, the default: a
+front loaded below breakaway stays put) or ``creeping`` (MuJoCo's defaults, what rik built before: such a front
+creeps at mm/s). ``creeping`` exists for the fidelity ablation (docs/policies.md); the friction levels, damping
+and effects are the same in both."""
+DEFAULT_JOINT_FRICTION = "held"
 
 
 @dataclass(frozen=True)
@@ -116,11 +128,13 @@ def joint_class(preset_id: str, joint_type: JointType | str) -> str:
     return f"{preset_id}_{getattr(joint_type, 'value', joint_type)}"
 
 
-def add_joint_classes(spec: mujoco.MjSpec, preset: ResistancePreset,
-                      joint_types: list[JointType]) -> dict[str, mujoco.MjsDefault]:
-    """Add one default class per joint type holding ``preset``'s resistance; returns the classes by type."""
+def add_joint_classes(spec: mujoco.MjSpec, preset: ResistancePreset, joint_types: list[JointType],
+                      friction: str = DEFAULT_JOINT_FRICTION) -> dict[str, mujoco.MjsDefault]:
+    """Add one default class per joint type holding ``preset``'s resistance, its friction holding as
+    ``friction`` says (:data:`JOINT_FRICTION_MODES`); returns the classes by type."""
     import mujoco
 
+    solimp, solref = JOINT_FRICTION_MODES[friction]
     classes: dict[str, mujoco.MjsDefault] = {}
     for joint_type in joint_types:
         model = joint_model(preset.for_joint(joint_type), joint_type)
@@ -130,8 +144,8 @@ def add_joint_classes(spec: mujoco.MjSpec, preset: ResistancePreset,
         joint.damping[0] = model.damping
         joint.damping[1] = model.damping_quadratic
         joint.frictionloss = model.frictionloss
-        joint.solimp_friction = list(FRICTION_SOLIMP)
-        joint.solref_friction = list(FRICTION_SOLREF)
+        joint.solimp_friction = list(solimp)
+        joint.solref_friction = list(solref)
         joint.armature = model.armature
         joint.stiffness[0] = model.stiffness
         joint.springref = model.springref

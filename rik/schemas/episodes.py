@@ -47,6 +47,9 @@ class EpisodeMeta(Frozen):
     collision: Literal["coacd", "hull"] = "coacd"
     """The handle's collision mode in the simulator it was recorded in (``rik variants build --collision``);
     episodes recorded before modes existed are ``coacd``."""
+    joint_friction: Literal["held", "creeping"] = "held"
+    """How the front's joint friction held in that simulator (``rik variants build --joint-friction``); episodes
+    without the field are read as ``held``."""
     front: SimpleId
     operator: str = Field(description="strategy, device or policy name")
     operator_kind: Literal["strategy", "device", "policy"]

@@ -105,13 +105,13 @@ def handle_glb(catalog: Catalog, handle_id: str) -> bytes:
 def built_variant(catalog: Catalog, variants: Path, variant: str) -> tuple[str, Path, str]:
     """The canonical id, folder and spec hash of ``variant`` when it is built in ``variants`` and current, else a
     one-line RikError naming what builds it. Reads (and hashes) the variant's files; writes nothing."""
-    from rik.combinator.build import is_current, resolve_collision, spec_hash
+    from rik.combinator.build import folder_spec_hash, is_current
     from rik.paths import inside
     from rik.registry.ids import parse_variant_id
 
     key = parse_variant_id(catalog, variant)
     directory = inside(variants, key.id, what="variant id")
-    digest = spec_hash(catalog, key, resolve_collision(variants))
+    digest = folder_spec_hash(catalog, key, variants)
     if not is_current(directory, digest):
         state = "is not built" if not (directory / "report.json").exists() else "is out of date"
         raise RikError(f"variant {key.id} {state} in {variants}: open its station (/teleop/{key.id}) or run "
