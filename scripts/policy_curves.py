@@ -53,6 +53,17 @@ def _train_facts(policy: Path) -> dict[str, Any]:
     return facts
 
 
+def _simulator(work: Path, variants: str) -> str:
+    """The simulator an evaluation ran in, from its variants folder's modes: ``coacd`` or ``hull`` collision, and
+    ``, creeping joints`` where the joint friction creeps (a folder no longer there: by its name, held)."""
+    from rik.combinator.build import COLLISION, JOINT_FRICTION
+
+    folder = Path(variants) if Path(variants).is_absolute() else work / variants
+    collision = COLLISION.of_folder(folder) or ("hull" if "hull" in folder.name else "coacd")
+    friction = JOINT_FRICTION.of_folder(folder) or JOINT_FRICTION.default
+    return collision if friction == JOINT_FRICTION.default else f"{collision}, {friction} joints"
+
+
 def rows(work: Path) -> list[dict[str, Any]]:
     """One row per evaluation under ``work/eval`` (with its ``spec`` and ``episodes`` for :func:`table3`)."""
     out = []
@@ -66,9 +77,9 @@ def rows(work: Path) -> list[dict[str, Any]]:
         counts = {o: sum(e["outcome"] == o for e in episodes) for o in "FPS"}
         lo, hi = wilson(counts["S"], len(episodes))
         out.append({"label": spec.get("label") or operator, "folder": info_file.parent.name,
-                    "simulator": "hull" if "hull" in Path(spec["variants"]).name else "coacd",
+                    "simulator": _simulator(work, spec["variants"]),
                     "n": len(episodes), **counts, "rate": counts["S"] / len(episodes), "lo": lo, "hi": hi, **facts,
-                    "spec": spec, "episodes": episodes})
+                    "scripted": operator.startswith("strategy:"), "spec": spec, "episodes": episodes})
     return out
 
 
@@ -78,11 +89,11 @@ def table3(found: list[dict[str, Any]], out: Path) -> str | None:
     from rik.evaluation.evaluate import EvalSpec, write_tables
 
     coacd = [r for r in found if r["simulator"] == "coacd"]
-    learned = [r for r in coacd if "run" in r]
+    learned = [r for r in coacd if "run" in r and r["spec"]["split"] == "test"]
     if not learned:
         return None
     best = max(learned, key=lambda r: (r["S"], r.get("step", 0)))
-    same = [r for r in coacd if "run" not in r and r["spec"]["seed"] == best["spec"]["seed"]
+    same = [r for r in coacd if r["scripted"] and r["spec"]["seed"] == best["spec"]["seed"]
             and r["n"] == best["n"] and r["spec"]["split"] == best["spec"]["split"]]
     if not same:
         return None
@@ -143,7 +154,7 @@ def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[in
                     label=name)
     scripted: dict[float, list[str]] = {}
     for r in found:
-        if "run" not in r and r["simulator"] == "coacd":
+        if r["scripted"] and r["simulator"] == "coacd" and r["spec"]["split"] == "test":
             scripted.setdefault(round(100 * r["rate"], 1), []).append(str(r["label"]))
     for rate, labels in scripted.items():
         ax.axhline(rate, ls="--", color="grey", lw=1)
