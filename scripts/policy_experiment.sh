@@ -78,6 +78,24 @@ evaluate() {  # evaluate OPERATOR LABEL [VARIANTS]: the test split, seeds 1000..
   [ -f "$out/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2" --split test --seed 1000 \
     --episodes-per-cell "$PER_CELL" --videos 2 --workers "$WORKERS" --out "$out" --variants "${3:-variants}"
 }
+evaluate_val() {  # evaluate_val OPERATOR LABEL: the validation split (choosing settings), seeds 3000.., PER_CELL/2 per cell
+  local out="eval/$2-val"
+  [ -f "$out/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2-val" --split val --seed 3000 \
+    --episodes-per-cell $(( PER_CELL / 2 > 0 ? PER_CELL / 2 : 1 )) --videos 0 --workers "$WORKERS" --out "$out" \
+    --variants variants
+}
+chunked() {  # chunked POLICY FOLDER N_ACTION_STEPS [ENSEMBLE_COEFF]: a copy of a policy run with other chunking
+  [ -d "$2" ] && return
+  mkdir -p "$2.tmp"; cp -r "$1"/. "$2.tmp"/
+  python3 - "$2.tmp/config.json" "$3" "${4:-}" <<'PY'
+import json, sys
+path, steps, coeff = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+config = json.load(open(path))
+config["n_action_steps"], config["temporal_ensemble_coeff"] = steps, (float(coeff) if coeff else None)
+json.dump(config, open(path, "w"), indent=4)
+PY
+  mv "$2.tmp" "$2"
+}
 checkpoint() {  # checkpoint RUN STEP: the folder of a saved step (the nearest saved one at or below STEP)
   local saved
   saved=$(ls "runs/$1/checkpoints" | grep -E '^[0-9]+$' | awk -v s="$2" '$1 + 0 <= s + 0' | sort -n | tail -n 1)
@@ -141,6 +159,7 @@ if stage train; then
     train "act-plk-s$seed" plk $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # its type and mount flags alone
     train "act-plg-s$seed" plg $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"  # the action and grasp point from the gripper
     resume "act-plg-s$seed" "$STEPS"  # trained on after its comparison at 2/3 STEPS
+    resume "act-plg-s$seed" $(( STEPS * 4 / 3 ))  # and on again: it still climbed from 2/3 STEPS to STEPS
     train "act-plgc-s$seed" plgc $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # plg's recipe on demonstrations whose joints creep
   done
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
@@ -214,18 +233,24 @@ if stage eval; then
   # ACT's chunking at evaluation, the same weights: the whole chunk of 20, and one action with temporal ensembling
   for variant in "n20 20" "te1 1 0.01"; do
     set -- $variant
-    folder="chunking/act-pl-$1"
-    if [ ! -d "$folder" ]; then
-      mkdir -p "$folder"; cp -r "$(checkpoint act-pl "$STEPS")"/. "$folder"/
-      python3 - "$folder/config.json" "$2" "${3:-}" <<'PY'
-import json, sys
-path, steps, coeff = sys.argv[1], int(sys.argv[2]), sys.argv[3]
-config = json.load(open(path))
-config["n_action_steps"], config["temporal_ensemble_coeff"] = steps, (float(coeff) if coeff else None)
-json.dump(config, open(path, "w"), indent=4)
-PY
-    fi
-    evaluate "$folder" "act-pl-$STEPS-$1"
+    chunked "$(checkpoint act-pl "$STEPS")" "chunking/act-pl-$1" "$2" "${3:-}"
+    evaluate "chunking/act-pl-$1" "act-pl-$STEPS-$1"
+  done
+  # the gripper frame's actions per prediction: chosen on the validation split at STEPS, then the test split with 15
+  # (the choice) at STEPS and, trained on, at 4/3 STEPS and over the mean of its STEPS .. 4/3 STEPS weights
+  for run in act-plg-s0 act-plg-s1; do
+    for n in 2 5 10 15 20; do
+      chunked "$(checkpoint "$run" "$STEPS")" "chunking/$run-$STEPS-n$n" "$n"
+      evaluate_val "chunking/$run-$STEPS-n$n" "$run-$STEPS-n$n"
+    done
+    evaluate "chunking/$run-$STEPS-n15" "$run-$STEPS-n15"
+    later=$(( STEPS * 4 / 3 ))
+    evaluate "$(checkpoint "$run" "$later")" "$run-$later"
+    chunked "$(checkpoint "$run" "$later")" "chunking/$run-$later-n15" 15
+    evaluate "chunking/$run-$later-n15" "$run-$later-n15"
+    average "$run" "$STEPS" "$later"
+    chunked "averaged/$run-$STEPS-$later" "chunking/$run-mean-$STEPS-$later-n15" 15
+    evaluate "chunking/$run-mean-$STEPS-$later-n15" "$run-mean-$STEPS-$later-n15"
   done
   evaluate "$(checkpoint act-pl "$SHORT_STEPS")" "act-pl-$SHORT_STEPS"
   for seed in 0 1; do
