@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The experiment of docs/policies.md: demonstrations built from the specs of examples/policies (the planned
 # strategy, whose grasps come from the catalog's visual meshes; with and without DART-style action noise; in CoACD
-# and convex-hull collision variants) -> state-only LeRobot datasets -> ACT trained with lerobot-train on the CPU,
+# and convex-hull collision variants; in joints that hold and joints that creep) -> state-only LeRobot datasets -> ACT trained with lerobot-train on the CPU,
 # a checkpoint every STEPS/30 steps -> every chosen checkpoint evaluated with rik eval on the test split (unseen
 # handles) beside the scripted strategy on the same episodes -> learning curves and tables (scripts/policy_curves.py).
 #
@@ -23,7 +23,7 @@ SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, ma
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
 WORKERS=${WORKERS:-2}
 STAGES=${STAGES:-data train eval report}
-DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls plk plt plg plgc}  # the data sets the data stage builds
+DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls plk plt plg plgc plgh}  # the data sets the data stage builds
 IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
 DEVICE=${DEVICE:-cpu}          # lerobot-train's --policy.device (cuda on a GPU machine)
 LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers (data-loading processes; 12 for images on a GPU)
@@ -119,6 +119,7 @@ if stage data; then
     "${RIK[@]}" variants build drawer-chest-80__two_point-bow-128__normal --joint-friction creeping --out variants-creep
   fi
   build plgc planned-360-gripper variants-creep
+  build plgh planned-360-gripper variants  # its control: plg's content (held joints) in plgc's episode order
   # the main data set's episodes with the action in the handle frame (what examples/policies/planned-360-handle.yaml
   # builds, without recording the same episodes again), and with the handle's shape in the front's state
   # (examples/policies/planned-360-shape.yaml; plk: its type and mount flags alone), and with the action and the
@@ -161,7 +162,10 @@ if stage train; then
     resume "act-plg-s$seed" "$STEPS"  # trained on after its comparison at 2/3 STEPS
     resume "act-plg-s$seed" $(( STEPS * 4 / 3 ))  # and on again: it still climbed from 2/3 STEPS to STEPS
     train "act-plgc-s$seed" plgc $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # plg's recipe on demonstrations whose joints creep
+    train "act-plgh-s$seed" plgh $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # and on the held control
   done
+  train act-plg-s2 plg $(( STEPS / 3 )) 2 "${ACT[@]}"  # a third seed of each joint arm
+  train act-plgc-s2 plgc $(( STEPS / 3 )) 2 "${ACT[@]}"
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
   if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
   # the image run (IMAGES=1): the same recipe with both cameras; ResNet-18 from scratch (no ImageNet weights
@@ -219,7 +223,9 @@ if stage eval; then
     evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))"
     evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))" variants-creep
     evaluate "$(checkpoint "act-plg-s$seed" $(( STEPS / 3 )))" "act-plg-s$seed-$(( STEPS / 3 ))" variants-creep
+    evaluate "$(checkpoint "act-plgh-s$seed" $(( STEPS / 3 )))" "act-plgh-s$seed-$(( STEPS / 3 ))"
   done
+  for run in act-plg-s2 act-plgc-s2; do evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"; done
   for run in act-plg-s0 act-plg-s1; do
     evaluate "$(checkpoint "$run" "$STEPS")" "$run-$STEPS"
     average "$run" $(( STEPS * 2 / 3 )) "$STEPS"
