@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The experiment of docs/policies.md: demonstrations built from the specs of examples/policies (the planned
 # strategy, whose grasps come from the catalog's visual meshes; with and without DART-style action noise; in CoACD
-# and convex-hull collision variants; in joints that hold and joints that creep) -> state-only LeRobot datasets -> ACT trained with lerobot-train on the CPU,
-# a checkpoint every STEPS/30 steps -> every chosen checkpoint evaluated with rik eval on the test split (unseen
-# handles) beside the scripted strategy on the same episodes -> learning curves and tables (scripts/policy_curves.py).
+# and convex-hull collision variants; in joints that hold and joints that creep) -> state-only LeRobot datasets ->
+# ACT trained with lerobot-train on the CPU, a checkpoint every STEPS/30 steps -> every chosen checkpoint evaluated
+# with rik eval on the test split (unseen handles) beside the scripted strategy on the same episodes -> learning
+# curves and tables (scripts/policy_curves.py).
 #
 #   bash scripts/policy_experiment.sh [WORK_DIR]     (default: experiments/policies; each step skips finished work)
 #
