@@ -15,7 +15,6 @@ from rik.combinator.build import (
     assemble_variant,
     check_collision,
     check_variant,
-    folder_spec_hash,
     is_current,
     make_report,
     materialise,
@@ -123,8 +122,8 @@ def render_variant(catalog: Catalog, key: VariantKey, png: Path, *, out: Path = 
             checked = check_variant(catalog, key, stop_at_failure=False, collision=collision,
                                     joint_friction=joint_friction)
             directory = Path(tmp) / key.id
-            materialise(checked, directory, make_report(catalog, checked, folder_spec_hash(catalog, key, out), 0.0),
-                        Path(tmp))
+            digest = spec_hash(catalog, key, collision, joint_friction)
+            materialise(checked, directory, make_report(catalog, checked, digest, 0.0), Path(tmp))
         model = mujoco.MjModel.from_xml_path(str(directory / "scene.xml"))
         model.vis.global_.offwidth, model.vis.global_.offheight = max(width, 64), max(height, 64)
         data = mujoco.MjData(model)

@@ -231,7 +231,7 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
               workers: int = 1, overlays: Sequence[Path] = ()) -> Plan:
     """Expand ``spec``: select its variants, build the ones missing into ``variants_dir`` (their checks decide
     which can be simulated), and lay out its units. Bad input raises one line naming ``source`` and the field."""
-    from rik.combinator.build import JOINT_FRICTION, folder_spec_hash, rejected_variants, resolve_collision
+    from rik.combinator.build import JOINT_FRICTION, rejected_variants, resolve_collision, spec_hash
     from rik.registry.ids import parse_variant_id
 
     check_robot(catalog, spec, source)
@@ -241,7 +241,7 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
     drawn = draw_episodes(catalog, spec, source)
     chosen = list(dict.fromkeys(v for v, _, _ in drawn)) if drawn else select_variants(catalog, spec, source)
     check_size(spec, len(drawn) if drawn else len(chosen), source)
-    collision = resolve_collision(variants_dir)
+    collision, joint_friction = resolve_collision(variants_dir), JOINT_FRICTION.resolve(variants_dir)
     rejected = {r.id: f"check {r.failed_check} failed: {r.reason}"
                 for r in rejected_variants(catalog, chosen, variants_dir, workers=workers,
                                            overlays=overlays).values()}
@@ -251,8 +251,8 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
         raise RikError(f"{source}, field 'variants': every selected variant fails its checks (the first, "
                        f"{first[0]}: {first[1]})")
     keys = {v: parse_variant_id(catalog, v) for v in kept}
-    hashes = {v: folder_spec_hash(catalog, k, variants_dir) for v, k in keys.items()}
-    plan = Plan(spec, hash_of_spec(spec), source, hashes, rejected, collision, JOINT_FRICTION.resolve(variants_dir))
+    hashes = {v: spec_hash(catalog, k, collision, joint_friction) for v, k in keys.items()}
+    plan = Plan(spec, hash_of_spec(spec), source, hashes, rejected, collision, joint_friction)
     if drawn:
         lay_out_units(plan, {}, [d for d in drawn if d[0] not in rejected])
     else:
