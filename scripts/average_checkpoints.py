@@ -58,8 +58,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("run", type=Path, help="a lerobot-train output folder (with checkpoints/)")
     parser.add_argument("--from", dest="first", type=int, required=True, help="first step averaged")
     parser.add_argument("--to", dest="last", type=int, required=True, help="last step averaged")
-    parser.add_argument("--out", type=Path, required=True, help="the averaged policy's folder (replaced)")
+    parser.add_argument("--out", type=Path, required=True,
+                        help="the averaged policy's folder (an earlier average there is replaced)")
     args = parser.parse_args(argv)
+    if not (args.run / "checkpoints").is_dir():
+        print(f"{args.run}: no checkpoints/ folder here; give a lerobot-train output folder", file=sys.stderr)
+        return 2
+    if args.out.exists() and not (args.out / AVERAGED).is_file():
+        print(f"{args.out}: exists and is no averaged policy (no {AVERAGED}); it is left as it is: give another --out",
+              file=sys.stderr)
+        return 2
     folders = checkpoints(args.run, args.first, args.last)
     if len(folders) < 2:
         print(f"{args.run}/checkpoints: {len(folders)} checkpoint(s) between steps {args.first} and {args.last}; "

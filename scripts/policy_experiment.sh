@@ -8,12 +8,14 @@
 #
 #   bash scripts/policy_experiment.sh [WORK_DIR]     (default: experiments/policies; each step skips finished work)
 #
-# Full size (docs/policies.md, about 7 CPU-hours on 2 cores): the defaults. Reduced size, the same pipeline end to
-# end in about 10 minutes on 2 cores:
-#   DEMOS=18 STEPS=300 SHORT_STEPS=150 PER_CELL=1 bash scripts/policy_experiment.sh experiments/policies-small
+# Full size (docs/policies.md; tens of CPU-hours on 2 cores): the defaults. Reduced size, the same pipeline end to
+# end (every data set, training and evaluation; docs/policies.md gives its measured time), two steps at once:
+#   DEMOS=18 STEPS=300 SHORT_STEPS=60 PER_CELL=1 EPISODE_LENGTH=200 JOBS=2 WORKERS=1 VIDEOS=0 \
+#     bash scripts/policy_experiment.sh experiments/policies-small
 # STAGES picks the stages to run (default "data train eval report"), DATASETS the data sets of the data stage, SEED
 # the first drawn seed (tests/test_policy_experiment.py runs the data stage at DEMOS=2 SEED=378). IMAGES=1 adds the
-# image run (both cameras at 80x80; on a GPU machine: IMAGES=1 DEVICE=cuda LOADERS=12).
+# image run (both cameras at 80x80; on a GPU machine: IMAGES=1 DEVICE=cuda LOADERS=12). JOBS runs that many
+# independent steps at once (data sets after the first, trainings, evaluations; default 1: one after another).
 # Every hyper-parameter of the training is pinned below; one thread per process, so two trainings share 2 cores.
 set -euo pipefail
 WORK=${1:-experiments/policies}
@@ -22,7 +24,10 @@ SEED=${SEED:-0}                # the first drawn seed: the data sets hold seeds 
 STEPS=${STEPS:-30000}          # training steps of the main run (act-pl); act-pl-quarter trains STEPS/3
 SHORT_STEPS=${SHORT_STEPS:-5000}  # steps of the comparison runs (DART, hull, matched CoACD), two seeds each
 PER_CELL=${PER_CELL:-10}       # evaluated episodes per handle type x preset cell (9 cells)
-WORKERS=${WORKERS:-2}
+WORKERS=${WORKERS:-2}          # rik's worker processes per recording or evaluation
+JOBS=${JOBS:-1}                # independent steps at once (with JOBS=2 on 2 cores, set WORKERS=1)
+VIDEOS=${VIDEOS:-2}            # videos each evaluation keeps (rendering them is most of a small evaluation's time)
+EPISODE_LENGTH=${EPISODE_LENGTH:-400}  # control steps before an evaluated episode is cut off (20 per second)
 STAGES=${STAGES:-data train eval report}
 DATASETS=${DATASETS:-pl pl-quarter pln hull cm plh pla plah pls plk plt plg plgc plgh}  # the data sets the data stage builds
 IMAGES=${IMAGES:-0}            # 1: also the image run (pl-images: both 80x80 cameras; train it where a GPU is)
@@ -35,6 +40,24 @@ RIK=(uv run --project "$REPO" --locked rik)
 mkdir -p "$WORK/specs"
 cd "$WORK"
 stage() { [[ " $STAGES " == *" $1 "* ]]; }
+PIDS=()
+declare -A SPAWNED=()
+spawn() {  # spawn COMMAND...: a step that depends on no other step of its phase; JOBS of them at once (a command
+  # asked for twice, as small sizes' windows and steps can coincide, runs once)
+  local key="${*@Q}"
+  [ -z "${SPAWNED[$key]:-}" ] || return 0
+  SPAWNED[$key]=1
+  if [ "$JOBS" -le 1 ]; then "$@"; return; fi
+  while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do sleep 0.2; done
+  "$@" &
+  PIDS+=($!)
+}
+settle() {  # wait for every spawned step; stop if one failed (each step's log says why)
+  local pid failed=0
+  for pid in "${PIDS[@]}"; do wait "$pid" || failed=1; done
+  PIDS=()
+  [ "$failed" = 0 ] || { echo "policy_experiment.sh: a step failed (see the logs in $PWD)" >&2; exit 1; }
+}
 
 build() {  # build NAME SPEC VARIANTS [DRAW]: a spec of examples/policies at DEMOS (or DRAW) drawn episodes from SEED
   [[ " $DATASETS " == *" $1 "* ]] || return 0
@@ -77,13 +100,14 @@ resume() {  # resume RUN STEPS: a run trained on from its last checkpoint to STE
 evaluate() {  # evaluate OPERATOR LABEL [VARIANTS]: the test split, seeds 1000.., PER_CELL episodes per cell
   local out="eval/$2-test${3:+-${3#variants-}}"
   [ -f "$out/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2" --split test --seed 1000 \
-    --episodes-per-cell "$PER_CELL" --videos 2 --workers "$WORKERS" --out "$out" --variants "${3:-variants}"
+    --episodes-per-cell "$PER_CELL" --episode-length "$EPISODE_LENGTH" --videos "$VIDEOS" --workers "$WORKERS" \
+    --out "$out" --variants "${3:-variants}"
 }
 evaluate_val() {  # evaluate_val OPERATOR LABEL: the validation split (choosing settings), seeds 3000.., PER_CELL/2 per cell
   local out="eval/$2-val"
   [ -f "$out/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2-val" --split val --seed 3000 \
-    --episodes-per-cell $(( PER_CELL / 2 > 0 ? PER_CELL / 2 : 1 )) --videos 0 --workers "$WORKERS" --out "$out" \
-    --variants variants
+    --episodes-per-cell $(( PER_CELL / 2 > 0 ? PER_CELL / 2 : 1 )) --episode-length "$EPISODE_LENGTH" --videos 0 \
+    --workers "$WORKERS" --out "$out" --variants variants
 }
 chunked() {  # chunked POLICY FOLDER N_ACTION_STEPS [ENSEMBLE_COEFF]: a copy of a policy run with other chunking
   [ -d "$2" ] && return
@@ -103,171 +127,200 @@ checkpoint() {  # checkpoint RUN STEP: the folder of a saved step (the nearest s
   echo "runs/$1/checkpoints/$saved/pretrained_model"
 }
 
+export_frame() {  # export_frame NAME FROM FLAG: FROM's recorded episodes exported again with one export flag
+  [[ " $DATASETS " == *" $1 "* ]] && [ ! -d "ds-$1" ] || return 0
+  "${RIK[@]}" export-lerobot "work-$2/episodes" --out "ds-$1" --repo-id "local/rik-$1" --streams none \
+    --outcomes S --variants variants "$3"
+}
+export_cm() {  # the CoACD demonstrations of exactly the episodes the hull data set holds (the ablation compares
+  # collision, not data size): same seeds, same demonstrator, same plans (tests/test_collision_mode.py)
+  [[ " $DATASETS " == *" cm "* ]] && [ ! -d ds-cm ] || return 0
+  rm -rf sel-cm; mkdir -p sel-cm
+  local meta seed match
+  for meta in work-hull/episodes/*/meta.json; do
+    grep -q '"outcome": "S"' "$meta" || continue
+    seed=$(sed -n 's/.*"seed": \([0-9]*\).*/\1/p' "$meta")
+    match=$(grep -l "\"seed\": $seed," work-pl/episodes/*/meta.json | head -n 1)
+    ln -sfn "$(realpath "$(dirname "$match")")" "sel-cm/$(basename "$(dirname "$match")")"
+  done
+  "${RIK[@]}" export-lerobot sel-cm --out ds-cm --repo-id local/rik-cm --streams none --outcomes S --variants variants
+}
+
 if stage data; then
-  # CoACD variants (the catalog's default) and convex-hull ones, whose single hull per handle is the low-fidelity arm
+  # CoACD variants (the catalog's default) and convex-hull ones, whose single hull per handle is the low-fidelity
+  # arm; and for the joint side of the fidelity ablation, variants whose joint friction creeps (MuJoCo's default
+  # impedance) instead of holding
   [ -f variants-hull/collision.json ] || "${RIK[@]}" variants build drawer-chest-80__two_point-bow-128__normal \
     --collision hull --out variants-hull
-  build pl planned-360 variants                      # the main data set
-  build pl-quarter planned-360 variants $(( DEMOS / 4 > 0 ? DEMOS / 4 : 1 ))  # the first quarter of them
-  build pln planned-dart-360 variants                # the same episodes, DART-style
-  build hull planned-hull-360 variants-hull          # the same episodes in hull variants (rejected ones left out)
-  build pla planned-above-360 variants               # the same seeds, planned_above: one way to hold each handle
-  build plt planned-typed-360 variants               # the same seeds, planned_typed: one hook side per handle type
-  build pl-images planned-360-images variants        # the main data set with both cameras (IMAGES=1)
-  # the joint side of the fidelity ablation: plg's spec recorded in variants whose joint friction creeps (MuJoCo's
-  # default impedance) instead of holding
   if [[ " $DATASETS " == *" plgc "* ]] && [ ! -f variants-creep/joint_friction.json ]; then
     "${RIK[@]}" variants build drawer-chest-80__two_point-bow-128__normal --joint-friction creeping --out variants-creep
   fi
-  build plgc planned-360-gripper variants-creep
-  build plgh planned-360-gripper variants  # its control: plg's content (held joints) in plgc's episode order
+  build pl planned-360 variants  # the main data set, first: it builds the drawn variants the others reuse
+  spawn build pl-quarter planned-360 variants $(( DEMOS / 4 > 0 ? DEMOS / 4 : 1 ))  # the first quarter of them
+  spawn build pln planned-dart-360 variants              # the same episodes, DART-style
+  spawn build hull planned-hull-360 variants-hull        # the same episodes in hull variants (rejected ones left out)
+  spawn build pla planned-above-360 variants             # the same seeds, planned_above: one way to hold each handle
+  spawn build plt planned-typed-360 variants             # the same seeds, planned_typed: one hook side per handle type
+  spawn build pl-images planned-360-images variants      # the main data set with both cameras (IMAGES=1)
+  spawn build plgc planned-360-gripper variants-creep    # plg's spec recorded in joints that creep
+  spawn build plgh planned-360-gripper variants  # its control: plg's content (held joints) in plgc's episode order
   # the main data set's episodes with the action in the handle frame (what examples/policies/planned-360-handle.yaml
   # builds, without recording the same episodes again), and with the handle's shape in the front's state
   # (examples/policies/planned-360-shape.yaml; plk: its type and mount flags alone), and with the action and the
   # grasp point measured from the gripper (examples/policies/planned-360-gripper.yaml)
-  for triple in "plh pl --action-frame=handle" "plah pla --action-frame=handle" "pls pl --handle-shape=full" \
-                "plk pl --handle-shape=kind" "plg pl --action-frame=gripper"; do
-    set -- $triple
-    if [[ " $DATASETS " == *" $1 "* ]] && [ ! -d "ds-$1" ]; then
-      "${RIK[@]}" export-lerobot "work-$2/episodes" --out "ds-$1" --repo-id "local/rik-$1" --streams none \
-        --outcomes S --variants variants "$3"
-    fi
-  done
-  # the CoACD demonstrations of exactly the episodes the hull data set holds (the ablation compares collision,
-  # not data size): same seeds, same demonstrator, same plans (tests/test_collision_mode.py)
-  if [[ " $DATASETS " == *" cm "* ]] && [ ! -d ds-cm ]; then
-    rm -rf sel-cm; mkdir -p sel-cm
-    for meta in work-hull/episodes/*/meta.json; do
-      grep -q '"outcome": "S"' "$meta" || continue
-      seed=$(sed -n 's/.*"seed": \([0-9]*\).*/\1/p' "$meta")
-      match=$(grep -l "\"seed\": $seed," work-pl/episodes/*/meta.json | head -n 1)
-      ln -sfn "$(realpath "$(dirname "$match")")" "sel-cm/$(basename "$(dirname "$match")")"
-    done
-    "${RIK[@]}" export-lerobot sel-cm --out ds-cm --repo-id local/rik-cm --streams none --outcomes S \
-      --variants variants
-  fi
+  spawn export_frame plh pl --action-frame=handle
+  spawn export_frame pls pl --handle-shape=full
+  spawn export_frame plk pl --handle-shape=kind
+  spawn export_frame plg pl --action-frame=gripper
+  settle
+  spawn export_frame plah pla --action-frame=handle
+  spawn export_cm
+  settle
 fi
+pl_s1() {  # the main run again with training seed 1 (its mean of the last third), and on past STEPS: is STEPS the
+  # flat end of the curve?
+  train act-pl-s1 pl "$STEPS" 1 "${ACT[@]}"
+  resume act-pl-s1 $(( STEPS * 5 / 3 ))
+}
+plg_seed() {  # plg_seed SEED: the best recipe (the action and grasp point from the gripper), compared at 2/3 STEPS,
+  # then trained on to STEPS and 4/3 STEPS (it still climbed from 2/3 STEPS to STEPS)
+  train "act-plg-s$1" plg $(( STEPS * 2 / 3 )) "$1" "${ACT[@]}"
+  resume "act-plg-s$1" "$STEPS"
+  resume "act-plg-s$1" $(( STEPS * 4 / 3 ))
+}
+plg_s2() {  # its third seed: first the joint ablation's third held run (STEPS/3), then the recipe's (4/3 STEPS)
+  train act-plg-s2 plg $(( STEPS / 3 )) 2 "${ACT[@]}"
+  resume act-plg-s2 $(( STEPS * 4 / 3 ))
+}
 if stage train; then
-  train act-pl pl "$STEPS" 0 "${ACT[@]}"
-  train act-pl-s1 pl "$STEPS" 1 "${ACT[@]}"  # the main run again with training seed 1 (its mean of the last third)
-  resume act-pl-s1 $(( STEPS * 5 / 3 ))       # and on past STEPS: is STEPS the flat end of the curve?
-  train act-pl-quarter pl-quarter $(( STEPS / 3 )) 0 "${ACT[@]}"
-  train act-plh plh $(( STEPS / 3 )) 0 "${ACT[@]}"   # the same recipe, the action from the handle's grasp point
-  train act-pla pla $(( STEPS * 2 / 3 )) 0 "${ACT[@]}"  # the same recipe, planned_above's demonstrations
-  train act-plt plt $(( STEPS * 2 / 3 )) 0 "${ACT[@]}"  # planned_typed's demonstrations
-  train act-plah plah $(( STEPS / 3 )) 0 "${ACT[@]}"  # both changes
+  spawn train act-pl pl "$STEPS" 0 "${ACT[@]}"
+  spawn pl_s1
+  spawn train act-pl-quarter pl-quarter $(( STEPS / 3 )) 0 "${ACT[@]}"
+  spawn train act-plh plh $(( STEPS / 3 )) 0 "${ACT[@]}"   # the same recipe, the action from the handle's grasp point
+  spawn train act-pla pla $(( STEPS * 2 / 3 )) 0 "${ACT[@]}"  # the same recipe, planned_above's demonstrations
+  spawn train act-plt plt $(( STEPS * 2 / 3 )) 0 "${ACT[@]}"  # planned_typed's demonstrations
+  spawn train act-plah plah $(( STEPS / 3 )) 0 "${ACT[@]}"  # both changes
   for seed in 0 1; do  # the same recipe and data, the handle's shape in the front's state; two training seeds
-    train "act-pls-s$seed" pls $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"
-    train "act-plk-s$seed" plk $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # its type and mount flags alone
-    train "act-plg-s$seed" plg $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"  # the action and grasp point from the gripper
-    resume "act-plg-s$seed" "$STEPS"  # trained on after its comparison at 2/3 STEPS
-    resume "act-plg-s$seed" $(( STEPS * 4 / 3 ))  # and on again: it still climbed from 2/3 STEPS to STEPS
-    train "act-plgc-s$seed" plgc $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # plg's recipe on demonstrations whose joints creep
-    train "act-plgh-s$seed" plgh $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # and on the held control
+    spawn train "act-pls-s$seed" pls $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"
+    spawn train "act-plk-s$seed" plk $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # its type and mount flags alone
+    spawn plg_seed "$seed"
+    spawn train "act-plgc-s$seed" plgc $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # plg's recipe on demonstrations whose joints creep
+    spawn train "act-plgh-s$seed" plgh $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # and on the held control
   done
-  train act-plg-s2 plg $(( STEPS / 3 )) 2 "${ACT[@]}"  # a third seed of each joint arm
-  train act-plgc-s2 plgc $(( STEPS / 3 )) 2 "${ACT[@]}"
+  spawn plg_s2  # a third seed of each joint arm, and of the recipe
+  spawn train act-plgc-s2 plgc $(( STEPS / 3 )) 2 "${ACT[@]}"
+  spawn train act-plg-s3 plg $(( STEPS * 4 / 3 )) 3 "${ACT[@]}"  # the recipe's fourth seed, in one go
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
-  if [ "${DIFFUSION:-0}" = 1 ]; then train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
+  if [ "${DIFFUSION:-0}" = 1 ]; then spawn train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
   # the image run (IMAGES=1): the same recipe with both cameras; ResNet-18 from scratch (no ImageNet weights
   # offline); docs/policies.md's ran on a GPU machine (DEVICE=cuda LOADERS=12) for SHORT_STEPS
   if [ "$IMAGES" = 1 ]; then
-    train act-pl-images pl-images "$SHORT_STEPS" 0 "${ACT[@]}" --policy.pretrained_backbone_weights=null
+    spawn train act-pl-images pl-images "$SHORT_STEPS" 0 "${ACT[@]}" --policy.pretrained_backbone_weights=null
   fi
   for seed in 0 1; do
-    train "act-pln-s$seed" pln "$SHORT_STEPS" "$seed" "${ACT[@]}"
-    train "act-hull-s$seed" hull "$SHORT_STEPS" "$seed" "${ACT[@]}"
-    train "act-cm-s$seed" cm "$SHORT_STEPS" "$seed" "${ACT[@]}"
+    spawn train "act-pln-s$seed" pln "$SHORT_STEPS" "$seed" "${ACT[@]}"
+    spawn train "act-hull-s$seed" hull "$SHORT_STEPS" "$seed" "${ACT[@]}"
+    spawn train "act-cm-s$seed" cm "$SHORT_STEPS" "$seed" "${ACT[@]}"
   done
+  settle
 fi
+mean() {  # mean RUN FROM TO: averaged/RUN-FROM-TO, the mean of a run's saved weights over a window fixed in advance
+  local out="averaged/$1-$2-$3"
+  [ -f "$out/model.safetensors" ] || uv run --project "$REPO" --locked python "$REPO/scripts/average_checkpoints.py" \
+    "runs/$1" --from "$2" --to "$3" --out "$out" > /dev/null
+}
 if stage eval; then
-  evaluate strategy:planned planned
-  for step in $(( STEPS / 10 )) $(( STEPS / 3 )) $(( STEPS * 2 / 3 )) "$STEPS"; do
-    evaluate "$(checkpoint act-pl "$step")" "act-pl-$step"
-    evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
+  # 1. the weights evaluated that no training saved: means over windows (scripts/average_checkpoints.py): act-pl's
+  # last third, both demonstrators' SHORT_STEPS .. STEPS/3 and STEPS/3 .. 2 STEPS/3, each run past STEPS
+  MEANS=("act-pl $(( STEPS * 2 / 3 )) $STEPS" "act-pl-s1 $(( STEPS * 2 / 3 )) $STEPS"
+         "act-pl-s1 $STEPS $(( STEPS * 4 / 3 ))" "act-pl-s1 $(( STEPS * 4 / 3 )) $(( STEPS * 5 / 3 ))"
+         "act-plk-s0 $SHORT_STEPS $(( STEPS / 3 ))" "act-plk-s1 $SHORT_STEPS $(( STEPS / 3 ))"
+         "act-plg-s0 $(( STEPS * 2 / 3 )) $STEPS" "act-plg-s1 $(( STEPS * 2 / 3 )) $STEPS")
+  for run in act-pl act-pl-s1 act-pla act-plt act-pls-s0 act-pls-s1 act-plg-s0 act-plg-s1; do
+    MEANS+=("$run $SHORT_STEPS $(( STEPS / 3 ))" "$run $(( STEPS / 3 )) $(( STEPS * 2 / 3 ))")
   done
-  evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
+  for run in act-plg-s0 act-plg-s1 act-plg-s2 act-plg-s3; do MEANS+=("$run $STEPS $(( STEPS * 4 / 3 ))"); done
+  for window in "${MEANS[@]}"; do spawn mean $window; done
+  settle
+  # ... and copies of saved weights with other chunking at evaluation: act-pl's whole chunk of 20, and one action
+  # with temporal ensembling; the gripper frame's actions per prediction (2-20, chosen on the validation split at
+  # STEPS: 15), at STEPS, 4/3 STEPS and over the mean of its STEPS .. 4/3 STEPS weights
+  later=$(( STEPS * 4 / 3 ))
+  chunked "$(checkpoint act-pl "$STEPS")" chunking/act-pl-n20 20
+  chunked "$(checkpoint act-pl "$STEPS")" chunking/act-pl-te1 1 0.01
+  for run in act-plg-s0 act-plg-s1; do
+    for n in 2 5 10 15 20; do chunked "$(checkpoint "$run" "$STEPS")" "chunking/$run-$STEPS-n$n" "$n"; done
+    chunked "$(checkpoint "$run" "$later")" "chunking/$run-$later-n15" 15
+  done
+  for run in act-plg-s0 act-plg-s1 act-plg-s2 act-plg-s3; do
+    chunked "averaged/$run-$STEPS-$later" "chunking/$run-mean-$STEPS-$later-n15" 15
+  done
+
+  # 2. the evaluations. The scripted teacher first, in each variants folder: it builds the test episodes' variants
+  # there, which the policies' evaluations (JOBS at once) then share
+  evaluate strategy:planned planned
+  evaluate strategy:planned planned variants-creep
+  evaluate strategy:planned planned variants-hull
+  for step in $(( STEPS / 10 )) $(( STEPS / 3 )) $(( STEPS * 2 / 3 )) "$STEPS"; do
+    spawn evaluate "$(checkpoint act-pl "$step")" "act-pl-$step"
+    spawn evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
+  done
+  spawn evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
   for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )); do  # rik eval reads its frame from its statistics
-    evaluate "$(checkpoint act-plh "$step")" "act-plh-$step"
-    evaluate "$(checkpoint act-plah "$step")" "act-plah-$step"
+    spawn evaluate "$(checkpoint act-plh "$step")" "act-plh-$step"
+    spawn evaluate "$(checkpoint act-plah "$step")" "act-plah-$step"
   done
   for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )) $(( STEPS * 2 / 3 )); do
-    evaluate "$(checkpoint act-pla "$step")" "act-pla-$step"
-    evaluate "$(checkpoint act-plt "$step")" "act-plt-$step"
+    spawn evaluate "$(checkpoint act-pla "$step")" "act-pla-$step"
+    spawn evaluate "$(checkpoint act-plt "$step")" "act-plt-$step"
     for seed in 0 1; do  # rik eval reads the handle's shape from the policy's input width
-      evaluate "$(checkpoint "act-pls-s$seed" "$step")" "act-pls-s$seed-$step"
-      evaluate "$(checkpoint "act-plg-s$seed" "$step")" "act-plg-s$seed-$step"  # gripper frame: its input width
+      spawn evaluate "$(checkpoint "act-pls-s$seed" "$step")" "act-pls-s$seed-$step"
+      spawn evaluate "$(checkpoint "act-plg-s$seed" "$step")" "act-plg-s$seed-$step"  # gripper frame: its input width
     done
   done
-  # the mean of a run's saved weights over a window fixed in advance (scripts/average_checkpoints.py): act-pl's last
-  # third, and both demonstrators' SHORT_STEPS .. STEPS/3 and STEPS/3 .. 2 STEPS/3
-  average() {  # average RUN FROM TO
-    local out="averaged/$1-$2-$3"
-    [ -f "$out/model.safetensors" ] || uv run --project "$REPO" --locked python "$REPO/scripts/average_checkpoints.py" \
-      "runs/$1" --from "$2" --to "$3" --out "$out" > /dev/null
-    evaluate "$out" "$1-mean-$2-$3"
-  }
-  average act-pl $(( STEPS * 2 / 3 )) "$STEPS"
-  average act-pl-s1 $(( STEPS * 2 / 3 )) "$STEPS"
-  for step in $(( STEPS * 4 / 3 )) $(( STEPS * 5 / 3 )); do  # act-pl-s1 past STEPS
-    evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
+  for window in "${MEANS[@]}"; do
+    set -- $window
+    spawn evaluate "averaged/$1-$2-$3" "$1-mean-$2-$3"
   done
-  average act-pl-s1 "$STEPS" $(( STEPS * 4 / 3 ))
-  average act-pl-s1 $(( STEPS * 4 / 3 )) $(( STEPS * 5 / 3 ))
+  for step in $(( STEPS * 4 / 3 )) $(( STEPS * 5 / 3 )); do  # act-pl-s1 past STEPS
+    spawn evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
+  done
   for run in act-plk-s0 act-plk-s1; do
-    evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
-    average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
+    spawn evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
   done
   # the joint side of the fidelity ablation at STEPS/3: each arm in held joints (the highest fidelity) and creeping ones
-  evaluate strategy:planned planned variants-creep
   for seed in 0 1; do
-    evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))"
-    evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))" variants-creep
-    evaluate "$(checkpoint "act-plg-s$seed" $(( STEPS / 3 )))" "act-plg-s$seed-$(( STEPS / 3 ))" variants-creep
-    evaluate "$(checkpoint "act-plgh-s$seed" $(( STEPS / 3 )))" "act-plgh-s$seed-$(( STEPS / 3 ))"
+    spawn evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))"
+    spawn evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))" variants-creep
+    spawn evaluate "$(checkpoint "act-plg-s$seed" $(( STEPS / 3 )))" "act-plg-s$seed-$(( STEPS / 3 ))" variants-creep
+    spawn evaluate "$(checkpoint "act-plgh-s$seed" $(( STEPS / 3 )))" "act-plgh-s$seed-$(( STEPS / 3 ))"
   done
-  for run in act-plg-s2 act-plgc-s2; do evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"; done
+  for run in act-plg-s2 act-plgc-s2; do spawn evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"; done
+  for run in act-plg-s0 act-plg-s1; do spawn evaluate "$(checkpoint "$run" "$STEPS")" "$run-$STEPS"; done
+  if [ "${DIFFUSION:-0}" = 1 ]; then spawn evaluate "$(checkpoint dp-pl "$STEPS")" "dp-pl-$STEPS"; fi
+  if [ "$IMAGES" = 1 ]; then spawn evaluate "runs/act-pl-images/checkpoints/last/pretrained_model" act-pl-images; fi
+  spawn evaluate chunking/act-pl-n20 "act-pl-$STEPS-n20"
+  spawn evaluate chunking/act-pl-te1 "act-pl-$STEPS-te1"
   for run in act-plg-s0 act-plg-s1; do
-    evaluate "$(checkpoint "$run" "$STEPS")" "$run-$STEPS"
-    average "$run" $(( STEPS * 2 / 3 )) "$STEPS"
+    for n in 2 5 10 15 20; do spawn evaluate_val "chunking/$run-$STEPS-n$n" "$run-$STEPS-n$n"; done
+    spawn evaluate "chunking/$run-$STEPS-n15" "$run-$STEPS-n15"
+    spawn evaluate "chunking/$run-$later-n15" "$run-$later-n15"
   done
-  for run in act-pl act-pl-s1 act-pla act-plt act-pls-s0 act-pls-s1 act-plg-s0 act-plg-s1; do
-    average "$run" "$SHORT_STEPS" $(( STEPS / 3 ))
-    average "$run" $(( STEPS / 3 )) $(( STEPS * 2 / 3 ))
+  # the recipe (docs/policies.md): four training seeds at 4/3 STEPS, and each one's mean of STEPS .. 4/3 STEPS with 15
+  for run in act-plg-s0 act-plg-s1 act-plg-s2 act-plg-s3; do
+    spawn evaluate "$(checkpoint "$run" "$later")" "$run-$later"
+    spawn evaluate "chunking/$run-mean-$STEPS-$later-n15" "$run-mean-$STEPS-$later-n15"
   done
-  if [ "${DIFFUSION:-0}" = 1 ]; then evaluate "$(checkpoint dp-pl "$STEPS")" "dp-pl-$STEPS"; fi
-  if [ "$IMAGES" = 1 ]; then evaluate "runs/act-pl-images/checkpoints/last/pretrained_model" act-pl-images; fi
-  # ACT's chunking at evaluation, the same weights: the whole chunk of 20, and one action with temporal ensembling
-  for variant in "n20 20" "te1 1 0.01"; do
-    set -- $variant
-    chunked "$(checkpoint act-pl "$STEPS")" "chunking/act-pl-$1" "$2" "${3:-}"
-    evaluate "chunking/act-pl-$1" "act-pl-$STEPS-$1"
-  done
-  # the gripper frame's actions per prediction: chosen on the validation split at STEPS, then the test split with 15
-  # (the choice) at STEPS and, trained on, at 4/3 STEPS and over the mean of its STEPS .. 4/3 STEPS weights
-  for run in act-plg-s0 act-plg-s1; do
-    for n in 2 5 10 15 20; do
-      chunked "$(checkpoint "$run" "$STEPS")" "chunking/$run-$STEPS-n$n" "$n"
-      evaluate_val "chunking/$run-$STEPS-n$n" "$run-$STEPS-n$n"
-    done
-    evaluate "chunking/$run-$STEPS-n15" "$run-$STEPS-n15"
-    later=$(( STEPS * 4 / 3 ))
-    evaluate "$(checkpoint "$run" "$later")" "$run-$later"
-    chunked "$(checkpoint "$run" "$later")" "chunking/$run-$later-n15" 15
-    evaluate "chunking/$run-$later-n15" "$run-$later-n15"
-    average "$run" "$STEPS" "$later"
-    chunked "averaged/$run-$STEPS-$later" "chunking/$run-mean-$STEPS-$later-n15" 15
-    evaluate "chunking/$run-mean-$STEPS-$later-n15" "$run-mean-$STEPS-$later-n15"
-  done
-  evaluate "$(checkpoint act-pl "$SHORT_STEPS")" "act-pl-$SHORT_STEPS"
+  spawn evaluate "$(checkpoint act-pl "$SHORT_STEPS")" "act-pl-$SHORT_STEPS"
   for seed in 0 1; do
     for run in pln hull cm; do
-      evaluate "runs/act-$run-s$seed/checkpoints/last/pretrained_model" "act-$run-s$seed"
+      spawn evaluate "runs/act-$run-s$seed/checkpoints/last/pretrained_model" "act-$run-s$seed"
     done
     # the sim-to-sim gap: each ablation arm also in the other collision model
-    evaluate "runs/act-hull-s$seed/checkpoints/last/pretrained_model" "act-hull-s$seed" variants-hull
-    evaluate "runs/act-cm-s$seed/checkpoints/last/pretrained_model" "act-cm-s$seed" variants-hull
+    spawn evaluate "runs/act-hull-s$seed/checkpoints/last/pretrained_model" "act-hull-s$seed" variants-hull
+    spawn evaluate "runs/act-cm-s$seed/checkpoints/last/pretrained_model" "act-cm-s$seed" variants-hull
   done
+  settle
 fi
 if stage report; then
   uv run --project "$REPO" --locked python "$REPO/scripts/policy_curves.py" . --out report

@@ -41,3 +41,16 @@ def test_the_average_is_the_mean_of_the_chosen_checkpoints(tmp_path: Path) -> No
                                                                             "steps": [1000, 2000, 3000]}
     assert script.main([str(run), "--from", "3500", "--to", "9000", "--out", str(tmp_path / "one")]) == 2
     assert not (tmp_path / "one").exists()
+
+
+def test_a_folder_that_is_no_run_or_no_average_is_named_and_left_alone(tmp_path: Path, capsys) -> None:
+    script = _script()
+    assert script.main([str(tmp_path / "nothing"), "--from", "1", "--to", "2", "--out", str(tmp_path / "a")]) == 2
+    assert "nothing: no checkpoints/ folder here" in capsys.readouterr().err
+    (tmp_path / "run" / "checkpoints").mkdir(parents=True)
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep")
+    assert script.main([str(tmp_path / "run"), "--from", "1", "--to", "2", "--out", str(mine)]) == 2
+    assert "mine: exists and is no averaged policy (no averaged.json); it is left as it is" in capsys.readouterr().err
+    assert (mine / "notes.txt").read_text() == "keep"

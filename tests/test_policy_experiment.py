@@ -24,7 +24,9 @@ def test_the_experiments_data_stage_builds_every_data_set(tmp_path: Path) -> Non
     # the handle-frame exports (plh, plah) and the data sets of planned_above, planned_typed and DART noise (pla,
     # plt, pln) are made by the same steps as cm and pl from specs test_example_specs loads: left out to save the
     # suite an export and a recording each (about 6 CPU-s: lerobot's import in a fresh process)
-    env = {**os.environ, "STAGES": "data", "DEMOS": "2", "SEED": "378", "WORKERS": "1", "DATASETS": " ".join(DATASETS)}
+    # JOBS=2: the data sets after the first are built two at a time, as the reduced size runs them
+    env = {**os.environ, "STAGES": "data", "DEMOS": "2", "SEED": "378", "WORKERS": "1", "JOBS": "2",
+           "DATASETS": " ".join(DATASETS)}
     r = subprocess.run(["bash", str(ROOT / "scripts" / "policy_experiment.sh"), str(tmp_path / "exp")], cwd=ROOT,
                        env=env, capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
@@ -37,3 +39,15 @@ def test_the_experiments_data_stage_builds_every_data_set(tmp_path: Path) -> Non
     assert "  draw: 2 " in spec and "\nseed: 378\n" in spec
     assert "2 drawn episodes (" in r.stdout and "seeds 378..379" in r.stdout  # the build's plan, as drawn
     assert json.loads((exp / "variants-hull" / "collision.json").read_text())["collision"] == "hull"
+
+
+def test_a_step_that_fails_beside_others_stops_the_experiment(tmp_path: Path) -> None:
+    # the evaluation stage of a folder with no trainings: its first phase (the weight means, two at a time) fails
+    # in every step; the script must stop there with an error, not go on to evaluate
+    env = {**os.environ, "STAGES": "eval", "JOBS": "2"}
+    r = subprocess.run(["bash", str(ROOT / "scripts" / "policy_experiment.sh"), str(tmp_path / "exp")], cwd=ROOT,
+                       env=env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 1
+    assert "policy_experiment.sh: a step failed (see the logs in " in r.stderr
+    assert "no checkpoints/ folder here" in r.stderr
+    assert not (tmp_path / "exp" / "eval").exists()
