@@ -325,3 +325,26 @@ def test_test_pull_is_the_documented_multiple_of_the_force_to_open(built: Path) 
         assert front["force_to_open_n"] == pytest.approx(CAT.presets["high"].hinge.frictionloss
                                                          / front["lever_arm_m"], rel=0.05)
         assert 0 < front["seconds_to_open"] < 5 and math.isfinite(front["lever_arm_m"])
+
+
+def _build_in_a_process(out: str) -> str:
+    return build_variant(CAT, parse_variant_id(CAT, BOW), Path(out)).status
+
+
+def test_two_processes_building_one_variant_build_it_once(tmp_path: Path) -> None:
+    # evaluations side by side share a variants folder: the second waits for the first's build and reuses it
+    # (before, both built, and the second replaced the folder under the first one's compiling model)
+    import multiprocessing
+    import time
+
+    from rik.locks import exclusive
+
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        with exclusive(tmp_path / BOW, "test"):  # both processes reach the build while the lock is held here
+            pending = pool.map_async(_build_in_a_process, [str(tmp_path)] * 2)
+            time.sleep(3)
+        statuses = pending.get(timeout=300)
+    assert sorted(statuses) == ["built", "skipped"]
+    assert is_current(tmp_path / BOW, json.loads((tmp_path / BOW / "report.json").read_text())["spec_hash"])
+    assert mujoco.MjModel.from_xml_path(str(tmp_path / BOW / "scene.xml")).nbody > 1
+    assert not list(tmp_path.glob("*.lock"))

@@ -424,15 +424,22 @@ def build_variant(catalog: Catalog, key: VariantKey, out: Path = DEFAULT_OUT, ca
     directory = out / key.id
     if not force and is_current(directory, digest):
         return VariantResult(key.id, "skipped", digest, time.perf_counter() - t0)
-    check_replaceable(directory, VARIANT_FOLDER)  # before any work: a folder there that is no variant stays
-    mark_collision(out, collision)
-    JOINT_FRICTION.mark(out, joint_friction)
-    checked = check_variant(catalog, key, cache, collision=collision, joint_friction=joint_friction)
-    failed = checked.failed
-    if failed is not None:
-        return VariantResult(key.id, "rejected", digest, time.perf_counter() - t0, failed.name, failed.reason)
-    report = make_report(catalog, checked, digest, time.perf_counter() - t0)
-    materialise(checked, directory, report, out)
+    from rik.locks import exclusive
+
+    # two processes that need the same variant (evaluations side by side) build it once: the second waits, then
+    # finds it current; without the lock it would replace the folder under the first one's compiling model
+    with exclusive(directory, "rik variants build", wait=True):
+        if not force and is_current(directory, digest):
+            return VariantResult(key.id, "skipped", digest, time.perf_counter() - t0)
+        check_replaceable(directory, VARIANT_FOLDER)  # before any work: a folder there that is no variant stays
+        mark_collision(out, collision)
+        JOINT_FRICTION.mark(out, joint_friction)
+        checked = check_variant(catalog, key, cache, collision=collision, joint_friction=joint_friction)
+        failed = checked.failed
+        if failed is not None:
+            return VariantResult(key.id, "rejected", digest, time.perf_counter() - t0, failed.name, failed.reason)
+        report = make_report(catalog, checked, digest, time.perf_counter() - t0)
+        materialise(checked, directory, report, out)
     return VariantResult(key.id, "built", digest, time.perf_counter() - t0, hulls=report["hulls"],
                          collision_vertices=report["collision_vertices"], compile_seconds=checked.compile_seconds)
 
