@@ -15,7 +15,8 @@
 # STAGES picks the stages to run (default "data train eval report"), DATASETS the data sets of the data stage, SEED
 # the first drawn seed (tests/test_policy_experiment.py runs the data stage at DEMOS=2 SEED=378). IMAGES=1 adds the
 # image run (both cameras at 80x80; on a GPU machine: IMAGES=1 DEVICE=cuda LOADERS=12). JOBS runs that many
-# independent steps at once (data sets after the first, trainings, evaluations; default 1: one after another).
+# independent steps at once (data sets after the first, trainings; the evaluations of the same episodes are dealt
+# out to JOBS rik eval processes, many policies each; default 1: one after another).
 # Every hyper-parameter of the training is pinned below; one thread per process, so two trainings share 2 cores.
 set -euo pipefail
 WORK=${1:-experiments/policies}
@@ -97,17 +98,54 @@ resume() {  # resume RUN STEPS: a run trained on from its last checkpoint to STE
     --resume=true --steps="$2" > "train-$1-resume-$2.log" 2>&1
   echo "$1 resumed to $2 steps $((SECONDS - start)) s" >> train-times.txt
 }
-evaluate() {  # evaluate OPERATOR LABEL [VARIANTS]: the test split, seeds 1000.., PER_CELL episodes per cell
-  local out="eval/$2-test${3:+-${3#variants-}}"
-  [ -f "$out/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2" --split test --seed 1000 \
-    --episodes-per-cell "$PER_CELL" --episode-length "$EPISODE_LENGTH" --videos "$VIDEOS" --workers "$WORKERS" \
-    --out "$out" --variants "${3:-variants}"
+declare -A QUEUED=()
+QUEUE=()
+queue() {  # queue SETTINGS OPERATOR LABEL OUT: an evaluation for run_evaluations (none where OUT holds it already)
+  if [ -f "$4/eval_info.json" ] || [ -n "${QUEUED[$4]:-}" ]; then return 0; fi
+  QUEUED[$4]=1
+  QUEUE+=("$1|$2|$3|$4")
 }
-evaluate_val() {  # evaluate_val OPERATOR LABEL: the validation split (choosing settings), seeds 3000.., PER_CELL/2 per cell
-  local out="eval/$2-val"
-  [ -f "$out/eval_info.json" ] || "${RIK[@]}" eval "$1" --label "$2-val" --split val --seed 3000 \
-    --episodes-per-cell $(( PER_CELL / 2 > 0 ? PER_CELL / 2 : 1 )) --episode-length "$EPISODE_LENGTH" --videos 0 \
-    --workers "$WORKERS" --out "$out" --variants variants
+evaluate() {  # evaluate OPERATOR LABEL [VARIANTS]: the test split, seeds 1000.., PER_CELL episodes per cell (queued)
+  queue "test 1000 $PER_CELL $VIDEOS ${3:-variants}" "$1" "$2" "eval/$2-test${3:+-${3#variants-}}"
+}
+evaluate_val() {  # evaluate_val OPERATOR LABEL: the validation split (choosing settings), seeds 3000.., PER_CELL/2 per
+  # cell (queued)
+  queue "val 3000 $(( PER_CELL / 2 > 0 ? PER_CELL / 2 : 1 )) 0 variants" "$1" "$2-val" "eval/$2-val"
+}
+eval_batch() {  # eval_batch SETTINGS OPERATOR|LABEL|OUT...: one rik eval process for several evaluations of the same
+  # episodes, each into its own folder (a process's start-up, ~7 s, is most of a small evaluation's time)
+  local split seed per_cell videos variants item operator label out operators=() named=()
+  read -r split seed per_cell videos variants <<< "$1"
+  shift
+  for item in "$@"; do
+    IFS='|' read -r operator label out <<< "$item"
+    operators+=("$operator")
+    named+=(--label "$label" --out "$out")
+  done
+  "${RIK[@]}" eval "${operators[@]}" "${named[@]}" --split "$split" --seed "$seed" --episodes-per-cell "$per_cell" \
+    --episode-length "$EPISODE_LENGTH" --videos "$videos" --workers "$WORKERS" --variants "$variants"
+}
+run_evaluations() {  # the queued evaluations: those of the same episodes and variants folder dealt out round-robin
+  # to JOBS processes (or fewer); then wait for them all
+  local settings item i n chunk
+  local -a groups=() mine part
+  local -A seen=()
+  for item in "${QUEUE[@]}"; do
+    settings=${item%%|*}
+    [ -n "${seen[$settings]:-}" ] || { seen[$settings]=1; groups+=("$settings"); }
+  done
+  for settings in "${groups[@]}"; do
+    mine=()
+    for item in "${QUEUE[@]}"; do [ "${item%%|*}" != "$settings" ] || mine+=("${item#*|}"); done
+    n=$(( JOBS < ${#mine[@]} ? JOBS : ${#mine[@]} ))
+    for (( chunk = 0; chunk < n; chunk++ )); do
+      part=()
+      for (( i = chunk; i < ${#mine[@]}; i += n )); do part+=("${mine[$i]}"); done
+      spawn eval_batch "$settings" "${part[@]}"
+    done
+  done
+  settle
+  QUEUE=()
 }
 chunked() {  # chunked POLICY FOLDER N_ACTION_STEPS [ENSEMBLE_COEFF]: a copy of a policy run with other chunking
   [ -d "$2" ] && return
@@ -256,71 +294,72 @@ if stage eval; then
     chunked "averaged/$run-$STEPS-$later" "chunking/$run-mean-$STEPS-$later-n15" 15
   done
 
-  # 2. the evaluations. The scripted teacher first, in each variants folder: it builds the test episodes' variants
-  # there, which the policies' evaluations (JOBS at once) then share
+  # 2. the evaluations, queued, then run by run_evaluations. The scripted teacher first, in each variants folder: it
+  # builds the test episodes' variants there, which the policies' evaluations (JOBS processes) then share
   evaluate strategy:planned planned
   evaluate strategy:planned planned variants-creep
   evaluate strategy:planned planned variants-hull
+  run_evaluations
   for step in $(( STEPS / 10 )) $(( STEPS / 3 )) $(( STEPS * 2 / 3 )) "$STEPS"; do
-    spawn evaluate "$(checkpoint act-pl "$step")" "act-pl-$step"
-    spawn evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
+    evaluate "$(checkpoint act-pl "$step")" "act-pl-$step"
+    evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
   done
-  spawn evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
+  evaluate "$(checkpoint act-pl-quarter $(( STEPS / 3 )))" "act-pl-quarter-$(( STEPS / 3 ))"
   for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )); do  # rik eval reads its frame from its statistics
-    spawn evaluate "$(checkpoint act-plh "$step")" "act-plh-$step"
-    spawn evaluate "$(checkpoint act-plah "$step")" "act-plah-$step"
+    evaluate "$(checkpoint act-plh "$step")" "act-plh-$step"
+    evaluate "$(checkpoint act-plah "$step")" "act-plah-$step"
   done
   for step in $(( STEPS / 10 )) "$SHORT_STEPS" $(( STEPS / 3 )) $(( STEPS * 2 / 3 )); do
-    spawn evaluate "$(checkpoint act-pla "$step")" "act-pla-$step"
-    spawn evaluate "$(checkpoint act-plt "$step")" "act-plt-$step"
+    evaluate "$(checkpoint act-pla "$step")" "act-pla-$step"
+    evaluate "$(checkpoint act-plt "$step")" "act-plt-$step"
     for seed in 0 1; do  # rik eval reads the handle's shape from the policy's input width
-      spawn evaluate "$(checkpoint "act-pls-s$seed" "$step")" "act-pls-s$seed-$step"
-      spawn evaluate "$(checkpoint "act-plg-s$seed" "$step")" "act-plg-s$seed-$step"  # gripper frame: its input width
+      evaluate "$(checkpoint "act-pls-s$seed" "$step")" "act-pls-s$seed-$step"
+      evaluate "$(checkpoint "act-plg-s$seed" "$step")" "act-plg-s$seed-$step"  # gripper frame: its input width
     done
   done
   for window in "${MEANS[@]}"; do
     set -- $window
-    spawn evaluate "averaged/$1-$2-$3" "$1-mean-$2-$3"
+    evaluate "averaged/$1-$2-$3" "$1-mean-$2-$3"
   done
   for step in $(( STEPS * 4 / 3 )) $(( STEPS * 5 / 3 )); do  # act-pl-s1 past STEPS
-    spawn evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
+    evaluate "$(checkpoint act-pl-s1 "$step")" "act-pl-s1-$step"
   done
   for run in act-plk-s0 act-plk-s1; do
-    spawn evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
+    evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"
   done
   # the joint side of the fidelity ablation at STEPS/3: each arm in held joints (the highest fidelity) and creeping ones
   for seed in 0 1; do
-    spawn evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))"
-    spawn evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))" variants-creep
-    spawn evaluate "$(checkpoint "act-plg-s$seed" $(( STEPS / 3 )))" "act-plg-s$seed-$(( STEPS / 3 ))" variants-creep
-    spawn evaluate "$(checkpoint "act-plgh-s$seed" $(( STEPS / 3 )))" "act-plgh-s$seed-$(( STEPS / 3 ))"
+    evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))"
+    evaluate "$(checkpoint "act-plgc-s$seed" $(( STEPS / 3 )))" "act-plgc-s$seed-$(( STEPS / 3 ))" variants-creep
+    evaluate "$(checkpoint "act-plg-s$seed" $(( STEPS / 3 )))" "act-plg-s$seed-$(( STEPS / 3 ))" variants-creep
+    evaluate "$(checkpoint "act-plgh-s$seed" $(( STEPS / 3 )))" "act-plgh-s$seed-$(( STEPS / 3 ))"
   done
-  for run in act-plg-s2 act-plgc-s2; do spawn evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"; done
-  for run in act-plg-s0 act-plg-s1; do spawn evaluate "$(checkpoint "$run" "$STEPS")" "$run-$STEPS"; done
-  if [ "${DIFFUSION:-0}" = 1 ]; then spawn evaluate "$(checkpoint dp-pl "$STEPS")" "dp-pl-$STEPS"; fi
-  if [ "$IMAGES" = 1 ]; then spawn evaluate "runs/act-pl-images/checkpoints/last/pretrained_model" act-pl-images; fi
-  spawn evaluate chunking/act-pl-n20 "act-pl-$STEPS-n20"
-  spawn evaluate chunking/act-pl-te1 "act-pl-$STEPS-te1"
+  for run in act-plg-s2 act-plgc-s2; do evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"; done
+  for run in act-plg-s0 act-plg-s1; do evaluate "$(checkpoint "$run" "$STEPS")" "$run-$STEPS"; done
+  if [ "${DIFFUSION:-0}" = 1 ]; then evaluate "$(checkpoint dp-pl "$STEPS")" "dp-pl-$STEPS"; fi
+  if [ "$IMAGES" = 1 ]; then evaluate "runs/act-pl-images/checkpoints/last/pretrained_model" act-pl-images; fi
+  evaluate chunking/act-pl-n20 "act-pl-$STEPS-n20"
+  evaluate chunking/act-pl-te1 "act-pl-$STEPS-te1"
   for run in act-plg-s0 act-plg-s1; do
-    for n in 2 5 10 15 20; do spawn evaluate_val "chunking/$run-$STEPS-n$n" "$run-$STEPS-n$n"; done
-    spawn evaluate "chunking/$run-$STEPS-n15" "$run-$STEPS-n15"
-    spawn evaluate "chunking/$run-$later-n15" "$run-$later-n15"
+    for n in 2 5 10 15 20; do evaluate_val "chunking/$run-$STEPS-n$n" "$run-$STEPS-n$n"; done
+    evaluate "chunking/$run-$STEPS-n15" "$run-$STEPS-n15"
+    evaluate "chunking/$run-$later-n15" "$run-$later-n15"
   done
   # the recipe (docs/policies.md): four training seeds at 4/3 STEPS, and each one's mean of STEPS .. 4/3 STEPS with 15
   for run in act-plg-s0 act-plg-s1 act-plg-s2 act-plg-s3; do
-    spawn evaluate "$(checkpoint "$run" "$later")" "$run-$later"
-    spawn evaluate "chunking/$run-mean-$STEPS-$later-n15" "$run-mean-$STEPS-$later-n15"
+    evaluate "$(checkpoint "$run" "$later")" "$run-$later"
+    evaluate "chunking/$run-mean-$STEPS-$later-n15" "$run-mean-$STEPS-$later-n15"
   done
-  spawn evaluate "$(checkpoint act-pl "$SHORT_STEPS")" "act-pl-$SHORT_STEPS"
+  evaluate "$(checkpoint act-pl "$SHORT_STEPS")" "act-pl-$SHORT_STEPS"
   for seed in 0 1; do
     for run in pln hull cm; do
-      spawn evaluate "runs/act-$run-s$seed/checkpoints/last/pretrained_model" "act-$run-s$seed"
+      evaluate "runs/act-$run-s$seed/checkpoints/last/pretrained_model" "act-$run-s$seed"
     done
     # the sim-to-sim gap: each ablation arm also in the other collision model
-    spawn evaluate "runs/act-hull-s$seed/checkpoints/last/pretrained_model" "act-hull-s$seed" variants-hull
-    spawn evaluate "runs/act-cm-s$seed/checkpoints/last/pretrained_model" "act-cm-s$seed" variants-hull
+    evaluate "runs/act-hull-s$seed/checkpoints/last/pretrained_model" "act-hull-s$seed" variants-hull
+    evaluate "runs/act-cm-s$seed/checkpoints/last/pretrained_model" "act-cm-s$seed" variants-hull
   done
-  settle
+  run_evaluations
 fi
 if stage report; then
   uv run --project "$REPO" --locked python "$REPO/scripts/policy_curves.py" . --out report

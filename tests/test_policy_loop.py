@@ -295,8 +295,34 @@ def test_eval_tables_several_operators_side_by_side_and_reuses_finished_runs(rik
     assert r.code == 0 and "contact_rich: already evaluated on these episodes" in " ".join(r.out.split())
     assert (tmp_path / "both" / "contact_rich" / "eval_info.json").read_bytes() == before
     r = rik("eval", *args, "--label", "mine")
-    assert r.code == 2 and r.err.strip() == ("rik: error: --label names one policy; with several, each is named by "
-                                             "its type and training run")
+    assert r.code == 2 and r.err.strip() == ("rik: error: --label given 1 time for 2 policies: once per policy, in "
+                                             "their order, or not at all (each named by its type and training run)")
+
+
+def test_eval_writes_each_policy_into_its_own_folder_in_one_process(rik, tmp_path: Path) -> None:
+    """Several --out (and --label), one per policy: each policy's evaluation alone in its folder, the same episodes
+    and rows as one evaluation at a time (what scripts/policy_experiment.sh runs, many policies per process)."""
+    common = ("--split", "test", *DRAW, "-n", "1", "--videos", "0", "--workers", "1",
+              "--variants", str(tmp_path / "variants"))
+    r = rik("eval", "strategy:contact_rich", "strategy:grasp_vertical", "--label", "cr", "--out", str(tmp_path / "a"),
+            "--label", "gv", "--out", str(tmp_path / "b"), *common)
+    assert r.code == 0, r.err
+    assert not (tmp_path / "a" / "cr").exists() and not (tmp_path / "table.md").exists()
+    r = rik("eval", "strategy:grasp_vertical", "--label", "gv", "--out", str(tmp_path / "alone"), *common)
+    assert r.code == 0, r.err
+
+    def rows(folder: str) -> list[dict[str, object]]:
+        info = json.loads((tmp_path / folder / "eval_info.json").read_text())["rik"]
+        return [{k: v for k, v in row.items() if k != "seconds"} for row in info["per_episode"]]
+
+    assert rows("b") == rows("alone") and [r["strategy"] for r in rows("a")] == ["cr"]
+    for extra, message in (
+            (("--out", str(tmp_path / "a"), "--out", str(tmp_path / "a")),
+             "two policies have the same --out: give each its own folder"),
+            (("--out", "x", "--out", "y", "--out", "z"),
+             "--out given 3 times for 2 policies: once (their folders in it), or once per policy, in their order")):
+        r = rik("eval", "strategy:contact_rich", "strategy:grasp_vertical", *extra, *common)
+        assert r.code == 2 and r.err.strip() == f"rik: error: {message}"
 
 
 def test_out_of_stats_distance_counts_from_the_training_range() -> None:

@@ -49,10 +49,16 @@ def eval_policy(
         rerendered: Annotated[bool, typer.Option("--rerendered", help="Render Mitsuba's stream for a policy "
                                                  "trained on _rerendered images (slow without a GPU).")] = False,
         videos: Annotated[int, typer.Option("--videos", min=0, help="Episodes filmed (the first ones).")] = 4,
-        label: Annotated[str, typer.Option("--label", help="Name of the policy in the table (default: its type "
-                                           "and training run; one policy only).")] = "",
-        out: Annotated[Path, typer.Option("--out", "-o", help="Where table.md, episodes.csv, eval_info.json and "
-                                          "videos/ go.")] = Path("eval"),
+        labels: Annotated[list[str] | None, typer.Option("--label", help="Name of the policy in the table "
+                                                         "(default: its type and training run); with several "
+                                                         "policies, once per policy, in their order.",
+                                                         show_default=False)] = None,
+        outs: Annotated[list[Path] | None, typer.Option("--out", "-o", help="Where table.md, episodes.csv, "
+                                                        "eval_info.json and videos/ go (with several policies, a "
+                                                        "folder per policy in it and their table side by side); or "
+                                                        "once per policy, in their order: each policy's own folder, "
+                                                        "many evaluations in one process (default: eval).",
+                                                        show_default=False)] = None,
         workers: WorkersOpt = DEFAULT_WORKERS,
         variants: Annotated[Path, typer.Option("--variants", help="Directory of built variants.")] = Path("variants"),
         robot: RobotOpt = DEFAULT_ROBOT,
@@ -81,24 +87,42 @@ def eval_policy(
 
     if action_frame not in ("auto", *ACTION_FRAMES):
         raise RikError(f"--action-frame {action_frame}: use one of auto, {', '.join(ACTION_FRAMES)}")
-    if label and len(policies) > 1:
-        raise RikError("--label names one policy; with several, each is named by its type and training run")
+    labels, outs = labels or [], outs or [Path("eval")]
+
+    def given(flag: str, n: int) -> str:
+        return f"{flag} given {n} time{'s' * (n != 1)} for {len(policies)} policies"
+
+    if len(labels) not in (0, len(policies)):
+        raise RikError(f"{given('--label', len(labels))}: once per policy, in their order, or not at all (each "
+                       "named by its type and training run)")
+    if len(outs) not in (1, len(policies)):
+        raise RikError(f"{given('--out', len(outs))}: once (their folders in it), or once per policy, in their "
+                       "order")
+    separate = len(outs) > 1  # each policy's own folder: no table side by side
+    if separate and len({o.resolve() for o in outs}) < len(outs):
+        raise RikError("two policies have the same --out: give each its own folder")
     from rik.episodes.draw import Draw
 
     cat = load_catalog(overlays(catalog))
     draw = Draw.parse(split, types, presets, kinds)
     specs = [prepare(cat, EvalSpec(p, draw.split, draw.handle_types, draw.presets, draw.kinds, per_cell, seed,
-                                   episode_length, rerendered, videos, str(variants), label, robot,
-                                   action_frame))
-             for p in policies]
-    labels = [s.label for s in specs]
-    if len(set(labels)) < len(labels):
-        raise RikError(f"two policies have the same name ({', '.join(labels)}): give them different run folders")
-    check_eval_out(out, [slug(s.label) for s in specs] if len(specs) > 1 else [])
+                                   episode_length, rerendered, videos, str(variants),
+                                   labels[i] if labels else "", robot, action_frame))
+             for i, p in enumerate(policies)]
+    names = [s.label for s in specs]
+    if not separate and len(set(names)) < len(names):
+        raise RikError(f"two policies have the same name ({', '.join(names)}): give them different run folders "
+                       "or --label")
+    if separate:
+        wheres = outs
+        for where in wheres:
+            check_eval_out(where)
+    else:
+        wheres = [outs[0]] if len(specs) == 1 else [outs[0] / slug(s.label) for s in specs]
+        check_eval_out(outs[0], [slug(s.label) for s in specs] if len(specs) > 1 else [])
     con = console()
     every: list[dict[str, Any]] = []
-    for spec in specs:
-        where = out if len(specs) == 1 else out / slug(spec.label)
+    for spec, where in zip(specs, wheres, strict=True):
         rows = finished_rows(where, spec)
         if rows is None:
             with progress_bar() as progress:
@@ -112,6 +136,8 @@ def eval_policy(
         con.print(f"{spec.label}: {len(rows)} episodes, {wins} successes ({100 * wins / len(rows):.1f} %); "
                   f"table.md, episodes.csv, eval_info.json in {where}")
         every += rows
+    if separate:
+        return
     if len(specs) > 1:
-        write_tables(out, specs, every)
-    con.print((out / "table.md").read_text())
+        write_tables(outs[0], specs, every)
+    con.print((outs[0] / "table.md").read_text())
