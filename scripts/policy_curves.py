@@ -27,6 +27,11 @@ from rik.benchmark.bench import wilson
 from rik.paths import pyplot, save_figure, write_atomic
 
 
+def _steps(steps: int) -> str:
+    """Training steps as tables and axes name them: 10k, 2.5k; 60 below a thousand (the reduced size's runs)."""
+    return f"{steps / 1000:g}k" if steps >= 1000 else str(steps)
+
+
 def _train_facts(policy: Path) -> dict[str, Any]:
     """Run name, step and data set (root, episodes) of a saved checkpoint; empty for a scripted operator."""
     if not (policy / "train_config.json").is_file():
@@ -36,8 +41,8 @@ def _train_facts(policy: Path) -> dict[str, Any]:
         note = json.loads(averaged.read_text(encoding="utf-8"))
         facts = _train_facts(policy.parent.parent / "runs" / note["run"] / "checkpoints" / f"{note['steps'][-1]:06d}"
                              / "pretrained_model")
-        return {**facts, "run": f"{note['run']}, weights averaged {note['steps'][0] // 1000}k-"
-                f"{note['steps'][-1] // 1000}k", "averaged": True}
+        return {**facts, "run": f"{note['run']}, weights averaged {_steps(note['steps'][0])}-"
+                f"{_steps(note['steps'][-1])}", "averaged": True}
     config = json.loads((policy / "train_config.json").read_text(encoding="utf-8"))
     saved = policy.name == "pretrained_model" and policy.parents[1].name == "checkpoints"
     work = policy.parents[4] if saved else policy.parents[1]  # runs/<run>/checkpoints/<step>/..., or <folder>/<copy>
@@ -162,7 +167,7 @@ def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[in
     ax.axhline(60, ls=":", color="black", lw=1)
     ax.set_xscale("log")
     steps = sorted({r["step"] for r in found if "step" in r})
-    ax.set_xticks(steps, [f"{s / 1000:g}k" for s in steps])
+    ax.set_xticks(steps, [_steps(s) for s in steps])
     ax.minorticks_off()
     ax.set_xlabel("training steps (batch 32)")
     ax.set_ylabel("S on unseen handles (test split), %")
