@@ -226,6 +226,11 @@ plg_seed() {  # plg_seed SEED: the best recipe (the action and grasp point from 
   resume "act-plg-s$1" "$STEPS"
   resume "act-plg-s$1" $(( STEPS * 4 / 3 ))
 }
+plgc_seed() {  # plgc_seed SEED: plg's recipe on demonstrations whose joints creep, STEPS/3, then on to 2/3 STEPS (the
+  # joint ablation at 20k, planned after the 10k result)
+  train "act-plgc-s$1" plgc $(( STEPS / 3 )) "$1" "${ACT[@]}"
+  resume "act-plgc-s$1" $(( STEPS * 2 / 3 ))
+}
 plg_s2() {  # its third seed: first the joint ablation's third held run (STEPS/3), then the recipe's (4/3 STEPS)
   train act-plg-s2 plg $(( STEPS / 3 )) 2 "${ACT[@]}"
   resume act-plg-s2 $(( STEPS * 4 / 3 ))
@@ -242,11 +247,11 @@ if stage train; then
     spawn train "act-pls-s$seed" pls $(( STEPS * 2 / 3 )) "$seed" "${ACT[@]}"
     spawn train "act-plk-s$seed" plk $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # its type and mount flags alone
     spawn plg_seed "$seed"
-    spawn train "act-plgc-s$seed" plgc $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # plg's recipe on demonstrations whose joints creep
+    spawn plgc_seed "$seed"  # plg's recipe on demonstrations whose joints creep
     spawn train "act-plgh-s$seed" plgh $(( STEPS / 3 )) "$seed" "${ACT[@]}"  # and on the held control
   done
   spawn plg_s2  # a third seed of each joint arm, and of the recipe
-  spawn train act-plgc-s2 plgc $(( STEPS / 3 )) 2 "${ACT[@]}"
+  spawn plgc_seed 2
   spawn train act-plg-s3 plg $(( STEPS * 4 / 3 )) 3 "${ACT[@]}"  # the recipe's fourth seed, in one go
   # diffusion (DIFFUSION=1; not in docs/policies.md's runs: CPU time), the same data and steps as act-pl
   if [ "${DIFFUSION:-0}" = 1 ]; then spawn train dp-pl pl "$STEPS" 0 "${DIFFUSION_POLICY[@]}"; fi
@@ -335,6 +340,10 @@ if stage eval; then
     evaluate "$(checkpoint "act-plgh-s$seed" $(( STEPS / 3 )))" "act-plgh-s$seed-$(( STEPS / 3 ))"
   done
   for run in act-plg-s2 act-plgc-s2; do evaluate "$(checkpoint "$run" $(( STEPS / 3 )))" "$run-$(( STEPS / 3 ))"; done
+  # ... and at 2/3 STEPS, three runs of each arm (act-plg-s0/s1 at 2/3 STEPS are evaluated above)
+  for run in act-plg-s2 act-plgc-s0 act-plgc-s1 act-plgc-s2; do
+    evaluate "$(checkpoint "$run" $(( STEPS * 2 / 3 )))" "$run-$(( STEPS * 2 / 3 ))"
+  done
   for run in act-plg-s0 act-plg-s1; do evaluate "$(checkpoint "$run" "$STEPS")" "$run-$STEPS"; done
   if [ "${DIFFUSION:-0}" = 1 ]; then evaluate "$(checkpoint dp-pl "$STEPS")" "dp-pl-$STEPS"; fi
   if [ "$IMAGES" = 1 ]; then evaluate "runs/act-pl-images/checkpoints/last/pretrained_model" act-pl-images; fi
