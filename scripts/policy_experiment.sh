@@ -10,7 +10,7 @@
 #
 # Full size (docs/policies.md; tens of CPU-hours on 2 cores): the defaults. Reduced size, the same pipeline end to
 # end (every data set, training and evaluation; docs/policies.md gives its measured time), two steps at once:
-#   DEMOS=18 STEPS=300 SHORT_STEPS=60 PER_CELL=1 EPISODE_LENGTH=200 JOBS=2 WORKERS=1 VIDEOS=0 \
+#   DEMOS=18 STEPS=180 SHORT_STEPS=45 PER_CELL=1 EPISODE_LENGTH=200 JOBS=2 WORKERS=1 VIDEOS=0 \
 #     bash scripts/policy_experiment.sh experiments/policies-small
 # STAGES picks the stages to run (default "data train eval report"), DATASETS the data sets of the data stage, SEED
 # the first drawn seed (tests/test_policy_experiment.py runs the data stage at DEMOS=2 SEED=378). IMAGES=1 adds the
