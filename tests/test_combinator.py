@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 from pathlib import Path
 
 import mujoco
@@ -331,6 +332,11 @@ def _build_in_a_process(out: str) -> str:
     return build_variant(CAT, parse_variant_id(CAT, BOW), Path(out)).status
 
 
+def _ready(flags: str) -> None:
+    """A pool worker's initializer: this module (rik, MuJoCo) is imported; say so."""
+    (Path(flags) / f"ready-{os.getpid()}").touch()
+
+
 def test_two_processes_building_one_variant_build_it_once(tmp_path: Path) -> None:
     # evaluations side by side share a variants folder: the second waits for the first's build and reuses it
     # (before, both built, and the second replaced the folder under the first one's compiling model)
@@ -339,7 +345,13 @@ def test_two_processes_building_one_variant_build_it_once(tmp_path: Path) -> Non
 
     from rik.locks import exclusive
 
-    with multiprocessing.get_context("spawn").Pool(2) as pool:
+    flags = tmp_path / "ready"
+    flags.mkdir()
+    with multiprocessing.get_context("spawn").Pool(2, initializer=_ready, initargs=(str(flags),)) as pool:
+        deadline = time.monotonic() + 300
+        while len(list(flags.iterdir())) < 2:  # both workers past their imports: the sleep below only covers the
+            assert time.monotonic() < deadline, "the pool's workers never started"  # way to the lock
+            time.sleep(0.1)
         with exclusive(tmp_path / BOW, "test"):  # both processes reach the build while the lock is held here
             pending = pool.map_async(_build_in_a_process, [str(tmp_path)] * 2)
             time.sleep(3)

@@ -74,12 +74,11 @@ def eval_policy(
     from rik.errors import RikError
     from rik.evaluation.evaluate import (
         EvalSpec,
-        check_eval_out,
+        eval_folders,
         finished_rows,
         out_of_stats_warning,
         prepare,
         run_eval,
-        slug,
         write_tables,
     )
     from rik.registry.load import load_catalog
@@ -109,17 +108,7 @@ def eval_policy(
                                    episode_length, rerendered, videos, str(variants),
                                    labels[i] if labels else "", robot, action_frame))
              for i, p in enumerate(policies)]
-    names = [s.label for s in specs]
-    if not separate and len(set(names)) < len(names):
-        raise RikError(f"two policies have the same name ({', '.join(names)}): give them different run folders "
-                       "or --label")
-    if separate:
-        wheres = outs
-        for where in wheres:
-            check_eval_out(where)
-    else:
-        wheres = [outs[0]] if len(specs) == 1 else [outs[0] / slug(s.label) for s in specs]
-        check_eval_out(outs[0], [slug(s.label) for s in specs] if len(specs) > 1 else [])
+    wheres = eval_folders(outs, specs)
     con = console()
     every: list[dict[str, Any]] = []
     for spec, where in zip(specs, wheres, strict=True):

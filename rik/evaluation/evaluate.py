@@ -356,6 +356,25 @@ def check_eval_out(out: Path, policy_folders: Sequence[str] = ()) -> None:
                         "eval_info.json")
 
 
+def eval_folders(outs: Sequence[Path], specs: Sequence[EvalSpec]) -> list[Path]:
+    """Where each spec's outputs go, checked (:func:`check_eval_out`) before any episode runs: with one folder in
+    ``outs``, that folder for one spec and a folder per spec in it (named by its label) for several; with one per
+    spec, each its own."""
+    if len(outs) > 1:
+        for out in outs:
+            check_eval_out(out)
+        return list(outs)
+    names = [s.label for s in specs]
+    if len(set(names)) < len(names):
+        raise RikError(f"two policies have the same name ({', '.join(names)}): give them different run folders "
+                       "or --label")
+    if len(specs) == 1:
+        check_eval_out(outs[0])
+        return [outs[0]]
+    check_eval_out(outs[0], [slug(name) for name in names])
+    return [outs[0] / slug(name) for name in names]
+
+
 def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
              progress: Callable[[dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
     """Run every episode of ``spec`` (in ``workers`` processes, one PyTorch thread each) and write the outputs
