@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
-import shutil
+import os
 import sys
 from pathlib import Path
 
@@ -30,10 +30,21 @@ def checkpoints(run: Path, first: int, last: int) -> list[Path]:
     return [p for _, p in found]
 
 
+def _is_average(folder: Path) -> bool:
+    """Whether ``folder`` is an averaged policy this script wrote: its ``averaged.json``, and only the plain files of
+    a saved policy beside it (no folder)."""
+    from rik.outputs import tree_holds_only
+
+    return (folder / AVERAGED).is_file() and tree_holds_only(folder, lambda rel: "/" not in rel)
+
+
 def average(folders: list[Path], out: Path) -> Path:
-    """``out``: a copy of the last folder whose weights are the mean of all ``folders``' (float32)."""
+    """``out``: a copy of the last folder whose weights are the mean of all ``folders``' (float32). An earlier
+    average at ``out`` is replaced whole; anything else there is refused (:mod:`rik.outputs`)."""
     import numpy as np
     from safetensors.numpy import load_file, save_file
+
+    from rik.outputs import NEW, MadeFolder, staged_directory, write_bytes, write_text, writing
 
     total: dict[str, np.ndarray] = {}
     dtypes: dict[str, np.dtype] = {}
@@ -41,15 +52,15 @@ def average(folders: list[Path], out: Path) -> Path:
         for name, tensor in load_file(str(folder / WEIGHTS)).items():
             total[name] = total.get(name, 0) + tensor.astype(np.float64)
             dtypes[name] = tensor.dtype  # the last checkpoint's, as its copy keeps
-    staged = out.with_name(out.name + ".partial")
-    shutil.rmtree(staged, ignore_errors=True)
-    shutil.copytree(folders[-1], staged)
-    save_file({name: (t / len(folders)).astype(dtypes[name]) for name, t in total.items()}, str(staged / WEIGHTS))
-    (staged / AVERAGED).write_text(json.dumps({"run": folders[0].parents[2].name,
-                                               "steps": [int(f.parent.name) for f in folders]}) + "\n")
-    if out.exists():
-        shutil.rmtree(out)
-    staged.rename(out)
+    kind = MadeFolder("an averaged policy of scripts/average_checkpoints.py", _is_average, "give another --out")
+    with staged_directory(out, kind) as staged:
+        for file in sorted(folders[-1].iterdir()):
+            if file.is_file() and file.name != WEIGHTS:
+                write_bytes(staged / file.name, file.read_bytes(), NEW)
+        with writing(staged / WEIGHTS, NEW) as tmp:
+            save_file({name: (t / len(folders)).astype(dtypes[name]) for name, t in total.items()}, str(tmp))
+        write_text(staged / AVERAGED, json.dumps({"run": folders[0].parents[2].name,
+                                                  "steps": [int(f.parent.name) for f in folders]}) + "\n", NEW)
     return out
 
 
@@ -64,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     if not (args.run / "checkpoints").is_dir():
         print(f"{args.run}: no checkpoints/ folder here; give a lerobot-train output folder", file=sys.stderr)
         return 2
-    if args.out.exists() and not (args.out / AVERAGED).is_file():
+    if os.path.lexists(args.out) and not (args.out.is_dir() and _is_average(args.out)):
         print(f"{args.out}: exists and is no averaged policy (no {AVERAGED}); it is left as it is: give another --out",
               file=sys.stderr)
         return 2

@@ -24,7 +24,8 @@ from pathlib import Path
 from typing import Any
 
 from rik.benchmark.bench import wilson
-from rik.paths import pyplot, save_figure, write_atomic
+from rik.outputs import REGENERATED, save_figure, write_text
+from rik.paths import pyplot
 
 
 def _steps(steps: int) -> str:
@@ -185,7 +186,7 @@ def plot(found: list[dict[str, Any]], png: Path, losses: dict[str, list[tuple[in
         loss_ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncol=2)
     loss_ax.set_title("training loss (lerobot-train's log; 500-step means)", fontsize=10)
     fig.tight_layout()
-    return save_figure(fig, png)
+    return save_figure(fig, png, REGENERATED)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -199,11 +200,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     out = args.out or args.work / "report"
     out.mkdir(parents=True, exist_ok=True)
-    write_atomic(out / "curves.md", table(found))
+    write_text(out / "curves.md", table(found), REGENERATED)
     losses = training_losses(args.work)
     plot(found, out / "curves.png", losses)
-    write_atomic(out / "losses.csv", "run,step,l1_loss\n" + "".join(
-        f"{run},{step},{loss}\n" for run, points in sorted(losses.items()) for step, loss in points))
+    write_text(out / "losses.csv", "run,step,l1_loss\n" + "".join(
+        f"{run},{step},{loss}\n" for run, points in sorted(losses.items()) for step, loss in points), REGENERATED)
     best = table3(found, out / "table3")
     print(table(found), end="")
     print(f"wrote {out / 'curves.md'}, {out / 'curves.png'}"

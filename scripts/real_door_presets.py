@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--table", type=Path, help="also write the markdown table of the presets here")
     args = parser.parse_args(argv)
 
-    from rik.paths import write_atomic
+    from rik.outputs import REGENERATED, write_text
 
     text, doors = presets_text(args.csv)
     if args.check:
@@ -107,10 +107,10 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         print(f"{args.out}: up to date ({len(doors)} presets)")
         return 0
-    write_atomic(args.out, text)
+    write_text(args.out, text, REGENERATED)
     print(f"{args.out}: {len(doors)} presets")
     if args.table:
-        write_atomic(args.table, table(doors))
+        write_text(args.table, table(doors), REGENERATED)
     return 0
 
 

@@ -29,7 +29,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from rik.benchmark.real_doors import error_table, plot_grid, simulate_doors
     from rik.errors import RikError
-    from rik.paths import write_atomic
+    from rik.outputs import REGENERATED, write_text
     from rik.registry import load_catalog
 
     start = time.perf_counter()
@@ -45,9 +45,9 @@ def main(argv: list[str] | None = None) -> int:
     print(table)
     print(f"{len(results)} doors in {time.perf_counter() - start:.0f} s", file=sys.stderr)
     if args.table:
-        write_atomic(args.table, table)
+        write_text(args.table, table, REGENERATED)
     if args.img:
-        plot_grid(results, args.img)
+        plot_grid(results, args.img, replaces=REGENERATED)
     return 0
 
 

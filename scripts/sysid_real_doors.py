@@ -42,7 +42,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--img", type=Path, help="directory for the PNG grids (default: no plots)")
     args = parser.parse_args(argv)
 
-    from rik.paths import pyplot, save_figure, write_atomic
+    from rik.outputs import REGENERATED, save_figure, write_text
+    from rik.paths import pyplot
     from rik.sysid.profile import read_profiles
     from rik.sysid.profile_fit import describe, fit_profile
     from rik.sysid.profile_report import plot_profile
@@ -71,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     note = f"{data.dropped} rows with a NaN force left out (first: {', '.join(data.dropped_rows)})"
     if args.table:
         args.table.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(args.table, table)
+        write_text(args.table, table, REGENERATED)
     else:
         sys.stdout.write(table)
     print(note, file=sys.stderr)
@@ -92,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
             for ax in list(axes.flat)[len(doors):]:
                 ax.axis("off")
             fig.tight_layout()
-            save_figure(fig, args.img / name, dpi=72)
+            save_figure(fig, args.img / name, REGENERATED, dpi=72)
     return 0
 
 

@@ -297,10 +297,10 @@ def _full_disk(code: str, limit: int = 2000) -> subprocess.CompletedProcess:
 def test_full_disk_leaves_no_temporary_files(tmp_path: Path) -> None:
     done = _full_disk(
         "import sys; from pathlib import Path; import numpy as np\n"
-        "from rik.paths import write_atomic, write_png\n"
+        "from rik.outputs import NEW, write_png, write_text\n"
         f"d = Path({str(tmp_path)!r})\n"
-        "for f in (lambda: write_atomic(d / 'a.json', 'x' * 100_000),\n"
-        "          lambda: write_png(d / 'b.png', np.random.default_rng(0).integers(0, 255, (200, 200, 3)))):\n"
+        "for f in (lambda: write_text(d / 'a.json', 'x' * 100_000, NEW),\n"
+        "          lambda: write_png(d / 'b.png', np.random.default_rng(0).integers(0, 255, (200, 200, 3)), NEW)):\n"
         "    try:\n"
         "        f()\n"
         "    except OSError as exc:\n"

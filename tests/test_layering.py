@@ -22,12 +22,14 @@ DOC = PACKAGE.parent / "docs" / "architecture.md"
 FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
     (("rik", "The root: rik's version and the catalog format's; imports nothing."),),
     (("rik.errors", "`RikError` and its kinds: the one-line messages every command ends with."),),
-    (("rik.paths", "Files and folders: atomic writes, bounded JSON reads, what may be replaced or removed."),
+    (("rik.paths", "Paths: the cache folder, paths kept inside their folder, bounded JSON reads."),
      ("rik.locks", "Cross-process file locks (content-addressed caches, shared folders)."),
      ("rik.scheduling", "Threads kept at normal scheduling where a library raises them to real time (SVT-AV1)."),
      ("rik.schemas", "pydantic models of everything rik reads: catalog entries, episodes, dataset specs, "
                      "measured trajectories. SI units.")),
-    (("rik.joints", "Joint mechanisms and resistance laws: MJCF for MuJoCo's own, runtime effects for the rest."),),
+    (("rik.joints", "Joint mechanisms and resistance laws: MJCF for MuJoCo's own, runtime effects for the rest."),
+     ("rik.outputs", "The output contract: every file and folder rik writes, replaces or removes goes through it "
+                     "(exclusive names, only what rik made is replaced, checked before the work).")),
     (("rik.registry", "The catalog: YAML files loaded, validated and indexed; ids, splits, the fit test, "
                       "CATALOG.md."),),
     (("rik.assets", "Meshes of handles and base units, CoACD collision (cached), the collision-fidelity metric."),

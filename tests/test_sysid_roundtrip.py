@@ -222,6 +222,6 @@ def test_rik_variants_probe_pulls_a_front_and_writes_what_sysid_reads(rik, varia
 
     for args, message in ((("--front", "lid"), "has no front 'lid' (fronts: drawer)"),
                           (("--stroke", "500"), "a stroke of 0.5 m does not fit front 'drawer'"),
-                          (("--csv", str(tmp_path)), "a folder is there")):
+                          (("--csv", str(tmp_path)), "is a folder, where a file is expected")):
         bad = rik("variants", "probe", VARIANTS["slide"], *where, *args)
         assert bad.code == 2 and message in bad.err and len(bad.err.strip().splitlines()) == 1, bad.err

@@ -139,12 +139,16 @@ def test_every_episode_gets_a_new_id_and_nothing_is_overwritten(variants: Path, 
     a = first.save()
     assert a is not None and a.meta.seed == 3
     before = (a.path / "meta.json").read_bytes()
-    second = _session(variants, tmp_path, seed=3)  # a new session on the same folder and seed
-    assert second.seed == 4 and second.episode.endswith("__s0004")
+    second = _session(variants, tmp_path, seed=3)  # a new session on the same folder and seed: 3 is saved, and the
+    assert second.seed == 5 and second.episode.endswith("__s0005")  # first session holds 4, its next episode
     second.set_input([0, 1, 0, 0, 0, 0])
     second.tick()
     b = second.save()
-    assert b is not None and b.path != a.path and (a.path / "meta.json").read_bytes() == before
+    first.set_input([0, 1, 0, 0, 0, 0])
+    first.tick()
+    c = first.save()
+    assert b is not None and c is not None and len({a.path, b.path, c.path}) == 3
+    assert (a.path / "meta.json").read_bytes() == before and c.meta.seed == 4 and read_meta(b.path).seed == 5
 
 
 def test_discard_writes_nothing_and_a_draft_is_kept_until_saved(variants: Path, tmp_path: Path) -> None:
@@ -175,8 +179,9 @@ def test_the_time_limit_stops_the_episode_and_bad_input_is_refused(variants: Pat
         pass
     st = s.status()
     assert st["state"] == "time up" and st["steps"] == 10 and st["time_left"] == 0.0
-    with pytest.raises(RikError, match="--max-seconds -1: a time limit must be positive"):
-        _session(variants, tmp_path, max_seconds=-1)
+    for bad in (-1, float("inf"), float("nan")):  # inf was taken, and ended the episode at once
+        with pytest.raises(RikError, match=f"--max-seconds {bad}: a time limit must be a positive, finite number"):
+            _session(variants, tmp_path, max_seconds=bad)
     with pytest.raises(RikError, match="--seed -2: seeds must lie in 0"):
         _session(variants, tmp_path, seed=-2)
 

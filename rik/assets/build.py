@@ -204,9 +204,9 @@ def load_asset(cache: AssetCache, key: str) -> Asset | None:
                 baseline = [(data[f"p{i}_base_v"], data[f"p{i}_base_f"])]
                 parts.append(RigidPart(p["name"], p["role"], p["finish"], p["method"], visual, hulls, baseline))
     except (KeyError, ValueError, OSError) as exc:
-        import shutil
+        from rik.outputs import remove_cache_entry
 
-        shutil.rmtree(entry.path, ignore_errors=True)
+        remove_cache_entry(entry.path)
         raise CorruptEntry(f"cache entry {entry.path} is unreadable ({exc}); it was removed") from None
     m = entry.meta
     return Asset(m["id"], m["kind"], m["category"], key, parts, m)

@@ -14,15 +14,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
-from rik.paths import cache_dir, json_sha256, write_atomic
+from rik.outputs import CACHED, NEW, make_stage, publish_cache_entry, remove_cache_entry, write_text, writing
+from rik.paths import cache_dir, json_sha256
 
 ASSET_FORMAT = 2
 """Bumped when the layout of an entry changes (2: ``meta.json`` records its own sha256)."""
@@ -106,7 +104,7 @@ class AssetCache:
         except (OSError, ValueError, KeyError, TypeError):
             ok = False
         if not ok:
-            shutil.rmtree(path, ignore_errors=True)
+            remove_cache_entry(path)
             raise CorruptEntry(f"cache entry {path} failed its sha256 check; it was removed and will be rebuilt")
         return CacheEntry(key, path, meta)
 
@@ -116,27 +114,24 @@ class AssetCache:
 
         final = self.path(key)
         final.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{key[:12]}-", dir=final.parent))
+        tmp = make_stage(final)
         try:
-            with (tmp / "asset.npz").open("wb") as fh:
-                np.savez_compressed(fh, **arrays)
+            with writing(tmp / "asset.npz", NEW, keep_suffix=True) as npz:
+                np.savez_compressed(npz, **arrays)
             meta = {**meta, "key": key, "format": ASSET_FORMAT, "payload_sha256": file_sha256(tmp / "asset.npz")}
             meta["meta_sha256"] = _meta_sha256(meta)
-            (tmp / "meta.json").write_text(json.dumps(meta, indent=1, sort_keys=True))
-            try:
-                os.rename(tmp, final)
-            except OSError:  # another worker wrote the same entry first: identical content, keep theirs
-                shutil.rmtree(tmp, ignore_errors=True)
+            write_text(tmp / "meta.json", json.dumps(meta, indent=1, sort_keys=True), NEW)
+            publish_cache_entry(tmp, final)  # another worker may have written the same entry first: keep theirs
         except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True)
+            remove_cache_entry(tmp)
             raise
         return CacheEntry(key, final, json.loads((final / "meta.json").read_text()))
 
     def write_extra(self, key: str, name: str, data: dict[str, Any]) -> None:
         """Store a derived JSON result (for example fidelity figures) beside an entry, atomically, with the
         sha256 of its canonical JSON (:func:`json_sha256`)."""
-        write_atomic(self.path(key) / name, json.dumps({"sha256": json_sha256(data), "data": data}, indent=1,
-                                                       sort_keys=True))
+        write_text(self.path(key) / name, json.dumps({"sha256": json_sha256(data), "data": data}, indent=1,
+                                                       sort_keys=True), CACHED)
 
     def read_extra(self, key: str, name: str) -> dict[str, Any] | None:
         """A result stored by :meth:`write_extra`; ``None`` (compute it again) when absent, unreadable, or when

@@ -8,8 +8,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from rik.outputs import Replaces, save_figure
 from rik.paths import pyplot as _pyplot
-from rik.paths import save_figure as _save
 
 if TYPE_CHECKING:
     import numpy as np
@@ -23,6 +23,24 @@ HEAT_MAX_MM = 5.0
 """Top of the colour scale, mm: the same for every handle, so pictures compare; larger deviations saturate."""
 HEAT_POINTS = 6000
 """Points drawn per heatmap panel (a random subset of the samples)."""
+
+
+def _is_pictures(folder: Path) -> bool:
+    """Whether ``folder`` holds a handle's pictures rik drew: its ``asset.key`` stamp and nothing but the pictures."""
+    from rik.outputs import holds_only
+
+    try:
+        with open(folder / "asset.key", "rb") as handle:
+            stamp = handle.read(200).split()
+    except OSError:
+        return False
+    return len(stamp) == 2 and holds_only(folder, PICTURE_FILES)
+
+
+PICTURE_FILES = frozenset({"asset.key", "fidelity.png", "thumbnail.png"})
+"""What ``rik assets fidelity`` writes into each handle's picture folder."""
+PICTURE = Replaces.when("a picture rik drew of a handle (its folder's asset.key)", lambda p: _is_pictures(p.parent))
+"""What a handle's picture may replace: one in a folder of pictures rik drew (:func:`_is_pictures`)."""
 
 
 def _frame(ax, points: np.ndarray, zoom: float = 1.0) -> None:
@@ -71,7 +89,7 @@ def thumbnail(mesh: trimesh.Trimesh, base_color: tuple[float, float, float], met
     ax.add_collection3d(Poly3DCollection(mesh.triangles, facecolors=colour, edgecolors="none", linewidths=0,
                                         antialiased=False))
     _frame(ax, mesh.vertices, zoom=1.05)
-    _save(fig, path, dpi=80)
+    save_figure(fig, path, PICTURE, dpi=80)
 
 
 def heatmap(samples: FidelitySamples, fidelity: Fidelity, title: str, path: Path, seed: int = 0) -> None:
@@ -101,4 +119,4 @@ def heatmap(samples: FidelitySamples, fidelity: Fidelity, title: str, path: Path
     fig.suptitle(title, fontsize=10)
     bar = fig.colorbar(scatter, ax=fig.axes, shrink=0.7, pad=0.02, extend="max")
     bar.set_label("deviation, mm", fontsize=8)
-    _save(fig, path, dpi=90)
+    save_figure(fig, path, PICTURE, dpi=90)

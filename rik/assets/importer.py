@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import hashlib
 import os
-import shutil
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.outputs import NEW, make_stage, move_new, remove_stage, write_text
 from rik.registry.sources import display_path
 
 if TYPE_CHECKING:
@@ -345,14 +344,14 @@ def _register(catalog_dir: Path, stem: str, meshes: dict[Path, trimesh.Trimesh],
 
     catalog_dir.mkdir(parents=True, exist_ok=True)
     yaml_rel = Path(f"{stem}.yaml")
-    tmp = Path(tempfile.mkdtemp(prefix=".import-", dir=catalog_dir))
+    tmp = make_stage(catalog_dir / "import")
     try:
         sha256 = {}
         for rel, mesh in meshes.items():
             (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
             mesh.export(tmp / rel, file_type="stl")
             sha256[rel] = mesh_sha256(tmp / rel)
-        (tmp / yaml_rel).write_text(yaml_text(sha256))
+        write_text(tmp / yaml_rel, yaml_text(sha256), NEW)
         for rel in (yaml_rel, *meshes):
             if (catalog_dir / rel).exists():
                 raise RikError(f"{display_path(catalog_dir / rel)} already exists: {what} was imported before; "
@@ -375,9 +374,9 @@ def _register(catalog_dir: Path, stem: str, meshes: dict[Path, trimesh.Trimesh],
                 raise RikError(f"{display_path(folder)}: cannot create the folder ({exc.strerror}); nothing was "
                                f"registered") from None
         for rel in order:
-            os.replace(tmp / rel, catalog_dir / rel)
+            move_new(tmp / rel, catalog_dir / rel)
     finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        remove_stage(tmp)
     return catalog_dir / yaml_rel
 
 

@@ -21,7 +21,7 @@ from rik.assets.fidelity import DEFAULT_POINTS, Deviation, Fidelity, check_point
 from rik.assets.stats import MeshStats
 from rik.assets.workers import map_ids
 from rik.errors import RikError
-from rik.paths import write_atomic
+from rik.outputs import Replaces, write_text
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -91,7 +91,7 @@ def fidelity_row(catalog: Catalog, handle_id: str, *, out: Path | None = None, p
             finish = catalog.finish(part.finish)
             figures.thumbnail(part.visual, finish.base_color, finish.metallic, pictures / "thumbnail.png")
         if not current:
-            stamp.write_text(drawn + "\n")
+            write_text(stamp, drawn + "\n", figures.PICTURE)
     return {"id": handle_id, "type": asset.category, "hulls": len(part.hulls),
             "collision_vertices": sum(len(v) for v, _ in part.hulls),
             **_deviation_cells("eqp", fid.q_to_p), **_deviation_cells("epq", fid.p_to_q),
@@ -143,14 +143,29 @@ def run_rows(fn: Callable[..., Row], catalog: Catalog, ids: Sequence[str], *, wo
     return [rows[i] for i in ids]
 
 
+def csv_table(columns: Sequence[str]) -> Replaces:
+    """What a CSV table of ``columns`` may replace: a table with exactly that header (rik's, whose rows
+    :func:`merge_csv` keeps), or a file rik recorded writing there."""
+    header = ",".join(columns)
+
+    def test(path: Path) -> bool:
+        try:
+            with open(path, encoding="utf-8") as handle:
+                return handle.readline().rstrip("\r\n") == header
+        except (OSError, UnicodeDecodeError):
+            return False
+
+    return Replaces.when(f"a table of rik's with the columns {header[:60]}...", test)
+
+
 def write_csv(rows: Sequence[Row], columns: Sequence[str], path: Path) -> None:
-    """Write ``rows`` as CSV atomically."""
+    """Write ``rows`` as CSV atomically, over a table of the same columns only (:func:`csv_table`)."""
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=list(columns), lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_atomic(path, buf.getvalue())
+    write_text(path, buf.getvalue(), csv_table(columns))
 
 
 def merge_csv(rows: Sequence[Row], columns: Sequence[str], path: Path) -> list[Row]:

@@ -21,6 +21,7 @@ from rik.errors import RikError
 from rik.sim.outcome import OUTCOMES
 
 if TYPE_CHECKING:
+    from rik.outputs import Replaces
     from rik.registry.catalog import Catalog
 
 DEFAULT_STRATEGIES = ("grasp_horizontal", "grasp_vertical", "contact_rich")
@@ -215,7 +216,8 @@ def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
 def sweep_plot(rows: Sequence[dict[str, Any]], png: Path) -> Path:
     """Success rate against the friction-capacity ratio (2 x pad friction x grip force / joint resistance), one
     line per strategy."""
-    from rik.paths import pyplot, save_figure
+    from rik.outputs import save_figure
+    from rik.paths import pyplot
 
     fig, ax = pyplot().subplots(figsize=(6.4, 4.0), dpi=120)
     for s in dict.fromkeys(r["strategy"] for r in rows):
@@ -233,7 +235,7 @@ def sweep_plot(rows: Sequence[dict[str, Any]], png: Path) -> Path:
     ax.legend(frameon=False)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    return save_figure(fig, png)
+    return save_figure(fig, png, bench_file())
 
 
 def sweep_markdown(rows: Sequence[dict[str, Any]]) -> str:
@@ -266,8 +268,15 @@ def is_bench_out(folder: Path) -> bool:
         return False
 
 
+def bench_file() -> Replaces:
+    """What a file ``rik bench`` writes into ``--out`` may replace: the same file of an earlier rik bench there."""
+    from rik.outputs import Replaces
+
+    return Replaces.when("a file of an earlier rik bench (its results.csv beside it)", lambda p: is_bench_out(p.parent))
+
+
 def check_bench_out(out: Path) -> None:
     """Refuse an ``--out`` where a file ``rik bench`` writes is there and the folder is not one rik bench wrote."""
-    from rik.paths import check_own_files
+    from rik.outputs import check_own_files
 
     check_own_files(out, BENCH_FILES, is_bench_out, "rik bench", "results.csv")

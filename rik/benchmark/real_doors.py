@@ -30,6 +30,7 @@ from rik.registry.ids import variant_id
 from rik.schemas.joints import CATALOG_LEVER_ARM
 
 if TYPE_CHECKING:
+    from rik.outputs import Replaces
     from rik.registry.catalog import Catalog
     from rik.sysid.real_presets import RealDoor
 
@@ -149,10 +150,12 @@ def error_table(results: Sequence[SimulatedDoor]) -> str:
     return "\n".join(rows) + "\n"
 
 
-def plot_grid(results: Sequence[SimulatedDoor], path: Path, columns: int = 4) -> Path:
+def plot_grid(results: Sequence[SimulatedDoor], path: Path, columns: int = 4, replaces: Replaces | None = None) -> Path:
     """A grid of plots, one per door: the held-out openings (grey), the simulated pull with the nearest paper preset
-    (dashed) and with the fitted preset (solid), force at the handle against the angle in degrees."""
-    from rik.paths import pyplot, save_figure
+    (dashed) and with the fitted preset (solid), force at the handle against the angle in degrees. A file at
+    ``path`` is replaced as ``replaces`` says (default: rik's own earlier plot there, :data:`rik.outputs.RECORDED`)."""
+    from rik.outputs import RECORDED, save_figure
+    from rik.paths import pyplot
 
     plt = pyplot()
     rows = max(1, math.ceil(len(results) / columns))
@@ -176,4 +179,4 @@ def plot_grid(results: Sequence[SimulatedDoor], path: Path, columns: int = 4) ->
     fig.supxlabel("door angle (°)")
     fig.supylabel(f"force at the handle (N, at {CATALOG_LEVER_ARM:.2f} m)")
     fig.tight_layout()
-    return save_figure(fig, path)
+    return save_figure(fig, path, replaces or RECORDED)

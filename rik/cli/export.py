@@ -21,7 +21,7 @@ from rik.cli.rerender import DEMO_RES, CamerasOpt, EpisodesArg, ResOpt
 from rik.cli.sim import VariantsOpt
 
 if TYPE_CHECKING:
-    from rik.paths import MadeFolder
+    from rik.outputs import MadeFolder
 
 
 def export_lerobot(
@@ -100,24 +100,20 @@ def export_lerobot(
 
 
 DEMO_DATASET = Path("datasets/rik-demo")
-DATASET_NAMES = frozenset({"meta", "data", "videos", "images", "README.md"})
-"""What a LeRobot dataset rik exported holds at its top."""
 
 
 def demo_folders(out: Path) -> list[tuple[Path, MadeFolder]]:
-    """The folders the demo's export replaces: its dataset ``out`` (a finished rik export: lerobot's
-    ``meta/info.json`` and rik's ``meta/rik_card.json``, and nothing else at its top) and ``<out>.partial`` (an
+    """The folders the demo's export replaces: its dataset ``out`` (a finished rik export, nothing in it but a
+    dataset's files: :func:`~rik.exporters.lerobot_export.is_exported_dataset`) and ``<out>.partial`` (an
     interrupted one: its plan, shards and merged dataset)."""
-    from rik.exporters.lerobot_export import PLAN, is_rik_export
-    from rik.paths import MadeFolder, holds_only, json_object
+    from dataclasses import replace
 
-    def exported(p: Path) -> bool:
-        return is_rik_export(p) and holds_only(p, DATASET_NAMES)
+    from rik.exporters.lerobot_export import PARTIAL_FOLDER, is_exported_dataset
+    from rik.outputs import MadeFolder
 
     hint = "run the demo in another folder"
-    return [(out, MadeFolder("a dataset rik export-lerobot made", exported, hint)),
-            (out.with_name(f"{out.name}.partial"), MadeFolder("an interrupted export of rik export-lerobot",
-                lambda p: json_object(p / PLAN) is not None and holds_only(p, {PLAN, "shards", "merged"}), hint))]
+    return [(out, MadeFolder("a dataset rik export-lerobot made", is_exported_dataset, hint)),
+            (out.with_name(f"{out.name}.partial"), replace(PARTIAL_FOLDER, advice=hint))]
 DEMO_REPO_ID = "local/rik-demo"
 
 
@@ -129,7 +125,7 @@ def print_demo_export(overlay_paths: list[Path], episodes: list[Path], out: Path
     removed first, and only if rik made it (:func:`demo_folders`)."""
     from rik.exporters.lerobot_export import export_lerobot as run
     from rik.exporters.spec import ExportSpec
-    from rik.paths import remove_directory
+    from rik.outputs import remove_directory
     from rik.registry.load import load_catalog
 
     quiet_writers()

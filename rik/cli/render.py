@@ -42,10 +42,15 @@ def visual_gap(
     """The visual gap between real and simulated (and/or re-rendered) images: FID, KID and EMD in an image
     encoder's features, every comparison at the same size (split halves of N images), with the real-vs-real
     split-half floor and bootstrap intervals. docs/visual-gap.md explains the protocol and where to get weights."""
-    from rik.paths import write_atomic
+    from rik.outputs import RECORDED, check_destination, write_text
     from rik.render.visual_gap import results_json, results_markdown
     from rik.render.visual_gap import visual_gap as run
 
+    if json_path is not None:  # before the work: a file of the user's there is never replaced
+        check_destination(json_path, RECORDED, "--json")
+    if out is not None:
+        for name in ("visual_gap.json", "visual_gap.md"):
+            check_destination(out / name, RECORDED, "--out")
     results = []
     with progress_bar() as progress:
         for spec in encoder or ["resnet18"]:
@@ -59,13 +64,11 @@ def visual_gap(
     for r in results:
         print_result(r)
     if json_path is not None:
-        json_path.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(json_path, results_json(results))
+        write_text(json_path, results_json(results), RECORDED)
         console().print(f"JSON: {json_path}")
     if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
-        write_atomic(out / "visual_gap.json", results_json(results))
-        write_atomic(out / "visual_gap.md", results_markdown(results))
+        write_text(out / "visual_gap.json", results_json(results), RECORDED)
+        write_text(out / "visual_gap.md", results_markdown(results), RECORDED)
         console().print(f"reports: {out / 'visual_gap.md'} and {out / 'visual_gap.json'}")
 
 

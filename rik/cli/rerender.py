@@ -136,7 +136,7 @@ def print_demo_renders(overlay_paths: list[Path], episodes: list[Path], out: Pat
         for r in results:
             con.print(f"stream {r.directory}: {r.frames} frames x {', '.join(r.cameras)}"
                       + (f", {r.seconds_per_frame:.2f} s per frame" if r.rendered else " (already rendered)"))
-    meta, table = read_episode(episodes[0])
+    meta, table = read_episode(episodes[0], ("state",))
     scene = episode_scene(cat, episodes[0], variants, meta)
     scene.restore(states(table)[0])
     ious = {cam: silhouette_iou(scene.model, scene.data, cam, res, res, cat.finishes)

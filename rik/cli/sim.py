@@ -214,7 +214,8 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
     """The resistance benchmark: randomised drawer-opening episodes, F/P/S per handle type, strategy and preset
     (the paper's Table 3), with the Hand-E or an arm (--robot)."""
     from rik.benchmark import bench as b
-    from rik.paths import check_folder, write_atomic
+    from rik.outputs import write_text
+    from rik.paths import check_folder
     from rik.registry.load import load_catalog
 
     check_folder(out, "--out")  # before the episodes, not after them
@@ -235,13 +236,13 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
         rows = b.run_bench(cat, tasks, workers=workers, variants=variants, overlays=overlays(catalog),
                            progress=lambda r: progress.update(task, advance=1, last=f"{r['variant']} {r['outcome']}"))
     out.mkdir(parents=True, exist_ok=True)
-    write_atomic(out / "results.csv", b.rows_csv(rows))
+    write_text(out / "results.csv", b.rows_csv(rows), b.bench_file())
     table = b.table_markdown(rows)
-    write_atomic(out / "table.md", table)
+    write_text(out / "table.md", table, b.bench_file())
     con = console()
     if sweep is not None:
         png = b.sweep_plot(rows, out / "sweep.png")
-        write_atomic(out / "sweep.md", b.sweep_markdown(rows))
+        write_text(out / "sweep.md", b.sweep_markdown(rows), b.bench_file())
         con.print(b.sweep_markdown(rows))
         con.print(f"plot: {png}")
     else:

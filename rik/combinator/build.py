@@ -22,7 +22,6 @@ from __future__ import annotations
 import functools
 import json
 import os
-import shutil
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
@@ -32,7 +31,22 @@ from typing import TYPE_CHECKING, Any
 from rik.combinator.checks import GEOMETRY_CHECKS, CheckResult, ModelContext, run_model_checks
 from rik.combinator.scene import scene_xml
 from rik.errors import RikError
-from rik.paths import MadeFolder, atomic_path, check_replaceable, holds_only, inside, json_object
+from rik.outputs import (
+    NEW,
+    PRIVATE,
+    MadeFolder,
+    Replaces,
+    check_replaceable,
+    link_or_copy,
+    make_stage,
+    remove_empty_folder,
+    remove_stage,
+    replace_directory,
+    tree_holds_only,
+    write_bytes,
+    write_text,
+)
+from rik.paths import inside, json_object
 from rik.registry.ids import VariantKey
 
 if TYPE_CHECKING:
@@ -47,10 +61,24 @@ MESH_STORE = ".meshes"
 STAGING = ".staging"
 MANIFEST = "manifest.json"
 VARIANT_FILES = frozenset({"model.xml", "scene.xml", "meshes", "report.json"})
-"""What :func:`materialise` writes into a variant's folder."""
-VARIANT_FOLDER = MadeFolder("a variant rik built", lambda d: json_object(d / "report.json") is not None
-                            and holds_only(d, VARIANT_FILES), "choose another --out")
-"""A variant's folder: rebuilt, it is replaced, and only if it is a variant (its report.json, nothing else)."""
+"""What :func:`materialise` writes at the top of a variant's folder."""
+
+
+def is_variant(directory: Path) -> bool:
+    """Whether ``directory`` is a variant rik built: its ``report.json``, and nothing else at any depth but the files
+    the report lists (``model.xml``, ``scene.xml``, ``meshes/*``; a report without a list: those names)."""
+    report = json_object(Path(directory) / "report.json")
+    if report is None:
+        return False
+    files = report.get("files")
+    if isinstance(files, dict):
+        return tree_holds_only(directory, {"report.json", *files})
+    return tree_holds_only(directory, lambda rel: rel in VARIANT_FILES or (rel.startswith("meshes/")
+                                                                           and rel.count("/") == 1))
+
+
+VARIANT_FOLDER = MadeFolder("a variant rik built", is_variant, "choose another --out")
+"""A variant's folder: rebuilt, it is replaced, and only if it is a variant (:func:`is_variant`)."""
 COMBINATOR_DIR = Path(__file__).parent
 JOINTS_DIR = COMBINATOR_DIR.parent / "joints"
 """rik.joints: the joint model's MJCF mapping and laws, part of what decides a variant's files."""
@@ -192,12 +220,12 @@ class FolderMode:
     def mark(self, out: Path, mode: str) -> None:
         """Write the marker naming the folder's mode where the folder does not say it yet (a mode that is not
         always marked needs no marker for its default)."""
-        from rik.paths import write_atomic
-
         said = self.of_folder(out) if self.always_mark or (out / self.marker).exists() else self.default
         if said != mode:
             out.mkdir(parents=True, exist_ok=True)
-            write_atomic(out / self.marker, json.dumps({self.field: mode}) + "\n")
+            ours = Replaces.when(f"rik's {self.marker} (an object with {self.field!r})",
+                                 lambda p: self.field in (json_object(p) or {}))
+            write_text(out / self.marker, json.dumps({self.field: mode}) + "\n", ours)
 
 
 def _collision_mode() -> FolderMode:
@@ -322,17 +350,8 @@ def _store_mesh(out: Path, data: bytes) -> Path:
     file with a new inode: variants still linked to the damaged one fail :func:`is_current` and are rebuilt."""
     store = out / MESH_STORE / f"{_sha256(data)}.stl"
     if not _intact(store, data):
-        store.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(store) as tmp:
-            tmp.write_bytes(data)
+        write_bytes(store, data, PRIVATE)
     return store
-
-
-def _link(src: Path, dst: Path) -> None:
-    try:
-        os.link(src, dst)
-    except OSError:
-        shutil.copyfile(src, dst)
 
 
 def materialise(checked: CheckedVariant, directory: Path, report: dict[str, Any], out: Path | None = None) -> None:
@@ -340,25 +359,25 @@ def materialise(checked: CheckedVariant, directory: Path, report: dict[str, Any]
     whole, through a staging directory beside it under ``out``)."""
     variant = checked.variant
     out = out or directory.parent
-    stage = out / STAGING / f"{directory.name}.{os.getpid()}"
-    shutil.rmtree(stage, ignore_errors=True)
-    (stage / "meshes").mkdir(parents=True)
-    files: dict[str, str] = {}
-    for name, data in sorted(variant.mesh_files.items()):
-        _link(_store_mesh(out, data), stage / "meshes" / name)
-        files[f"meshes/{name}"] = _sha256(data)
-    model_xml = variant.spec.to_xml()
-    scene = scene_xml(variant.key.id, variant.unit)
-    for name, text in (("model.xml", model_xml), ("scene.xml", scene)):
-        (stage / name).write_text(text, encoding="utf-8")
-        files[name] = _sha256(text.encode())
-    (stage / "report.json").write_text(json.dumps({**report, "files": files}, indent=2) + "\n", encoding="utf-8")
-    old = out / STAGING / f"{directory.name}.{os.getpid()}.old"
-    check_replaceable(directory, VARIANT_FOLDER)
-    if directory.exists():
-        os.replace(directory, old)
-    os.replace(stage, directory)
-    shutil.rmtree(old, ignore_errors=True)
+    stage = make_stage(out / STAGING / directory.name)  # a name of its own: builders side by side never share it
+    try:
+        (stage / "meshes").mkdir()
+        files: dict[str, str] = {}
+        for name, data in sorted(variant.mesh_files.items()):
+            link_or_copy(_store_mesh(out, data), stage / "meshes" / name)
+            files[f"meshes/{name}"] = _sha256(data)
+        model_xml = variant.spec.to_xml()
+        scene = scene_xml(variant.key.id, variant.unit)
+        for name, text in (("model.xml", model_xml), ("scene.xml", scene)):
+            write_text(stage / name, text, NEW)
+            files[name] = _sha256(text.encode())
+        write_text(stage / "report.json", json.dumps({**report, "files": files}, indent=2) + "\n", NEW)
+        replace_directory(stage, directory, VARIANT_FOLDER)
+    except BaseException:
+        remove_stage(stage)
+        raise
+    finally:
+        remove_empty_folder(out / STAGING)  # when no other builder stages a variant in it
 
 
 def make_report(catalog: Catalog, checked: CheckedVariant, digest: str, build_seconds: float) -> dict[str, Any]:
@@ -474,8 +493,6 @@ def read_manifest(out: Path) -> dict[str, Any]:
 
 def write_manifest(out: Path, results: Sequence[VariantResult]) -> Path:
     """Merge ``results`` into ``<out>/manifest.json`` (atomically)."""
-    from rik.paths import write_atomic
-
     manifest = read_manifest(out)
     variants = manifest["variants"]
     for r in results:
@@ -483,7 +500,9 @@ def write_manifest(out: Path, results: Sequence[VariantResult]) -> Path:
                           "spec_hash": r.spec_hash, "failed_check": r.failed_check, "reason": r.reason}
     manifest = {"format": REPORT_FORMAT, "variants": dict(sorted(variants.items()))}
     out.mkdir(parents=True, exist_ok=True)
-    write_atomic(out / MANIFEST, json.dumps(manifest, indent=1) + "\n")
+    ours = Replaces.when("the manifest of rik variants build (an object with 'variants')",
+                         lambda p: isinstance((json_object(p) or {}).get("variants"), dict))
+    write_text(out / MANIFEST, json.dumps(manifest, indent=1) + "\n", ours)
     return out / MANIFEST
 
 
@@ -542,6 +561,6 @@ def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEF
                 write_manifest(out, pending)
                 pending = []
     finally:
-        write_manifest(out, pending)
-        shutil.rmtree(out / STAGING, ignore_errors=True)
+        if pending:
+            write_manifest(out, pending)
     return [done[k.id] for k in keys]

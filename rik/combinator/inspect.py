@@ -113,8 +113,9 @@ def render_variant(catalog: Catalog, key: VariantKey, png: Path, *, out: Path = 
     os.environ.setdefault("MUJOCO_GL", "egl")
     import mujoco
 
-    from rik.paths import write_png
+    from rik.outputs import RECORDED, check_destination, write_png
 
+    check_destination(png, RECORDED, "--png")
     directory = out / key.id
     with tempfile.TemporaryDirectory(prefix="rik-show-") as tmp:
         if not (directory / "scene.xml").is_file():
@@ -133,6 +134,4 @@ def render_variant(catalog: Catalog, key: VariantKey, png: Path, *, out: Path = 
         with mujoco.Renderer(model, height, width) as renderer:
             renderer.update_scene(data, camera="front")
             pixels = renderer.render()
-    png.parent.mkdir(parents=True, exist_ok=True)
-    write_png(png, pixels)
-    return png
+    return write_png(png, pixels, RECORDED)

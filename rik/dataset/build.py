@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import time
 from collections import deque
 from collections.abc import Callable
@@ -27,7 +26,7 @@ from rik.dataset.plan import EpisodeUnit, Plan, RenderUnit, ShardUnit, export_se
 from rik.dataset.registry import register_dataset
 from rik.dataset.spec import library_versions
 from rik.errors import RikError
-from rik.paths import write_atomic
+from rik.outputs import Replaces, remove_directory, remove_file, write_text
 
 if TYPE_CHECKING:
 
@@ -106,10 +105,17 @@ class Folders:
         return self.work / "units" / "failed" / f"{key}.json"
 
 
+def work_file(work: Path) -> Replaces:
+    """What a file the build writes into its work folder ``work`` may replace: any file there (the folder was
+    checked to be a build's work folder, :func:`check_destination`, and is locked while the build runs)."""
+    root = Path(work).absolute()
+    return Replaces("a file of rik dataset build's work folder", lambda p: Path(p).absolute().is_relative_to(root))
+
+
 def _mark(folders: Folders, stage: str, key: str, record: dict[str, Any]) -> dict[str, Any]:
     path = folders.marker(stage, key)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_atomic(path, json.dumps({"stage": stage, "key": key, **record}, indent=1) + "\n")
+    write_text(path, json.dumps({"stage": stage, "key": key, **record}, indent=1) + "\n", work_file(folders.work))
     return record
 
 
@@ -280,7 +286,7 @@ class _Schedule:
             self._finish(stage, unit, record, reused=True)
             return
         self.attempts[unit.key] = 1
-        self.folders.failed(unit.key).unlink(missing_ok=True)
+        remove_file(self.folders.failed(unit.key), work_file(self.folders.work))
         job = self._job(stage, unit)
         if stage == "record":
             self.ready.append(job)
@@ -318,7 +324,7 @@ class _Schedule:
         self.result.failures.append(failure)
         path = self.folders.failed(unit.key)
         path.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(path, json.dumps(failure.__dict__, indent=1) + "\n")
+        write_text(path, json.dumps(failure.__dict__, indent=1) + "\n", work_file(self.folders.work))
 
 
 def describe(stage: str, unit: Any) -> str:
@@ -351,9 +357,9 @@ def build_dataset(catalog: Catalog, plan: Plan, out: Path, engine: Engine, *, wo
         t0 = time.perf_counter()
         folders = Folders(work, Path(variants).absolute())
         work.mkdir(parents=True, exist_ok=True)
-        write_atomic(work / f"spec-{plan.spec_hash[:16]}.json",
-                     json.dumps({"source": plan.source, "spec_hash": plan.spec_hash,
-                                 "spec": plan.spec.model_dump(mode="json")}, indent=1) + "\n")
+        write_text(work / f"spec-{plan.spec_hash[:16]}.json",
+                   json.dumps({"source": plan.source, "spec_hash": plan.spec_hash,
+                               "spec": plan.spec.model_dump(mode="json")}, indent=1) + "\n", work_file(work))
         schedule = _Schedule(plan, folders, engine, retries, result, progress)
         try:
             schedule.run()
@@ -487,13 +493,13 @@ def file_checksums(root: Path) -> dict[str, str]:
 def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, out: Path,
            result: BuildResult) -> None:
     """Aggregate the shards (in plan order), check the result, write the card and rik's metadata, publish."""
+    from rik.exporters.layout import MERGED_FILE, MERGING
     from rik.exporters.lerobot_card import write_card
     from rik.exporters.lerobot_check import check_dataset
     from rik.exporters.lerobot_export import aggregate_shards, order_stats, publish, quiet_encoders
 
     merged = folders.work / f"merged-{plan.spec_hash[:16]}"
-    if merged.exists():
-        shutil.rmtree(merged)
+    remove_directory(merged, MERGING)
     done = [schedule.done[s.key] for s in plan.shards]
     roots = [folders.work / d["output"] / "ds" for d in done if d.get("output")]
     if not roots:
@@ -520,7 +526,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
             "counts": {**plan.summary(), "frames": result.dataset_frames, "fps": fps},
             "outcomes": result.outcomes, "export": export_settings(plan.spec),
             "files": file_checksums(merged)}
-    write_atomic(merged / "meta" / DATASET_META, json.dumps(data, indent=1) + "\n")
+    write_text(merged / "meta" / DATASET_META, json.dumps(data, indent=1) + "\n", MERGED_FILE)
     publish(merged, out, what="the build", rerun="build again")
 
 
@@ -539,4 +545,5 @@ def _write_build_meta(out: Path, result: BuildResult, engine: Engine) -> None:
              "ran": result.ran, "reused": result.reused,
              "seconds": {k: round(v, 3) for k, v in result.seconds.items()}, "frames_rendered": result.frames,
              "episodes_per_hour": round(result.ran["record"] / hours, 1) if hours and result.ran["record"] else None}
-    write_atomic(out / "meta" / BUILD_META, json.dumps(stats, indent=1) + "\n")
+    ours = Replaces.when("rik's record of a build", lambda p: read_dataset_meta(p.parent.parent) is not None)
+    write_text(out / "meta" / BUILD_META, json.dumps(stats, indent=1) + "\n", ours)

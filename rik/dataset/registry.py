@@ -9,7 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from rik.dataset.meta import BUILD_META, read_dataset_meta, read_meta_file
-from rik.paths import cache_dir, write_atomic
+from rik.outputs import PRIVATE, write_text
+from rik.paths import cache_dir
 
 REGISTRY = "datasets.json"
 
@@ -85,7 +86,7 @@ def register_dataset(root: Path) -> None:
             entries = [e for e in _read() if e["path"] != str(root)]
             info = describe_dataset(root)
             entries.append({k: info.get(k) for k in ("path", "repo_id", "spec_hash")})
-            write_atomic(path, json.dumps(entries, indent=1) + "\n")
+            write_text(path, json.dumps(entries, indent=1) + "\n", PRIVATE)
     except (OSError, RikError):  # a damaged registry is left as it is (rik dataset list names it), not replaced
         pass
 

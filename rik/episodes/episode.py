@@ -11,26 +11,37 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import shutil
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from rik.episodes.states import COLUMNS as COLUMNS
+from rik.episodes.states import COLUMNS_2 as COLUMNS_2
+from rik.episodes.states import EXECUTED as EXECUTED
+from rik.episodes.states import META as META
+from rik.episodes.states import STATES as STATES
+from rik.episodes.states import VECTORS as VECTORS
+from rik.episodes.states import EpisodeError as EpisodeError
+from rik.episodes.states import columns_of as columns_of
+from rik.episodes.states import read_states
 from rik.errors import RikError
-from rik.paths import (
+from rik.outputs import (
+    NEW,
     MadeFolder,
+    Replaces,
     check_replaceable,
-    holds_only,
-    inside,
-    json_object,
-    json_sha256,
-    read_json,
-    write_atomic,
+    make_stage,
+    publish_new_directory,
+    remove_stage,
+    replace_directory,
+    tree_holds_only,
+    write_text,
+    writing,
 )
+from rik.paths import inside, json_object, json_sha256, read_json
 from rik.sim.outcome import classify
 from rik.sim.scene import SimScene
 
@@ -41,47 +52,18 @@ if TYPE_CHECKING:
     from rik.schemas.episodes import EpisodeMeta
 
 DEFAULT_EPISODES = Path("episodes")
-META = "meta.json"
 MAX_META_BYTES = 2**20
 """Largest ``meta.json`` read (:func:`read_meta`): rik writes a few kB."""
-STATES = "states.parquet"
-STAGING_PREFIX = ".staging-"
 
 
 def is_episode(directory: Path) -> bool:
     """Whether ``directory`` is an episode rik recorded: its ``meta.json`` (an object) and ``states.parquet``,
-    nothing else."""
-    return json_object(Path(directory) / META) is not None and holds_only(directory, {META, STATES})
+    nothing else, at any depth."""
+    return json_object(Path(directory) / META) is not None and tree_holds_only(directory, {META, STATES})
 
 
 EPISODE_FOLDER = MadeFolder("an episode rik recorded", is_episode, "choose another --out")
 """An episode's folder: recorded again, it is replaced, and only if :func:`is_episode` recognises it."""
-
-COLUMNS_2 = ("step", "time", "state", "action", "front_qpos", "front_qvel", "opening", "gripper_opening",
-             "tcp", "contacts", "contact_normal_force", "contact_tangential_force")
-"""The columns of episodes before format 3."""
-COLUMNS = (*COLUMNS_2, "tcp_quat", "robot_joints", "robot_targets")
-"""``tcp_quat``: the gripper frame's world orientation (w, x, y, z); ``robot_joints``: the robot's joint positions
-and its gripper's (meta.json's ``robot_joints`` names them); ``robot_targets``: what the servos were commanded in
-the row's step (the IK's joint targets for an arm, then the gripper's goal)."""
-EXECUTED = "executed_action"
-"""The column of an episode recorded with action noise (meta ``action_noise``): the action sent to the robot, where
-``action`` holds the operator's own (the label a policy learns, DART-style); episodes without noise lack it."""
-VECTORS = {"state": None, "action": 7, "tcp": 3, "tcp_quat": 4, "robot_joints": None, "robot_targets": None,
-           EXECUTED: 7}
-"""Vector columns and their widths (None: the meta's ``state_size``, or the robot's joint count)."""
-
-
-def columns_of(meta: EpisodeMeta) -> tuple[str, ...]:
-    """The columns of an episode's ``states.parquet``, in order, by its meta's format and noise."""
-    if meta.format < 3:
-        return COLUMNS_2
-    return (*COLUMNS, EXECUTED) if meta.action_noise is not None else COLUMNS
-
-
-class EpisodeError(RikError):
-    """An episode on disk is missing, truncated or corrupt."""
-
 
 def _versions() -> dict[str, str]:
     import mujoco
@@ -218,9 +200,12 @@ def _robot_base(scene: SimScene) -> Any:
 
 
 def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operator: str, operator_kind: str,
-                  seed: int, log: tuple[str, ...] = (), action_noise: float | None = None) -> EpisodeMeta:
-    """Write the recorded episode to ``out/<episode>`` (through a staging directory); returns its meta.
-    ``action_noise``: the operator's noise on the executed action (m), for an episode recorded with it."""
+                  seed: int, log: tuple[str, ...] = (), action_noise: float | None = None,
+                  replace: bool = True) -> EpisodeMeta:
+    """Write the recorded episode to ``out/<episode>`` (through a staging directory of its own); returns its meta.
+    ``action_noise``: the operator's noise on the executed action (m), for an episode recorded with it. With
+    ``replace``, an episode rik recorded there before is replaced (a recording is deterministic: the same one);
+    without, the id is taken exclusively and :class:`rik.outputs.NameTaken` raised when another writer has it."""
     import pyarrow.parquet as pq
 
     from rik.schemas.episodes import EpisodeMeta, GripperInfo
@@ -229,12 +214,10 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
     table = recorder.table()
     final = inside(out, episode, what="episode id")  # before any work: an id leading outside ``out`` is refused
     check_replaceable(final, EPISODE_FOLDER)  # and a folder there that is not an episode is never replaced
-    out.mkdir(parents=True, exist_ok=True)
-    staging = out / f"{STAGING_PREFIX}{episode}-{os.getpid()}"
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir()
+    staging = make_stage(final)
     try:
-        pq.write_table(table, staging / STATES, compression="zstd")
+        with writing(staging / STATES, NEW) as tmp:
+            pq.write_table(table, tmp, compression="zstd")
         digest = hashlib.sha256((staging / STATES).read_bytes()).hexdigest()
         g = s.gripper
         info = s.info
@@ -257,12 +240,12 @@ def write_episode(recorder: EpisodeRecorder, out: Path, *, episode: str, operato
         if data["action_kind"] == "pose":  # and pose-driven ones (every episode before leader arms) too
             del data["action_kind"]
         meta = write_meta(staging, data)
-        if final.exists():
-            check_replaceable(final, EPISODE_FOLDER)
-            shutil.rmtree(final)
-        os.replace(staging, final)
+        if replace:
+            replace_directory(staging, final, EPISODE_FOLDER)
+        else:
+            publish_new_directory(staging, final)
     except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
+        remove_stage(staging)
         raise
     return meta
 
@@ -281,7 +264,7 @@ def write_meta(directory: Path, data: dict[str, Any]) -> EpisodeMeta:
     data = {**data, "format": EPISODE_FORMAT}
     data["meta_sha256"] = meta_digest(data)
     meta = EpisodeMeta.model_validate(data)
-    write_atomic(Path(directory) / META, json.dumps(data, indent=2) + "\n")
+    write_text(Path(directory) / META, json.dumps(data, indent=2) + "\n", Replaces.in_folder(EPISODE_FOLDER))
     return meta
 
 
@@ -315,56 +298,13 @@ def read_meta(directory: Path) -> EpisodeMeta:
     return meta
 
 
-def read_episode(directory: Path) -> tuple[EpisodeMeta, pa.Table]:
-    """(meta, states table) of a recorded episode, checked whole: the states file's hash, its layout (columns, types,
-    vector widths) and row count must match the meta."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    meta = read_meta(directory)
-    file = Path(directory) / STATES
-    if not file.is_file():
-        raise EpisodeError(f"{file}: no such file; the episode is incomplete")
-    data = file.read_bytes()  # read once: hashed, then parsed from memory
-    if hashlib.sha256(data).hexdigest() != meta.states_sha256:
-        raise EpisodeError(f"{file}: truncated or corrupt (its sha256 differs from the one in meta.json)")
-    try:
-        table = pq.read_table(pa.BufferReader(data))
-    except (pa.ArrowException, OSError) as exc:
-        raise EpisodeError(f"{file}: not a readable Parquet file ({type(exc).__name__}: "
-                           f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
-    columns = columns_of(meta)
-    if table.num_rows != meta.steps + 1 or list(table.column_names) != list(columns):
-        raise EpisodeError(f"{file}: {table.num_rows} rows and columns {table.column_names}, expected "
-                           f"{meta.steps + 1} rows and {list(columns)}")
-    joint_action = len(meta.robot_joints) if meta.action_kind == "joints" else None
-    widths = {"state": meta.state_size, "action": joint_action, "tcp": 3, "tcp_quat": 4,
-              "robot_joints": len(meta.robot_joints), "robot_targets": len(meta.robot_joints), EXECUTED: 7}
-    for name in VECTORS:
-        if name in columns:
-            _check_vectors(file, table, name, widths[name])
-    for name in columns:
-        if name not in VECTORS and not pa.types.is_integer(table.schema.field(name).type) \
-                and not pa.types.is_floating(table.schema.field(name).type):
-            raise EpisodeError(f"{file}: column '{name}' holds {table.schema.field(name).type}, expected numbers")
-    return meta, table
-
-
-def _check_vectors(file: Path, table: pa.Table, name: str, width: int | None) -> None:
-    """Column ``name`` must hold finite-width float vectors, all ``width`` long (``None``: all the same length)."""
-    import pyarrow as pa
-    import pyarrow.compute as pc
-
-    kind = table.schema.field(name).type
-    if not (pa.types.is_list(kind) or pa.types.is_fixed_size_list(kind) or pa.types.is_large_list(kind)) \
-            or not pa.types.is_floating(kind.value_type):
-        raise EpisodeError(f"{file}: column '{name}' holds {kind}, expected lists of floats")
-    lengths = pc.list_value_length(table.column(name)).to_numpy(zero_copy_only=False)
-    want = width if width is not None else (int(lengths[0]) if len(lengths) else 0)
-    if len(lengths) and (lengths.min() != want or lengths.max() != want):
-        row = int(np.argmax(lengths != want))
-        raise EpisodeError(f"{file}: column '{name}' has {int(lengths[row])} numbers in row {row}, expected {want}"
-                           + (" (meta.json's state_size)" if name == "state" else ""))
+def read_episode(directory: Path, columns: Sequence[str] | None = None, meta: EpisodeMeta | None = None
+                 ) -> tuple[EpisodeMeta, pa.Table]:
+    """(meta, states table) of a recorded episode: :func:`rik.episodes.states.read_states`, the one reader of
+    ``states.parquet`` (bounded before anything is decoded; its hash, layout and rows checked against the meta);
+    ``columns``: only these (all when None); ``meta``: the episode's meta already read."""
+    meta = meta if meta is not None else read_meta(directory)
+    return meta, read_states(directory, meta, columns)
 
 
 def find_episodes(paths: list[Path]) -> list[Path]:

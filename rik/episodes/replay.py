@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from rik.episodes.episode import EXECUTED, EpisodeError, read_episode, states
+from rik.episodes.episode import EXECUTED, EpisodeError, columns_of, read_episode, read_meta, states
 from rik.episodes.record import variant_dir
 
 if TYPE_CHECKING:
@@ -71,10 +71,11 @@ def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: Episo
 
 def verify_episode(catalog: Catalog, directory: Path, variants: Path = Path("variants")) -> ReplayCheck:
     """Re-simulate every recorded step from its recorded state and action; compare with the next state."""
-    meta, table = read_episode(directory)
+    meta = read_meta(directory)
+    sent = EXECUTED if EXECUTED in columns_of(meta) else "action"  # the action the robot ran
+    _, table = read_episode(directory, ("state", sent), meta)  # only these two columns are decoded
     scene = episode_scene(catalog, directory, variants, meta)
     recorded = states(table)
-    sent = EXECUTED if EXECUTED in table.column_names else "action"  # the action the robot ran
     actions = cast("pa.ListArray", table.column(sent).combine_chunks()).values.to_numpy().reshape(len(recorded), -1)
     worst = 0.0
     for k in range(len(recorded) - 1):

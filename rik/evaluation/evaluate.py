@@ -17,17 +17,21 @@ Outputs (in ``--out``): ``table.md`` (F/P/S per handle type x preset, with Wilso
 from __future__ import annotations
 
 import json
+import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 from rik.errors import RikError
 from rik.evaluation.load import policy_needs
 from rik.evaluation.policy_files import check_policy_folder
 from rik.scheduling import normal_scheduling
+
+if TYPE_CHECKING:
+    from rik.outputs import Replaces
 
 STRATEGY_PREFIX = "strategy:"
 DEFAULT_SEED = 1000
@@ -250,12 +254,15 @@ def run_episode(spec: EvalSpec, seed: int, video_dir: Path | None = None) -> dic
     if video_dir is not None and frames:
         from lerobot.utils.io_utils import write_video
 
+        from rik.outputs import Replaces, recorded, writing
         from rik.sim.scene import CONTROL_FPS
 
         video_dir.mkdir(parents=True, exist_ok=True)
         path = video_dir / f"episode_{seed}.mp4"
-        with normal_scheduling():  # a video encoder may leave the thread at real-time priority (rik.scheduling)
-            write_video(str(path), frames, CONTROL_FPS)
+        ours = Replaces("a video of an earlier rik eval", lambda p: _is_eval(p.parent.parent) or recorded(p), True)
+        # a video encoder may leave the thread at real-time priority (rik.scheduling)
+        with normal_scheduling(), writing(path, ours, keep_suffix=True) as tmp:
+            write_video(str(tmp), frames, CONTROL_FPS)
         row["video"] = str(path)
     return row
 
@@ -343,11 +350,24 @@ def _is_eval(folder: Path) -> bool:
     return info is not None and isinstance(info.get("rik"), dict) and "spec" in info["rik"]
 
 
+def eval_file() -> Replaces:
+    """What a file rik eval writes may replace: the same file of an earlier rik eval in that folder (the folder, or
+    a policy's folder in it, holds its ``eval_info.json``), or one rik recorded writing there."""
+    from rik.outputs import Replaces, recorded
+
+    def ours(path: Path) -> bool:
+        folder = Path(path).parent
+        return (_is_eval(folder) or recorded(path)
+                or any(_is_eval(Path(e.path)) for e in os.scandir(folder) if e.is_dir(follow_symlinks=False)))
+
+    return Replaces("an output of an earlier rik eval", ours, record=True)
+
+
 def check_eval_out(out: Path, policy_folders: Sequence[str] = ()) -> None:
     """Refuse (one line), before any episode, an ``--out`` (or a policy's folder in it, ``policy_folders``) where a
     file rik eval writes (:data:`EVAL_FILES`) is there and the folder is not an earlier rik eval's output: a rerun
     may write over its own results, never a user's file."""
-    from rik.paths import check_own_files
+    from rik.outputs import check_own_files
 
     out = Path(out)
     ours_below = any(_is_eval(out / f) for f in policy_folders)
@@ -358,21 +378,43 @@ def check_eval_out(out: Path, policy_folders: Sequence[str] = ()) -> None:
 
 def eval_folders(outs: Sequence[Path], specs: Sequence[EvalSpec]) -> list[Path]:
     """Where each spec's outputs go, checked (:func:`check_eval_out`) before any episode runs: with one folder in
-    ``outs``, that folder for one spec and a folder per spec in it (named by its label) for several; with one per
-    spec, each its own."""
+    ``outs``, that folder for one spec and a folder per spec in it (named by its label, :func:`label_folders`) for
+    several; with one per spec, each its own."""
     if len(outs) > 1:
         for out in outs:
             check_eval_out(out)
         return list(outs)
-    names = [s.label for s in specs]
-    if len(set(names)) < len(names):
-        raise RikError(f"two policies have the same name ({', '.join(names)}): give them different run folders "
-                       "or --label")
     if len(specs) == 1:
         check_eval_out(outs[0])
         return [outs[0]]
-    check_eval_out(outs[0], [slug(name) for name in names])
-    return [outs[0] / slug(name) for name in names]
+    names = label_folders(outs[0], [s.label for s in specs])
+    check_eval_out(outs[0], names)
+    return [outs[0] / name for name in names]
+
+
+MAX_NAME_BYTES = 255
+"""Longest folder name (bytes of UTF-8) that Linux, macOS and Windows file systems all take."""
+
+
+def label_folders(out: Path, labels: Sequence[str]) -> list[str]:
+    """The folder in ``out`` of each label (:func:`slug`), refused (one line naming the labels) where it is not a
+    plain folder name of its own: empty, ``.`` or ``..`` (``out`` itself, or above it), too long, one of the files
+    rik eval writes beside them (:data:`EVAL_FILES`), or the same as another label's (compared as written: two
+    labels that differ only in characters :func:`slug` turns into ``-`` share one)."""
+    names = [slug(label) for label in labels]
+    for label, name in zip(labels, names, strict=True):
+        if not name or name in (".", "..") or len(name.encode()) > MAX_NAME_BYTES or name in EVAL_FILES:
+            raise RikError(f"label {label!r}: its folder in {out} would be {name!r}, which is not a folder of its "
+                           f"own (not empty, '.', '..', {', '.join(EVAL_FILES)}, nor over {MAX_NAME_BYTES} bytes); "
+                           "give the policy another --label")
+    first: dict[str, str] = {}
+    for label, name in zip(labels, names, strict=True):
+        if name in first:
+            raise RikError(f"labels {first[name]!r} and {label!r} would share the folder {out / name} (characters "
+                           "other than letters, digits, '-', '_' and '.' become '-'): give the policies labels that "
+                           "differ there (--label), or each its own --out")
+        first[name] = label
+    return names
 
 
 def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
@@ -437,7 +479,7 @@ def write_tables(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[str, 
     """``table.md`` and ``episodes.csv`` of one operator's rows, or of several operators' on the same episodes side
     by side (with ``success.png``)."""
     from rik.benchmark.bench import rows_csv, table_markdown
-    from rik.paths import write_atomic
+    from rik.outputs import write_text
 
     first, n = specs[0], len(specs[0].seeds())
     seeds = f"seeds {first.seed}..{first.seed + n - 1}, {first.episodes_per_cell} per cell"
@@ -446,8 +488,8 @@ def write_tables(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[str, 
     head = (f"# {', '.join(s.label for s in specs)} on the {first.split or 'all'} split{robot}\n\n{episodes}; F/P/S "
             "fractions, S with its 95 % Wilson interval.\n\n")
     out.mkdir(parents=True, exist_ok=True)
-    write_atomic(out / "table.md", head + table_markdown(rows, first.presets, ci=True))
-    write_atomic(out / "episodes.csv", rows_csv(rows))
+    write_text(out / "table.md", head + table_markdown(rows, first.presets, ci=True), eval_file())
+    write_text(out / "episodes.csv", rows_csv(rows), eval_file())
     if len(specs) > 1:
         success_plot(rows, out / "success.png", title=f"{first.split or 'all'} split, {n} episodes each")
 
@@ -458,7 +500,8 @@ def success_plot(rows: Sequence[dict[str, Any]], png: Path, title: str = "") -> 
     import numpy as np
 
     from rik.benchmark.bench import wilson
-    from rik.paths import pyplot, save_figure
+    from rik.outputs import save_figure
+    from rik.paths import pyplot
 
     operators = list(dict.fromkeys(r["strategy"] for r in rows))
     groups = ["all", *dict.fromkeys(r["handle_type"] for r in rows)]
@@ -482,7 +525,7 @@ def success_plot(rows: Sequence[dict[str, Any]], png: Path, title: str = "") -> 
     ax.legend(frameon=False, fontsize=8, ncols=len(groups))
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
-    return save_figure(fig, png)
+    return save_figure(fig, png, eval_file())
 
 
 def eval_info(spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> dict[str, Any]:
@@ -504,7 +547,8 @@ def eval_info(spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) ->
 
 def write_outputs(out: Path, spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> None:
     """``table.md``, ``episodes.csv`` and ``eval_info.json`` of one operator (atomically)."""
-    from rik.paths import write_atomic
+    from rik.outputs import write_text
 
     write_tables(out, [spec], rows)
-    write_atomic(out / "eval_info.json", json.dumps(eval_info(spec, rows, seconds), indent=2, default=list) + "\n")
+    write_text(out / "eval_info.json", json.dumps(eval_info(spec, rows, seconds), indent=2, default=list) + "\n",
+               eval_file())

@@ -8,6 +8,9 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rik.exporters.layout import MERGED_FILE, MERGING
+from rik.outputs import Replaces, write_text
+
 if TYPE_CHECKING:
     from rik.exporters.spec import ExportSpec
     from rik.registry.catalog import Catalog
@@ -301,16 +304,15 @@ def write_card(catalog: Catalog, root: Path, spec: ExportSpec, fps: int, checks:
     from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
     from lerobot.datasets.utils import create_lerobot_dataset_card
 
-    from rik.paths import write_atomic
 
     info = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))
     description = (_description(catalog, spec, fps, checks, info, catalog.robot(robot), joint_driven)
                    + (f"\n{extra}\n" if extra else ""))
     fields = {"dataset_description": description,
               "paper": "Real-IKEA (see CITATION below)", "citation_bibtex": CITATION}
-    write_atomic(root / "meta" / CARD_FIELDS, json.dumps(fields, indent=1) + "\n")
+    write_text(root / "meta" / CARD_FIELDS, json.dumps(fields, indent=1) + "\n", MERGED_FILE)
     meta = LeRobotDatasetMetadata(spec.repo_id, root=root)
     card = create_lerobot_dataset_card(tags=["rik", "mujoco", "articulated-furniture"], dataset_info=meta.info,
                                        license="apache-2.0", repo_id=spec.repo_id, **fields)
-    write_atomic(root / "README.md", str(card))
+    write_text(root / "README.md", str(card), Replaces.in_folder(MERGING))
     return root / "README.md"

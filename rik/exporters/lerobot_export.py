@@ -18,7 +18,6 @@ from __future__ import annotations
 import json
 import multiprocessing
 import os
-import shutil
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from functools import partial
@@ -27,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
 from rik.exporters import lerobot_card, lerobot_check  # called through the modules, so that tests can replace them
+from rik.exporters.layout import DATASET_FILE, MERGED_FILE, MERGING
 from rik.exporters.lerobot_frames import (
     LAYOUT,
     LAYOUT_1_STATE_NAMES,
@@ -39,7 +39,18 @@ from rik.exporters.lerobot_frames import (
     load_episode,
 )
 from rik.exporters.spec import ENCODER_OPTIONS, ExportSpec, check_codec_size, check_spec, keep_outcomes
-from rik.paths import check_folder, json_object, write_atomic
+from rik.outputs import (
+    PRIVATE,
+    MadeFolder,
+    NameTaken,
+    Replaces,
+    holds_only,
+    publish_new_directory,
+    remove_directory,
+    tree_holds_only,
+    write_text,
+)
+from rik.paths import check_folder, json_object
 from rik.scheduling import normal_scheduling
 from rik.sim.feature_keys import TASK
 
@@ -50,6 +61,8 @@ if TYPE_CHECKING:
 
 DONE = "DONE"
 PLAN = "plan.json"
+SHARD_FOLDER = MadeFolder("a shard rik was writing", lambda d: holds_only(d, {"ds", DONE}), "delete it yourself")
+"""A shard's folder (lerobot's dataset in ``ds/``, then rik's ``DONE``): an unfinished one is redone from scratch."""
 
 
 @dataclass
@@ -169,8 +182,7 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     # costs no render; the shard holds its episodes' states (shard_episodes of them) until each is saved
     loaded: list[LoadedEpisode | None] = [load_episode(catalog, s.directory, metas[s.directory], spec.action_frame)
                                           for s in sources]
-    if root.exists():
-        shutil.rmtree(root)  # an unfinished shard is redone from scratch
+    remove_directory(root, SHARD_FOLDER)  # an unfinished shard is redone from scratch
     root.parent.mkdir(parents=True, exist_ok=True)
     ds = LeRobotDataset.create(repo_id=repo_id, fps=fps, features=features(cameras, spec.streams, spec.width,
                                                                              spec.height, layout, spec.handle_shape),
@@ -211,7 +223,7 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     finally:
         ds.finalize()
     lerobot_check.check_frame_counts(root / "ds")
-    write_atomic(root / DONE, json.dumps([s.directory.name for s in sources]) + "\n")
+    write_text(root / DONE, json.dumps([s.directory.name for s in sources]) + "\n", Replaces.in_folder(SHARD_FOLDER))
     return frames_total
 
 
@@ -245,8 +257,18 @@ def is_rik_export(folder: Path) -> bool:
         json_object(folder / "meta" / lerobot_card.CARD_FIELDS) is not None
 
 
+def is_exported_dataset(folder: Path) -> bool:
+    """Whether ``folder`` is a dataset rik exported (:func:`is_rik_export`) holding nothing but a dataset's files
+    (:data:`DATASET_FILE`), at any depth: the test before rik replaces one (the demo's)."""
+    return is_rik_export(folder) and tree_holds_only(folder, lambda rel: DATASET_FILE.fullmatch(rel) is not None)
+
+
 def _check_out_free(out: Path, resume: bool) -> None:
-    """``--out`` must not exist yet (an export publishes it whole, at the end)."""
+    """``--out`` must not exist yet (an export publishes it whole, at the end); nor be a link, even one that leads
+    nowhere (checked before any work)."""
+    if out.is_symlink():
+        raise RikError(f"{out}: is a symbolic link; an export is published as a new folder there, never through a "
+                       "link: choose another --out")
     if not out.exists():
         return
     if not resume:
@@ -301,7 +323,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         cams = list(spec.cameras) or list(CAMERAS)
     created = not partial_dir.exists()
     partial_dir.mkdir(parents=True, exist_ok=True)
-    write_atomic(partial_dir / PLAN, json.dumps(plan, indent=1) + "\n")
+    write_text(partial_dir / PLAN, json.dumps(plan, indent=1) + "\n", PRIVATE)
 
     # 2. Shards, each finished and checked before it counts; finished ones are never redone. A shard reads each of
     # its episodes once, renders the image streams missing from renders/ (resumable per frame) from that read, and
@@ -348,13 +370,12 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         # an episode found bad where it is read (sha256, rows, action width, scene): the partial export this call
         # began goes with it, so bad input leaves nothing behind; an older interrupted one stays for --resume
         if created:
-            shutil.rmtree(partial_dir, ignore_errors=True)
+            remove_partial(partial_dir)
         raise
 
     # 3. Merge, check, card, then publish by renaming.
     merged = partial_dir / "merged"
-    if merged.exists():
-        shutil.rmtree(merged)
+    remove_directory(merged, MERGING)
     shard_dirs = sorted(p for p in shard_root.iterdir() if p.is_dir())
     aggregate_shards(spec.repo_id, [p / "ds" for p in shard_dirs], merged)
     order_stats(merged)
@@ -362,7 +383,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     lerobot_card.write_card(catalog, merged, spec, fps, checks, robot=robot,
                             joint_driven=sum(m.action_kind == "joints" for m in metas.values()))
     publish(merged, out)
-    shutil.rmtree(partial_dir, ignore_errors=True)
+    remove_partial(partial_dir)
     return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
                         sorted(features(cams, spec.streams, spec.width, spec.height, layout, spec.handle_shape)),
                         len(jobs), skipped, checks, robot, layout.robot_type)
@@ -378,19 +399,34 @@ def order_stats(root: Path) -> None:
     stats = json.loads(stats_file.read_text(encoding="utf-8"))
     order = list(json.loads(info_file.read_text(encoding="utf-8"))["features"])
     ordered = {k: stats[k] for k in order if k in stats} | {k: stats[k] for k in sorted(stats) if k not in order}
-    write_atomic(stats_file, json.dumps(ordered, indent=4, ensure_ascii=False))  # lerobot's own layout
+    write_text(stats_file, json.dumps(ordered, indent=4, ensure_ascii=False), MERGED_FILE)  # lerobot's own layout
 
 
 def publish(merged: Path, out: Path, what: str = "the export", rerun: str = "run again with --resume") -> None:
     """Rename the finished dataset to ``out``, which must still be free: a folder made there by something else
     while ``what`` ran is never replaced, and the finished dataset stays where it is (``rerun``: how to go on)."""
     try:
-        if out.exists():
-            raise FileExistsError
-        os.rename(merged, out)
-    except OSError:
+        publish_new_directory(merged, out)
+    except (NameTaken, OSError):
         raise RikError(f"{out}: was created by something else while {what} ran, so the finished dataset was not "
                        f"moved there (it is kept in {merged}); move {out} away and {rerun}") from None
+
+
+PARTIAL_FOLDER = MadeFolder("an interrupted export of rik export-lerobot",
+                            lambda p: json_object(p / PLAN) is not None and tree_holds_only(p, _partial_file),
+                            "delete it yourself")
+"""``<out>.partial``: the plan, shards and merged dataset of an export under way."""
+
+
+def _partial_file(rel: str) -> bool:
+    """Whether ``rel`` is a path an export writes into ``<out>.partial``."""
+    top = rel.split("/", 1)[0]
+    return rel == PLAN or top in ("shards", "merged")
+
+
+def remove_partial(partial_dir: Path) -> None:
+    """Remove ``<out>.partial`` (:data:`PARTIAL_FOLDER`): only a folder an export made."""
+    remove_directory(partial_dir, PARTIAL_FOLDER)
 
 
 def _shard_by_name(jobs: dict[str, tuple], catalog: Catalog, name: str) -> int:

@@ -42,6 +42,8 @@ META_FIELDS = ("episode_id", "variant", "base_unit", "handle", "handle_type", "p
                "operator_kind", "outcome", "seed", "final_opening", "source_fps")
 ROBOT_TYPE = "rik_hand_e"
 """``info.json``'s ``robot_type`` of the Hand-E's exports (an arm's is its catalog entry's ``lerobot.robot_type``)."""
+EXPORT_COLUMNS = ("state", "action", "robot_targets")
+"""The columns of ``states.parquet`` an export decodes (an episode before format 3 has no ``robot_targets``)."""
 LAYOUT = 2
 """Version of the state layout an export writes: 2 is ``observation.state`` (the robot's state,
 :data:`rik.sim.observation.ROBOT_STATE_NAMES`) beside ``observation.environment_state`` (the front's state); 1 was
@@ -167,11 +169,11 @@ class LoadedEpisode:
 
 def load_episode(catalog: Catalog, directory: Path, meta: EpisodeMeta | None = None, action_frame: str = "world"
                  ) -> LoadedEpisode:
-    """Read the episode in ``directory`` for the export: ``meta.json`` (unless given) and ``states.parquet``, checked
-    whole (:func:`rik.episodes.episode.read_episode`), its robot's layout (:func:`episode_layout`) and its action
-    rows, refused (one line) when they are not the :data:`ACTION_NAMES` rik exports: the export's one check of
-    their width."""
-    recorded = RecordedEpisode(directory, meta)
+    """Read the episode in ``directory`` for the export: ``meta.json`` (unless given) and the :data:`EXPORT_COLUMNS`
+    of ``states.parquet`` (:func:`rik.episodes.states.read_states`: bounded before decoding, and checked), its
+    robot's layout (:func:`episode_layout`) and its action rows, refused (one line) when they are not the
+    :data:`ACTION_NAMES` rik exports: the export's one check of their width."""
+    recorded = RecordedEpisode(directory, meta, EXPORT_COLUMNS)
     table = recorded.table
     layout = episode_layout(catalog, recorded.directory, recorded.meta, action_frame)
     rows = len(recorded.states)

@@ -20,7 +20,8 @@ from typing import TYPE_CHECKING, Any
 
 import rik
 from rik.errors import UnknownIdError
-from rik.paths import cache_dir, write_atomic
+from rik.outputs import PRIVATE, write_text
+from rik.paths import cache_dir
 from rik.registry.fit import fits_base_unit
 from rik.registry.sources import NOUNS, SECTIONS, catalog_sources, read_file
 from rik.registry.splits import check_split
@@ -204,6 +205,6 @@ def _write(path: Path, index: CatalogIndex) -> None:
     sha = hashlib.sha256(payload.encode()).hexdigest()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(path, _header(index.fingerprint, sha).decode() + payload + "}")
+        write_text(path, _header(index.fingerprint, sha).decode() + payload + "}", PRIVATE)
     except OSError:
         pass

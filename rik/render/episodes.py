@@ -62,23 +62,27 @@ def scene_cameras(model: mujoco.MjModel, wanted: Sequence[str] | None, where: st
 
 class RecordedEpisode:
     """An episode read once, for everything made from it: its ``meta.json`` (given, or read at once) and, on first
-    use, ``states.parquet`` checked whole (:func:`rik.episodes.episode.read_episode`), the recorded states as an
-    array and the scene it was recorded in (built once per catalog and variants folder). Every stream rendered from
-    it (:func:`render_episode`) and the export's frames of it share them; the states are read only if asked for."""
+    use, the columns of ``states.parquet`` it needs (:func:`rik.episodes.states.read_states`), the recorded states as
+    an array and the scene it was recorded in (built once per catalog and variants folder). Every stream rendered
+    from it (:func:`render_episode`) and the export's frames of it share them; the states are read only if asked
+    for."""
 
-    def __init__(self, directory: Path, meta: EpisodeMeta | None = None) -> None:
-        from rik.episodes.episode import read_meta
+    def __init__(self, directory: Path, meta: EpisodeMeta | None = None, columns: Sequence[str] = ("state",)) -> None:
+        from rik.episodes.episode import columns_of, read_meta
 
         self.directory = Path(directory)
         self.meta = meta if meta is not None else read_meta(self.directory)
+        self.columns = tuple(c for c in columns if c in columns_of(self.meta))
+        """Those of ``columns`` the episode has: what :attr:`table` decodes (a render needs ``state`` only)."""
         self._scene: tuple[Catalog, Path, SimScene] | None = None
 
     @cached_property
     def table(self) -> pa.Table:
-        """``states.parquet``, checked against the meta's sha256 and layout (read on first use)."""
+        """:attr:`columns` of ``states.parquet``, bounded before decoding and checked against the meta's sha256 and
+        layout (:func:`rik.episodes.states.read_states`; read on first use)."""
         from rik.episodes.episode import read_episode
 
-        return read_episode(self.directory)[1]
+        return read_episode(self.directory, self.columns, self.meta)[1]
 
     @cached_property
     def states(self) -> np.ndarray:

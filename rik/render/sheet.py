@@ -7,10 +7,13 @@ from pathlib import Path
 
 import numpy as np
 
-from rik.paths import write_png
-from rik.render.streams import read_frame, read_manifest
+from rik.outputs import Replaces, write_png
+from rik.render.streams import is_stream, read_frame, read_manifest
 
 GAP_PX = 4
+SHEET = Replaces.when("a contact sheet rik drew beside an episode's streams",
+                      lambda p: p.suffix == ".png" and any(is_stream(d) for d in p.parent.iterdir() if d.is_dir()))
+"""What a contact sheet may replace: rik's earlier sheet, in a folder of an episode's streams."""
 
 
 def contact_sheet(streams: list[Path], out: Path, rows: int = 3, cameras: list[str] | None = None) -> Path:
@@ -33,6 +36,5 @@ def contact_sheet(streams: list[Path], out: Path, rows: int = 3, cameras: list[s
     for r, row in enumerate(tiles):
         for c, tile in enumerate(row):
             sheet.paste(Image.fromarray(tile), (c * (w + GAP_PX), label_h + r * (h + GAP_PX)))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    write_png(out, np.asarray(sheet))
+    write_png(out, np.asarray(sheet), SHEET)
     return out

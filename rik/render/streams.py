@@ -12,7 +12,7 @@ index), and a stream of an episode recorded again (another states sha256) is ren
 from __future__ import annotations
 
 import json
-import shutil
+import re
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -21,16 +21,18 @@ from typing import Any, Literal
 import numpy as np
 
 from rik.errors import RikError
-from rik.paths import (
+from rik.outputs import (
+    PRIVATE,
     MadeFolder,
     check_replaceable,
-    holds_only,
-    inside,
-    json_object,
+    remove_file,
+    remove_stage,
     replace_directory,
-    write_atomic,
+    tree_holds_only,
     write_png,
+    write_text,
 )
+from rik.paths import inside, json_object
 
 DEFAULT_RENDERS = Path("renders")
 MANIFEST = "stream.json"
@@ -109,13 +111,23 @@ def is_done(directory: Path, states_sha256: str) -> bool:
     return manifest is not None and manifest.get("states_sha256") == states_sha256
 
 
+FRAME = re.compile(r"\d{6}\.png")
+"""The name of a frame (:func:`frame_name`)."""
+
+
 def is_stream(directory: Path) -> bool:
     """Whether ``directory`` is a stream rik rendered (finished, of any states): its ``stream.json`` and one folder
-    per camera it names, nothing else."""
+    per camera it names holding frames, nothing else at any depth."""
     manifest = json_object(Path(directory) / MANIFEST)
     cameras = manifest.get("cameras") if manifest is not None else None
-    return (isinstance(cameras, list) and all(isinstance(c, str) for c in cameras)
-            and holds_only(directory, {MANIFEST, *cameras}))
+    if not (isinstance(cameras, list) and all(isinstance(c, str) for c in cameras)):
+        return False
+
+    def ours(rel: str) -> bool:
+        folder, _, name = rel.rpartition("/")
+        return rel == MANIFEST or (folder in cameras and FRAME.fullmatch(name) is not None)
+
+    return tree_holds_only(directory, ours)
 
 
 STREAM_FOLDER = MadeFolder("an image stream rik rendered", is_stream, "choose another folder for the renders")
@@ -132,10 +144,10 @@ class StreamWriter:
         self.staging = self.final.with_name(f".{self.final.name}.partial")
         marker = self.staging / ".states_sha256"
         if self.staging.exists() and (not marker.is_file() or marker.read_text().strip() != states_sha256):
-            shutil.rmtree(self.staging)  # frames of other states: start again
+            remove_stage(self.staging)  # frames of other states: start again
         for cam in cameras:
             (self.staging / cam).mkdir(parents=True, exist_ok=True)
-        marker.write_text(states_sha256)
+        write_text(marker, states_sha256, PRIVATE)
 
     def missing(self) -> Iterator[int]:
         """Indices of frames with at least one camera not written yet."""
@@ -144,14 +156,14 @@ class StreamWriter:
                 yield k
 
     def write(self, index: int, camera: str, image: np.ndarray) -> None:
-        write_png(self.staging / camera / frame_name(index), image, compress_level=4)
+        write_png(self.staging / camera / frame_name(index), image, PRIVATE, compress_level=4)
 
     def publish(self, info: dict[str, Any]) -> Path:
         """Write the manifest and move the finished stream into place (replacing an outdated one)."""
         manifest = {"stream": self.spec.kind, "key": self.spec.key, **asdict(self.spec), "cameras": self.cameras,
                     "frames": self.frames, "states_sha256": self.sha, **info}
-        (self.staging / ".states_sha256").unlink(missing_ok=True)
-        write_atomic(self.staging / MANIFEST, json.dumps(manifest, indent=2) + "\n")
+        remove_file(self.staging / ".states_sha256", PRIVATE)
+        write_text(self.staging / MANIFEST, json.dumps(manifest, indent=2) + "\n", PRIVATE)
         replace_directory(self.staging, self.final, STREAM_FOLDER)
         return self.final
 

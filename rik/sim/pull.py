@@ -280,8 +280,9 @@ def write_profiles(path: str | Path, pulls: Sequence[PullProfile], *, at_handle:
     (:mod:`rik.sysid.profile`): a CSV with columns ``trial``, ``position [m]`` or ``position [rad]``, and
     ``force [N]`` (slides; hinges with ``at_handle``: the force at the handle) or ``torque [N·m]`` (hinges: the
     joint torque, force × lever arm, so that fitted parameters compare with a preset's). One trial per pull,
-    numbered from 0. Returns ``path``."""
-    from rik.paths import write_atomic
+    numbered from 0. Returns ``path``. A file already at ``path`` is replaced only when it is rik's own earlier
+    profile there (:data:`rik.outputs.RECORDED`): the same format as a measured profile, so nothing else tells."""
+    from rik.outputs import RECORDED, write_text
 
     if not pulls:
         raise RikError("write_profiles: no pulls to write")
@@ -296,5 +297,4 @@ def write_profiles(path: str | Path, pulls: Sequence[PullProfile], *, at_handle:
         values = pull.force if (at_handle or not hinge) else pull.joint_force
         lines += [f"{i},{q:.9g},{f:.9g}" for q, f in zip(pull.q, values, strict=True)]
     path = Path(path)
-    write_atomic(path, "\n".join(lines) + "\n")
-    return path
+    return write_text(path, "\n".join(lines) + "\n", RECORDED)

@@ -7,9 +7,7 @@ values on the other side, in ``<catalog_dir>/preset-<name>.yaml``. Use it with `
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -51,7 +49,7 @@ def write_preset(resistance: JointResistance, joint_type: JointType, name: str, 
     import yaml
 
     from rik import CATALOG_SCHEMA
-    from rik.paths import write_atomic
+    from rik.outputs import NEW, make_stage, remove_stage, write_text
     from rik.registry import load_catalog
     from rik.registry.sources import BUILTIN_DIR, catalog_files, display_path
 
@@ -80,16 +78,13 @@ def write_preset(resistance: JointResistance, joint_type: JointType, name: str, 
     text = (f"# Resistance preset '{name}' fitted to measured data (rik sysid); units: rik/schemas/joints.py\n"
             + yaml.safe_dump({"schema": CATALOG_SCHEMA, "presets": [entry]}, sort_keys=False, allow_unicode=True))
     catalog_dir.mkdir(parents=True, exist_ok=True)
-    handle, name = tempfile.mkstemp(prefix=f".{file.name}.", suffix=".check.yaml", dir=catalog_dir)
-    os.close(handle)  # a new file (never one of the user's); hidden: a catalog scan skips it
-    staged = Path(name)
+    stage = make_stage(file)  # a new hidden folder (never one of the user's): a catalog scan skips it
     try:
-        staged.write_text(text, encoding="utf-8")
+        staged = write_text(stage / file.name, text, NEW)
         load_catalog([catalog_dir, staged])  # the whole user catalog must still validate with the new preset
     finally:
-        staged.unlink(missing_ok=True)
-    write_atomic(file, text)
-    return file
+        remove_stage(stage)
+    return write_text(file, text, NEW)
 
 
 def read_summary(path: Path) -> dict[str, Any]:

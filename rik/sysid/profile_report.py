@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from rik.paths import pyplot, save_figure, staged_directory, write_atomic
+from rik.outputs import NEW, save_figure, staged_directory, write_text
+from rik.paths import pyplot
 from rik.schemas.joints import JointType
 from rik.sysid.profile import ProfileData
 from rik.sysid.profile_fit import (
@@ -154,7 +155,7 @@ def plot_profile(fit: ProfileFit, path: Path, ax: Any = None, title: str | None 
         ax.legend(fontsize=6, frameon=False)
     if fig is not None:
         fig.tight_layout()
-        return save_figure(fig, path)
+        return save_figure(fig, path, NEW)
     return None
 
 
@@ -199,8 +200,8 @@ def _write_group(fit: ProfileFit, data: ProfileData, directory: Path) -> dict[st
     directory.mkdir(parents=True, exist_ok=True)
     info = summary(fit, data)
     plot_profile(fit, directory / PROFILE_PLOT)
-    write_atomic(directory / SUMMARY, json.dumps(info, indent=2) + "\n")
-    write_atomic(directory / REPORT, markdown(fit, info))
+    write_text(directory / SUMMARY, json.dumps(info, indent=2) + "\n", NEW)
+    write_text(directory / REPORT, markdown(fit, info), NEW)
     return info
 
 
@@ -223,6 +224,6 @@ def write_profile_report(data: ProfileData, fits: Sequence[ProfileFit], director
                 found = str(g["sentence"])[len(f.group) + 2:]
                 lines.append(f"| {f.group} | {g['trials']} | {found} | {f.selection.gain:.0%} | "
                              f"[{g['directory']}]({g['directory']}/{REPORT}) |")
-            write_atomic(stage / SUMMARY, json.dumps(index, indent=2) + "\n")
-            write_atomic(stage / REPORT, "\n".join(lines) + "\n")
+            write_text(stage / SUMMARY, json.dumps(index, indent=2) + "\n", NEW)
+            write_text(stage / REPORT, "\n".join(lines) + "\n", NEW)
     return directory

@@ -24,7 +24,8 @@ from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
-from rik.paths import MadeFolder, holds_only, json_object, pyplot, save_figure, staged_directory, write_atomic
+from rik.outputs import NEW, MadeFolder, holds_only, save_figure, staged_directory, tree_holds_only, write_text
+from rik.paths import json_object, pyplot
 from rik.schemas.joints import JointType, Spring
 from rik.sysid.discover import Discovery, describe
 from rik.sysid.fit import Fit, Rows, concat_rows
@@ -163,7 +164,7 @@ def plot_residual_time(d: Discovery, res: Residuals, path: Path) -> Path:
     axes[-1, 0].set_xlabel("time [s]")
     axes[0, 0].legend(fontsize=7, markerscale=6, loc="upper right")
     fig.tight_layout()
-    return save_figure(fig, path)
+    return save_figure(fig, path, NEW)
 
 
 def plot_residual_position(d: Discovery, res: Residuals, path: Path) -> Path:
@@ -184,7 +185,7 @@ def plot_residual_position(d: Discovery, res: Residuals, path: Path) -> Path:
     axes[0].set_ylabel(f"force residual [{unit}]")
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    return save_figure(fig, path)
+    return save_figure(fig, path, NEW)
 
 
 def plot_residual_velocity(d: Discovery, res: Residuals, path: Path) -> Path:
@@ -206,7 +207,7 @@ def plot_residual_velocity(d: Discovery, res: Residuals, path: Path) -> Path:
     ax.set_ylabel(f"force residual [{_UNITS[d.joint]['force']}]")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    return save_figure(fig, path)
+    return save_figure(fig, path, NEW)
 
 
 def plot_resimulated(d: Discovery, res: Residuals, path: Path) -> Path:
@@ -225,7 +226,7 @@ def plot_resimulated(d: Discovery, res: Residuals, path: Path) -> Path:
     axes[-1, 0].set_xlabel("time [s]")
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
-    return save_figure(fig, path)
+    return save_figure(fig, path, NEW)
 
 
 def breakaway_rows(d: Discovery) -> Rows:
@@ -260,7 +261,7 @@ def plot_breakaway(d: Discovery, res: Residuals, path: Path) -> Path:
     if len(rows):
         ax.legend(fontsize=7)
     fig.tight_layout()
-    return save_figure(fig, path)
+    return save_figure(fig, path, NEW)
 
 
 PLOTS = {"residual_time.png": plot_residual_time, "residual_position.png": plot_residual_position,
@@ -343,7 +344,7 @@ def is_report(folder: Path) -> bool:
         return False
     groups = data.get("groups") if data.get("mode") == "quasi-static" else None
     if not isinstance(groups, list):
-        return holds_only(folder, {SUMMARY, REPORT, PROFILE_PLOT, *PLOTS})
+        return tree_holds_only(folder, {SUMMARY, REPORT, PROFILE_PLOT, *PLOTS})
     named = [g.get("directory") if isinstance(g, dict) else None for g in groups]
     subdirs = {s for s in named if isinstance(s, str) and "/" not in s and s not in ("", ".", "..")}
     return (len(subdirs) == len(named)
@@ -364,6 +365,6 @@ def write_report(d: Discovery, directory: Path) -> Path:
         res = all_residuals(d)
         for name, plot in PLOTS.items():
             plot(d, res, stage / name)
-        write_atomic(stage / SUMMARY, json.dumps(data, indent=2) + "\n")
-        write_atomic(stage / REPORT, markdown(d, data))
+        write_text(stage / SUMMARY, json.dumps(data, indent=2) + "\n", NEW)
+        write_text(stage / REPORT, markdown(d, data), NEW)
     return directory

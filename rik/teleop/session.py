@@ -6,9 +6,12 @@ station). Devices set a velocity command and a grip; :meth:`TeleopSession.tick` 
 - the target moves at the commanded velocity per *control step* and never runs more than
   :data:`rik.teleop.keys.LEAD` ahead of the gripper, so a slow frame or a blocked gripper never turns into
   a jump;
-- every episode gets its own id: the seed advances to the next one with no episode (nor draft) in ``out``, so
-  nothing is ever overwritten; saving writes ``out/<id>``, discarding writes nothing, and a draft (a connection
-  lost mid-episode) goes to ``out/.drafts/<id>``, which ``rik export-lerobot`` and ``rik replay out/`` skip;
+- every episode gets its own id: the seed advances to the next one with no episode (nor draft) in ``out`` that no
+  other session holds (a lock per id in rik's cache, held while the episode is recorded), and a
+  Save takes the id exclusively (another writer's episode of that id moves this one to the next free seed), so
+  two stations on one folder never write over each other; saving writes ``out/<id>``, discarding writes nothing,
+  and a draft (a connection lost mid-episode) goes to ``out/.drafts/<id>``, which ``rik export-lerobot`` and
+  ``rik replay out/`` skip;
 - an optional time limit (simulated s) stops the episode, which the operator then saves or discards;
 - a saved episode ends :data:`IDLE_KEPT_S` after the last input (``trim_idle``): the idle time before the save
   (reaching for Enter) is not recorded, nor replayed, nor learned from.
@@ -16,8 +19,9 @@ station). Devices set a velocity command and a grip; :meth:`TeleopSession.tick` 
 
 from __future__ import annotations
 
+import contextlib
 import math
-import shutil
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -50,11 +54,23 @@ drawer's slide), frame-fixed otherwise; or always frame-fixed (towards / away fr
 
 
 def check_time_limit(max_seconds: float | None) -> None:
-    """A time limit is positive simulated seconds, or None for none."""
-    if max_seconds is not None and not max_seconds > 0:
+    """A time limit is positive, finite simulated seconds, or None for none."""
+    if max_seconds is not None and not (max_seconds > 0 and math.isfinite(max_seconds)):
         from rik.errors import RikError
 
-        raise RikError(f"--max-seconds {max_seconds}: a time limit must be positive (or none at all)")
+        raise RikError(f"--max-seconds {max_seconds}: a time limit must be a positive, finite number of seconds (or "
+                       "none at all)")
+
+
+def _claim_path(episode: Path) -> Path:
+    """Where the lock of a session recording ``episode`` (an episode folder's path) lives: in rik's cache, so that
+    a session writes nothing into the episodes folder before a Save or a draft."""
+    import hashlib
+
+    from rik.paths import cache_dir
+
+    key = hashlib.sha256(str(episode.absolute()).encode("utf-8", "surrogateescape")).hexdigest()
+    return cache_dir() / "claims" / key[:32]
 
 
 @dataclass(frozen=True)
@@ -90,6 +106,8 @@ class TeleopSession:
         """The last thing worth telling the operator (saved, discarded, draft kept)."""
         self.motion_mode = MOTION_MODES[0]
         """One of :data:`MOTION_MODES` (kept from episode to episode)."""
+        self._claim = contextlib.ExitStack()
+        """The lock on the current episode's id (:meth:`_take_free_seed`)."""
         self._start()
         self.hint = grasp_hint(scene)
         """How to grasp the operated handle (:func:`rik.teleop.feedback.grasp_hint`), shown before the first input."""
@@ -102,22 +120,43 @@ class TeleopSession:
         return episode_id(self.scene.info["id"], self.scene.front.id, self.operator, self.seed, self.scene.robot_id)
 
     def _taken(self, seed: int) -> bool:
+        """Whether an episode or a draft of ``seed``'s id is in ``out`` already."""
         from rik.episodes.episode import episode_id
 
         name = episode_id(self.scene.info["id"], self.scene.front.id, self.operator, seed, self.scene.robot_id)
-        return (self.out / name).exists() or (self.out / DRAFTS / name).exists()
+        return os.path.lexists(self.out / name) or os.path.lexists(self.out / DRAFTS / name)
+
+    def _take_free_seed(self, start: int) -> int:
+        """The first seed from ``start`` whose id is free (:meth:`_taken`) and that no other session holds; its lock
+        is held (released by the next call, :meth:`close` or the process's end, however it ends)."""
+        from rik.episodes.episode import episode_id
+        from rik.errors import RikError
+        from rik.locks import LockedError, exclusive
+
+        self._claim.close()
+        for seed in range(start, start + MAX_FREE_SEEDS):
+            if self._taken(seed):
+                continue
+            name = episode_id(self.scene.info["id"], self.scene.front.id, self.operator, seed, self.scene.robot_id)
+            try:
+                self._claim.enter_context(exclusive(_claim_path(self.out / name), "teleop session"))
+            except LockedError:
+                continue
+            if not self._taken(seed):  # saved by another session between the check and the lock
+                return seed
+            self._claim.close()
+        raise RikError(f"{self.out}: no free episode id among {MAX_FREE_SEEDS} seeds from {start}")
+
+    def close(self) -> None:
+        """Release the current episode's id (the session records nothing more)."""
+        self._claim.close()
 
     def _start(self) -> None:
         """A new episode: the next free seed, the scene at its start pose, nothing recorded."""
         from rik.episodes.episode import EpisodeRecorder
         from rik.episodes.record import check_seeds
-        from rik.errors import RikError
 
-        for seed in range(self.seed, self.seed + MAX_FREE_SEEDS):
-            if not self._taken(seed):
-                break
-        else:
-            raise RikError(f"{self.out}: no free episode id among {MAX_FREE_SEEDS} seeds from {self.seed}")
+        seed = self._take_free_seed(self.seed)
         check_seeds(seed, 1)
         self.seed = seed
         self.scene.reset()
@@ -149,6 +188,7 @@ class TeleopSession:
         """Write the episode to ``out/<id>`` (up to :data:`IDLE_KEPT_S` after its last input, with ``trim_idle``)
         and start the next one; None (and nothing written) when nothing was recorded yet."""
         from rik.episodes.episode import write_episode
+        from rik.outputs import NameTaken
 
         if not self.recording:
             self.message = "nothing recorded yet: move first"
@@ -158,9 +198,14 @@ class TeleopSession:
             keep = self.last_input_step + round(IDLE_KEPT_S * self.scene.control_fps)
             trimmed = max(0, self.recorder.steps - keep)
             self.recorder.truncate(keep)
-        meta = write_episode(self.recorder, self.out, episode=self.episode, operator=self.operator,
-                             operator_kind="device", seed=self.seed)
-        shutil.rmtree(self.out / DRAFTS / meta.id, ignore_errors=True)
+        while True:
+            try:
+                meta = write_episode(self.recorder, self.out, episode=self.episode, operator=self.operator,
+                                     operator_kind="device", seed=self.seed, replace=False)
+                break
+            except NameTaken:  # another writer, not a session (they lock ids), saved this id: take the next one
+                self.seed = self._take_free_seed(self.seed + 1)
+        self._remove_draft(meta.id)
         self.last_saved = Saved(self.out / meta.id, meta)
         self.message = f"saved {meta.id}: {meta.outcome}, opened {meta.final_opening:.0%}, {meta.steps} steps"
         if trimmed:
@@ -171,9 +216,18 @@ class TeleopSession:
 
     def discard(self) -> None:
         """Drop the episode (and its draft, if one was kept) and start again from the start pose."""
-        shutil.rmtree(self.out / DRAFTS / self.episode, ignore_errors=True)
+        self._remove_draft(self.episode)
         self.message = f"discarded {self.recorder.steps} steps" if self.recording else "back at the start pose"
         self._start()
+
+    def _remove_draft(self, episode: str) -> None:
+        """Remove the draft of ``episode`` if one was kept (only an episode folder rik wrote: anything else stays)."""
+        from rik.episodes.episode import EPISODE_FOLDER
+        from rik.errors import RikError
+        from rik.outputs import remove_directory
+
+        with contextlib.suppress(RikError, OSError):
+            remove_directory(self.out / DRAFTS / episode, EPISODE_FOLDER)
 
     def keep_draft(self) -> Path | None:
         """Write the episode so far to ``out/.drafts/<id>`` (replaced by each later draft, removed on save or

@@ -23,7 +23,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rik.paths import atomic_path, cache_dir
+from rik.outputs import CACHED, write_bytes
+from rik.paths import cache_dir
 
 if TYPE_CHECKING:
     import mujoco
@@ -129,8 +130,7 @@ def decimate(vert: np.ndarray, face: np.ndarray, target: int, cache: Path | None
     np.save(buf, f, allow_pickle=False)
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as tmp:
-            tmp.write_bytes(buf.getvalue())
+        write_bytes(path, buf.getvalue(), CACHED)
     except OSError:
         pass  # a read-only or full cache: the mesh is made again next time
     return v, f

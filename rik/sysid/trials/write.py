@@ -14,7 +14,7 @@ from rik.schemas.trajectory import TrialColumns, TrialUnits
 from rik.sysid.trials.load import Trial
 
 if TYPE_CHECKING:
-    from rik.paths import MadeFolder
+    from rik.outputs import MadeFolder
 
 
 def si_columns(joint: JointType) -> tuple[TrialUnits, TrialColumns]:
@@ -50,7 +50,7 @@ def write_csv_trials(trials: Sequence[Trial], directory: str | Path, joint: Join
     """Write each trial of ``joint`` to ``directory/<name>.csv`` (:func:`si_columns`' headers, values printed to
     round-trip exactly), each atomically; returns the paths (what :func:`load_trials` reads back). Refuses an empty
     list, repeated names, a name that is no file name and a trial of another joint type, each in one line."""
-    from rik.paths import write_atomic
+    from rik.outputs import NEW, write_text
 
     _check_writable(trials, joint)
     directory = Path(directory)
@@ -60,7 +60,7 @@ def write_csv_trials(trials: Sequence[Trial], directory: str | Path, joint: Join
     for trial in trials:
         rows = zip(trial.t.tolist(), trial.q.tolist(), trial.f.tolist(), strict=True)
         path = directory / f"{trial.name}.csv"
-        write_atomic(path, header + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows))
+        write_text(path, header + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows), NEW)
         paths.append(path)
     return paths
 
@@ -71,8 +71,11 @@ TRUTH_FILE = "truth.json"
 
 def is_simulated(folder: Path) -> bool:
     """Whether ``folder`` holds trials a generator wrote (:func:`write_simulated`): a ``truth.json`` object naming
-    the joint, and nothing else but CSV files that start with rik's header line."""
-    from rik.paths import holds_only, json_object
+    the joint, and nothing else but CSV files that start with rik's header line and that rik recorded writing there
+    (:func:`rik.outputs.recorded`): rik's header is also the documented format of measured trials, so a measured
+    CSV copied beside simulated ones has it too."""
+    from rik.outputs import holds_only, recorded
+    from rik.paths import json_object
 
     truth = json_object(folder / TRUTH_FILE)
     if truth is None or truth.get("joint") not in {j.value for j in JointType}:
@@ -84,7 +87,7 @@ def is_simulated(folder: Path) -> bool:
             return True
         try:
             with (folder / name).open(encoding="utf-8") as handle:
-                return name.endswith(".csv") and handle.readline() in headers
+                return name.endswith(".csv") and handle.readline() in headers and recorded(folder / name)
         except (OSError, UnicodeDecodeError):
             return False
 
@@ -93,7 +96,7 @@ def is_simulated(folder: Path) -> bool:
 
 def simulated_folder() -> MadeFolder:
     """The folder ``rik sysid simulate --out`` writes: replaced whole, and only if :func:`is_simulated`."""
-    from rik.paths import MadeFolder
+    from rik.outputs import MadeFolder
 
     return MadeFolder("a folder of trials rik sysid simulate wrote", is_simulated, "choose another --out")
 
@@ -104,11 +107,11 @@ def write_simulated(trials: Sequence[Trial], directory: str | Path, joint: Joint
     into a hidden sibling first, then renamed into place, replacing an earlier folder of simulated trials only (any
     other folder that is not empty is refused, before anything is written). Returns the CSV paths."""
 
-    from rik.paths import staged_directory, write_atomic
+    from rik.outputs import NEW, staged_directory, write_text
 
     _check_writable(trials, joint)
     directory = Path(directory)
-    with staged_directory(directory, simulated_folder()) as stage:
+    with staged_directory(directory, simulated_folder(), record_files=True) as stage:
         written = write_csv_trials(trials, stage, joint)
-        write_atomic(stage / TRUTH_FILE, json.dumps(truth, indent=2) + "\n")
+        write_text(stage / TRUTH_FILE, json.dumps(truth, indent=2) + "\n", NEW)
     return [directory / p.name for p in written]
