@@ -57,7 +57,9 @@ BAD_VIEW = "ignored a view message: give azimuth and elevation in degrees (each 
 
 
 MAX_EPISODE_ID = 255
-"""Longest episode id a replay command may name (a file name's limit)."""
+"""Longest episode id a replay command may name, UTF-8 bytes (a file name's limit)."""
+BAD_REPLAY = ("ignored a replay command: its episode must be an episode id (text of printable characters, at most "
+              f"{MAX_EPISODE_ID} bytes)")
 MAX_REPLAY_BYTES = 256 * 2**20
 """Largest states file a station replays from its episodes folder, bytes (an hour at 20 Hz is a few MB)."""
 
@@ -170,6 +172,14 @@ def parse_input(msg: dict[str, Any]) -> tuple[np.ndarray, float | None, int] | s
     return np.clip(axes, -1.0, 1.0), (None if grip is None else min(max(grip, 0.0), 1.0)), seq
 
 
+def is_episode_id(episode: object) -> bool:
+    """Whether a replay command's ``episode`` can name a folder: text of printable characters (no NUL, no control
+    character, no lone surrogate), 1 to :data:`MAX_EPISODE_ID` bytes in UTF-8."""
+    if not isinstance(episode, str) or not episode or not episode.isprintable():
+        return False
+    return len(episode.encode("utf-8", "surrogatepass")) <= MAX_EPISODE_ID
+
+
 MAX_VIEW_TURN = 360.0
 """Largest azimuth or elevation change one ``view`` message may ask for, degrees."""
 
@@ -203,6 +213,17 @@ def cameras_due(stale: list[str], behind: bool, skipped: bool) -> list[str]:
     if behind and not skipped and FOLLOWED in stale and WRIST in stale:
         return [cam for cam in stale if cam != WRIST]
     return list(stale)
+
+
+def failure(command: str, exc: Exception) -> str:
+    """The station's one-line message for ``command`` (a queued name, ``replay:<id>`` included) that raised
+    ``exc``: a RikError's or OSError's own line (a saved episode removed before its replay...), else the error's
+    type too (a fault of rik's: the station and its episode go on)."""
+    name = command.lstrip("_").split(":")[0]
+    text = str(exc).splitlines()[0] if str(exc) else ""
+    if isinstance(exc, (RikError, OSError)):
+        return f"{name} failed: {text}"
+    return f"{name} failed: {type(exc).__name__}: {text}"
 
 
 def build_station_scene(config: StationConfig, variant: str, robot: str) -> SimScene:
@@ -339,8 +360,8 @@ class Station:
                                                                    self.view_turn[1] + turn[1])
             elif kind == "command" and msg.get("name") == "replay" and "episode" in msg:
                 episode = msg["episode"]
-                if not isinstance(episode, str) or not 0 < len(episode) <= MAX_EPISODE_ID:
-                    client.notice = "ignored a replay command: its episode must be an episode id (text)"
+                if not is_episode_id(episode):
+                    client.notice = BAD_REPLAY
                     return
                 self.commands.append((client, f"replay:{episode}"))
             elif kind == "command" and msg.get("name") in ("save", "discard", "toggle_grip", "toggle_motion", "replay",
@@ -419,7 +440,7 @@ class Station:
                 if delay > 0:
                     self.stop.wait(delay)
         except Exception as exc:  # noqa: BLE001 -- shown on the page instead of a station that says nothing
-            self.error = f"the station stopped: {type(exc).__name__}: {exc}"
+            self.error = f"the station stopped: {type(exc).__name__}: {exc}" + self._draft_after_failure(session)
             self.ready = False
             while not self.stop.wait(0.2):
                 self._push_status()
@@ -441,10 +462,14 @@ class Station:
         for _, name in commands:
             try:
                 self._command(name, replay_data)
-            except (RikError, OSError) as exc:  # a saved episode removed before its replay...: said, never fatal
-                self.message = f"{name.lstrip('_').split(':')[0]} failed: {exc}"
+            except Exception as exc:  # noqa: BLE001 -- a command's failure is said on the page, never fatal
+                self.message = failure(name, exc)
         if self.replay is not None:
-            self._replay_row(replay_data)
+            try:
+                self._replay_row(replay_data)
+            except Exception as exc:  # noqa: BLE001 -- the replay stops; the station and its episode go on
+                self.replay = None
+                self.message = failure("replay", exc)
             return
         if not controlled or self.paused:
             return
@@ -493,7 +518,8 @@ class Station:
 
     def _start_replay(self, episode: str | None = None) -> None:
         """Replay the last episode saved here, or ``episode``: one saved in this station's episodes folder for its
-        variant and robot (the episodes page's replay link), read whole and checked first."""
+        variant and robot (the episodes page's replay link), bounded and checked first
+        (:func:`rik.episodes.states.read_states`)."""
         from rik.episodes.episode import read_episode, states
 
         session = self.session
@@ -509,7 +535,7 @@ class Station:
             return
         else:
             path = session.last_saved.path
-        meta, table = read_episode(path)
+        meta, table = read_episode(path, ("state", "opening"))  # bounded first; only these two decoded
         self.replay = {"episode": meta.id, "states": states(table), "row": 0,
                        "openings": table.column("opening").to_numpy()}
 
@@ -591,6 +617,17 @@ class Station:
             st = dict(base, role="controller" if c is self.controller else "watcher", notice=c.notice,
                       size=list(c.size))
             c.push("status", json.dumps(st))
+
+    @staticmethod
+    def _draft_after_failure(session: TeleopSession) -> str:
+        """Keep the episode in progress of a station whose thread failed as a draft (a person's recording is never
+        lost with the station); what the page says about it."""
+        if not session.recording:
+            return ""
+        try:
+            return f"; its {session.recorder.steps} recorded steps were kept as a draft: {session.keep_draft()}"
+        except Exception as exc:  # noqa: BLE001 -- the station is gone already; say what became of the episode
+            return f"; its {session.recorder.steps} recorded steps could not be kept ({type(exc).__name__}: {exc})"
 
     def shutdown(self) -> Path | None:
         """Stop the thread; keep the episode in progress as a draft. Returns the draft's path, if one was kept."""

@@ -83,7 +83,6 @@ def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = No
     """The application: the catalog's and the teleop station's routes, and the static files, behind the gate of
     :mod:`rik.web.guard` (``host``: the address it listens on, a name it answers to); ``scenes``: scenes already
     built, by (variant id, robot id), that those stations start from."""
-    from fastapi import FastAPI
     from fastapi.responses import RedirectResponse
     from fastapi.staticfiles import StaticFiles
 
@@ -91,8 +90,10 @@ def create_app(config: AppConfig, scenes: dict[tuple[str, str], Any] | None = No
     from rik.web import catalog as catalog_routes
     from rik.web import episodes as episode_routes
     from rik.web import teleop as teleop_routes
+    from rik.web.asgi import RikApp
 
-    app = FastAPI(title="rik", version=__version__, docs_url="/api/docs", redoc_url=None)
+    # no /docs, /redoc, /openapi.json: FastAPI's docs load Swagger UI from a CDN into the app's origin
+    app = RikApp(title="rik", version=__version__, docs_url=None, redoc_url=None, openapi_url=None)
     app.add_middleware(Guard, token=config.token, host=host, allowed_hosts=config.allowed_hosts)
     app.state.config = config
     app.include_router(catalog_routes.router)

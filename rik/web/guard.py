@@ -20,6 +20,14 @@ whole app, answers only requests that show:
 
 GETs never start work (the station starts on its websocket), so a GET that gets through (an ``<img>`` pointed at
 the app from a page in the same browser) costs nothing.
+
+Every response the app sends (pages, static files, JSON, the gate's refusals and redirects, errors) also says that
+no page may frame it (:class:`NoFraming`: ``Content-Security-Policy: frame-ancestors 'none'`` and ``X-Frame-Options:
+DENY``): a page on another port of ``localhost`` is the same *site*, so the browser sends the ``SameSite=Strict``
+cookie with its ``<iframe>`` of the station, whose own script would then pass the Origin check.
+
+The cookie is found by splitting the ``Cookie`` header on ``;`` and skipping what does not parse: another app on
+``localhost`` may set a cookie that :class:`http.cookies.SimpleCookie` cannot read, which would hide rik's.
 """
 
 from __future__ import annotations
@@ -31,9 +39,8 @@ import ipaddress
 import json
 import secrets
 from collections.abc import Awaitable, Callable, Iterable
-from http.cookies import SimpleCookie
 from typing import Any
-from urllib.parse import parse_qsl, urlencode, urlsplit
+from urllib.parse import parse_qsl, quote, urlencode, urlsplit
 
 Scope = dict[str, Any]
 Receive = Callable[[], Awaitable[dict[str, Any]]]
@@ -48,6 +55,10 @@ PUBLIC_PREFIX = "/static/"
 """Paths served without the token: the app's own scripts, styles and pictures, the same for everyone."""
 SAFE_METHODS = frozenset({"GET", "HEAD"})
 TOKEN_PARAM = "token"
+FRAME_ANCESTORS = "frame-ancestors 'none'"
+"""The Content-Security-Policy directive every response carries: no page may frame the app."""
+PATH_SAFE = "/!$&'()*+,;=:@-._~"
+"""Characters a redirect's path keeps as they are (RFC 3986's ``pchar`` and ``/``); others are percent-encoded."""
 
 
 def new_token() -> str:
@@ -91,6 +102,77 @@ def is_ip_literal(name: str) -> bool:
     return True
 
 
+def cookie_values(header: str, name: str) -> list[str]:
+    """The values of every cookie called ``name`` in a ``Cookie`` header, skipping pairs that do not parse (another
+    app's ``prefs={"theme":"dark"}`` hides nothing after it); a value in double quotes loses them."""
+    found = []
+    for pair in header.split(";"):
+        key, eq, value = pair.partition("=")
+        if eq and key.strip() == name:
+            value = value.strip()
+            found.append(value[1:-1] if len(value) > 1 and value[0] == value[-1] == '"' else value)
+    return found
+
+
+def request_headers(scope: Scope) -> dict[str, str]:
+    """A request's headers by lower-case name (the last of repeated ones; ``cookie`` headers joined with ``;``)."""
+    headers: dict[str, str] = {}
+    cookies = []
+    for k, v in scope.get("headers", []):
+        key, value = k.decode("latin-1").lower(), v.decode("latin-1")
+        headers[key] = value
+        if key == "cookie":
+            cookies.append(value)
+    if cookies:
+        headers["cookie"] = "; ".join(cookies)
+    return headers
+
+
+def login_location(scope: Scope) -> str:
+    """Where a GET that carried the token is sent: its own path (percent-encoded: a path of any characters is a
+    valid ``Location``, one leading ``/``: never another host's ``//name``) and query without the token."""
+    query = scope.get("query_string", b"").decode("latin-1")
+    rest = [(k, v) for k, v in parse_qsl(query, keep_blank_values=True) if k != TOKEN_PARAM]
+    path = quote(scope.get("root_path", "") + scope.get("path", "/"), safe=PATH_SAFE, errors="surrogatepass")
+    return "/" + path.lstrip("/") + (f"?{urlencode(rest)}" if rest else "")
+
+
+def no_framing(headers: Iterable[tuple[bytes, bytes]]) -> list[tuple[bytes, bytes]]:
+    """``headers`` of a response with ``X-Frame-Options: DENY`` and ``frame-ancestors 'none'`` in its
+    Content-Security-Policy (merged into one it has, replacing any frame-ancestors there)."""
+    out: list[tuple[bytes, bytes]] = []
+    policy: list[str] = []
+    for k, v in headers:
+        name = bytes(k).lower()
+        if name == b"content-security-policy":
+            policy += [d.strip() for d in bytes(v).decode("latin-1").split(";")
+                       if d.strip() and d.split()[0].lower() != "frame-ancestors"]
+        elif name != b"x-frame-options":
+            out.append((bytes(k), bytes(v)))
+    csp = "; ".join([*policy, FRAME_ANCESTORS])
+    return [*out, (b"content-security-policy", csp.encode("latin-1")), (b"x-frame-options", b"DENY")]
+
+
+class NoFraming:
+    """ASGI middleware, around the whole app: every HTTP response it sends gets the headers of :func:`no_framing`
+    (a page on another port of ``localhost`` cannot frame the station and act in it with the operator's cookie)."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+
+        async def framed(message: dict[str, Any]) -> None:
+            if message["type"] == "http.response.start":
+                message = {**message, "headers": no_framing(message.get("headers", []))}
+            await send(message)
+
+        await self.app(scope, receive, framed)
+
+
 class Guard:
     """ASGI middleware that lets through only requests that name this server, carry the launch token and, where
     a browser sends one, this app's Origin (see the module docstring)."""
@@ -124,7 +206,7 @@ class Guard:
             return 403, f"Origin {origin!r} is not this app's: only the app's own pages may act on it"
         if scope.get("path", "").startswith(PUBLIC_PREFIX):
             return None
-        if self._valid(self._query_token(scope)) or self._valid(self._cookie_token(headers)):
+        if self._valid(self._query_token(scope)) or self._cookie_valid(headers):
             return None
         return 403, ("this address needs the token that rik printed with it: open the address `rik serve` (or `rik "
                      "teleop --web`) printed, which ends in ?token=...")
@@ -140,21 +222,15 @@ class Guard:
         query = scope.get("query_string", b"").decode("latin-1")
         return next((v for k, v in parse_qsl(query, keep_blank_values=True) if k == TOKEN_PARAM), None)
 
-    def _cookie_token(self, headers: dict[str, str]) -> str | None:
-        jar: SimpleCookie = SimpleCookie()
-        try:
-            jar.load(headers.get("cookie", ""))
-        except Exception:  # noqa: BLE001 -- a malformed Cookie header is no token
-            return None
-        morsel = jar.get(self.cookie)
-        return morsel.value if morsel is not None else None
+    def _cookie_valid(self, headers: dict[str, str]) -> bool:
+        return any(self._valid(v) for v in cookie_values(headers.get("cookie", ""), self.cookie))
 
     # ---- the middleware -----------------------------------------------------------------------------------------
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
-        headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])}
+        headers = request_headers(scope)
         refused = self.refusal(scope, headers)
         if refused is not None:
             await self._refuse(scope, receive, send, *refused)
@@ -168,12 +244,10 @@ class Guard:
     async def _login(self, scope: Scope, send: Send) -> None:
         """The token in a GET's query: set the cookie and redirect to the same address without the token (so it
         stays out of the page's history and of links the page makes)."""
-        query = scope.get("query_string", b"").decode("latin-1")
-        rest = [(k, v) for k, v in parse_qsl(query, keep_blank_values=True) if k != TOKEN_PARAM]
-        location = scope.get("root_path", "") + scope.get("path", "/") + (f"?{urlencode(rest)}" if rest else "")
+        location = login_location(scope)
         cookie = f"{self.cookie}={self.token}; Path=/; HttpOnly; SameSite=Strict"
         await send({"type": "http.response.start", "status": 303,
-                    "headers": [(b"location", location.encode("latin-1")), (b"set-cookie", cookie.encode()),
+                    "headers": [(b"location", location.encode("ascii")), (b"set-cookie", cookie.encode()),
                                 (b"cache-control", b"no-store"), (b"content-length", b"0")]})
         await send({"type": "http.response.body", "body": b""})
 

@@ -46,7 +46,9 @@ over 64 KiB closes the connection with code 1009):
 - ``{"type": "command", "name": "replay", "episode": "<episode id>"}`` replays an episode saved in the app's episodes
   folder (the episodes page's link, ``/teleop/<variant>?robot=<id>&replay=<episode id>``, sends it once this tab
   controls the ready station): only one of this station's variant and robot, its states file at most 256 MiB;
-  otherwise the station's message says why in one line;
+  otherwise the station's message says why in one line (an id that is not printable text of at most 255 UTF-8
+  bytes, such as one holding a NUL, gets a notice). Any command that fails is a one-line message; the station and
+  its episode go on;
 - ``{"type": "view", "azimuth": degrees, "elevation": degrees}`` turns the front view by that much (each within
   +-360), ``{"type": "view", "reset": true}`` puts it back; from the controlling tab (the view is the station's);
 - ``{"type": "size", "width": 320|640, "height": 240|480}``.
