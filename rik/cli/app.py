@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from rik.cli import assets, catalog, dataset, export, policy, render, rerender, serve, sim, sysid, variants
-from rik.cli.common import CatalogOption, overlays
+from rik.cli.common import CatalogOption, finite_floats, overlays, usage_line
 from rik.errors import RikError, os_error_text
 
 
@@ -101,6 +101,29 @@ def _app_for(args: list[str]) -> typer.Typer:
     return only
 
 
+def _run(args: list[str]) -> None:
+    """Run ``rik ARGS``: typer's command, whose floats are finite (:func:`finite_floats`), with click's usage and
+    parameter errors (an option out of its range, an unknown command) as one line, exit 2 (click's own code), in
+    place of typer's box of five; help, ``--version``, ``typer.Exit`` and Ctrl-C end as they did."""
+    from typer._click.exceptions import ClickException, NoArgsIsHelpError
+    from typer.main import get_command
+
+    command = finite_floats(get_command(_app_for(args)))
+    try:
+        code = command.main(args, standalone_mode=False)
+    except NoArgsIsHelpError as exc:  # ``rik`` or a group alone: its help (rich printed it already), exit 2
+        if exc.format_message().strip():
+            exc.show()
+        sys.exit(exc.exit_code)
+    except ClickException as exc:
+        print(f"rik: error: {usage_line(exc)}", file=sys.stderr)
+        sys.exit(exc.exit_code)
+    except typer.Abort:
+        print("rik: error: aborted", file=sys.stderr)
+        sys.exit(1)
+    sys.exit(code if isinstance(code, int) else 0)  # a typer.Exit's code (commands return None)
+
+
 def main() -> None:
     """Entry point: bad input becomes one line on stderr and exit code 2, never a traceback."""
     import os
@@ -108,7 +131,7 @@ def main() -> None:
     if not os.environ.get("DISPLAY"):
         os.environ.setdefault("MUJOCO_GL", "egl")  # headless machines render through EGL
     try:
-        _app_for(sys.argv[1:])()
+        _run(sys.argv[1:])
     except RikError as exc:
         print(f"rik: error: {exc}", file=sys.stderr)
         sys.exit(2)

@@ -2,18 +2,22 @@
 
 from __future__ import annotations
 
+import math
 import os
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+from typer._click import types as click_types
 
 if TYPE_CHECKING:
     from collections.abc import Callable
 
     from rich.console import Console
     from rich.progress import Progress, TaskID
+    from typer._click import Command, Context, Parameter
+    from typer._click.exceptions import ClickException
 
 CatalogOption = Annotated[
     list[Path] | None,
@@ -59,6 +63,68 @@ def check_at_least_one_worker(workers: int) -> int:
 
 
 WorkersOpt = Annotated[int, typer.Option("--workers", "-j", callback=_check_workers, help="Parallel processes.")]
+
+
+class FiniteFloat(click_types.FloatParamType):
+    """A float option's type that refuses ``inf`` and ``nan``, which Python's ``float()`` (click's ``FLOAT``)
+    accepts: a time limit of ``inf``, a speed of ``nan``."""
+
+    def convert(self, value: object, param: Parameter | None, ctx: Context | None) -> float:
+        _check_finite(value, self, param, ctx)
+        number: float = super().convert(value, param, ctx)
+        return number
+
+
+class FiniteFloatRange(click_types.FloatRange):
+    """``FiniteFloat`` within typer's ``min=``/``max=`` (``nan`` passes click's range checks: every comparison is
+    false); a value that is not finite is said to be so before any range."""
+
+    def convert(self, value: object, param: Parameter | None, ctx: Context | None) -> float:
+        _check_finite(value, self, param, ctx)
+        number: float = super().convert(value, param, ctx)
+        return number
+
+
+def _check_finite(value: object, kind: click_types.ParamType, param: Parameter | None, ctx: Context | None) -> None:
+    """Click's parameter error (one line from :func:`usage_line`) when ``value`` is a number that is not finite."""
+    if not math.isfinite(click_types.FLOAT.convert(value, param, ctx)):
+        kind.fail(f"{value} is not a finite number; give a finite one", param, ctx)
+
+
+def _finite_type(kind: click_types.ParamType) -> click_types.ParamType:
+    """``kind`` with every float in it (a ``FLOAT``, a ``FloatRange``, the floats of a tuple) finite."""
+    if isinstance(kind, click_types.FloatRange):
+        return FiniteFloatRange(kind.min, kind.max, kind.min_open, kind.max_open, kind.clamp)
+    if isinstance(kind, click_types.FloatParamType):
+        return FiniteFloat()
+    if isinstance(kind, click_types.Tuple):
+        kind.types = [_finite_type(t) for t in kind.types]
+    return kind
+
+
+def finite_floats(command: Command) -> Command:
+    """``command`` (and each of its subcommands) with every float parameter refusing ``inf`` and ``nan``: a float
+    on rik's command line is a time, a size, a speed or a mass, always finite. Set on the click command typer builds,
+    so that no option can be declared without it."""
+    for param in command.params:
+        param.type = _finite_type(param.type)
+    for sub in getattr(command, "commands", {}).values():
+        finite_floats(sub)
+    return command
+
+
+def usage_line(exc: ClickException) -> str:
+    """A click usage or parameter error (an option out of its range, a missing argument, an unknown command) as
+    rik's one line: the parameter at fault, what is wrong, and where its help is."""
+    from typer._click.exceptions import BadParameter, MissingParameter, UsageError
+
+    text = exc.format_message()
+    if isinstance(exc, BadParameter) and not isinstance(exc, MissingParameter) and exc.param is not None:
+        text = f"{'/'.join(exc.param.opts) or exc.param.human_readable_name}: {exc.message}"
+    text = " ".join(text.split()).rstrip(".")
+    if isinstance(exc, UsageError) and exc.ctx is not None:
+        text += f" (see {exc.ctx.command_path} --help)"
+    return text
 
 
 class OutputFormat(StrEnum):

@@ -205,6 +205,7 @@ def discover(trials: Sequence[Trial], *, heldout: Sequence[int] | None = None, r
     limits = (min(float(p.q.min()) for p in prepared), max(float(p.q.max()) for p in prepared))
     split = split_rows(rows, prepared, heldout)
     selection = select_effects(split)
+    check_finite_fits(trials, [selection.baseline, *(sc.fit for sc in (*selection.scores, *selection.pairs))])
     baseline = selection.baseline
     base_res = resistance_of(baseline.baseline, (), "rik sysid: baseline fit")
     chosen = selection.final if selection.found else None
@@ -215,8 +216,28 @@ def discover(trials: Sequence[Trial], *, heldout: Sequence[int] | None = None, r
     if resimulate:
         resim, rmse = _resimulate(prepared, split, limits, baseline.baseline.inertia, base_res, ext_res,
                                   chosen.baseline.inertia if chosen else None, resim_window_s)
+        if not all(np.isfinite(e) for e in rmse if e is not None):
+            raise _not_finite(trials, "position", "the re-simulated position error")
     return Discovery(prepared[0].trial.joint, tuple(prepared), rows, split, selection, delay, limits, base_res,
                      ext_res, tuple(resim), rmse, velocity, resim_window_s)
+
+
+def check_finite_fits(trials: Sequence[Trial], fits: Sequence[Fit]) -> None:
+    """Refuse fits with a non-finite coefficient or error (an overflow): no NaN may reach a report or a preset.
+    (Measured values are bounded when read, :data:`rik.sysid.trials.MAX_MAGNITUDE`; this is the last guard.)"""
+    for fit in fits:
+        numbers = [*fit.theta, fit.rss, fit.rmse_train, fit.rmse_heldout]
+        if not all(np.isfinite(x) for x in numbers):
+            raise _not_finite(trials, "force", f"the fit of {fit.title}")
+
+
+def _not_finite(trials: Sequence[Trial], role: str, what: str) -> RikError:
+    """One line naming the trials' files and their ``role`` column: ``what`` came out NaN or infinite."""
+    files = list(dict.fromkeys(t.source for t in trials))
+    column = getattr(trials[0].meta.columns, role)
+    shown = ", ".join(files[:3]) + (f" and {len(files) - 3} more" if len(files) > 3 else "")
+    return RikError(f"{shown}, column '{column}': {what} is not a finite number (an overflow): the values are too "
+                    "large or too degenerate to fit; check the units")
 
 
 def _resimulate(prepared: Sequence[Prepared], split: Split, limits: tuple[float, float], inertia: float,

@@ -47,6 +47,7 @@ from rik.sysid.trials import (
     parse_header,
     read_table,
 )
+from rik.sysid.trials.load import check_magnitude, magnitude_problem
 
 BIN_UNIT = "bin"
 """Position unit of angle bins; one bin is read as one degree (hinges only)."""
@@ -253,6 +254,8 @@ def read_profiles(paths: str | Path | Sequence[str | Path], joint: str | JointTy
         stem = Path(raw.file).stem
         group_of = labels["group"] if "group" in labels else np.full(raw.rows, stem, dtype=object)
         trial_of = labels["trial"] if "trial" in labels else group_of
+        _check_magnitudes(raw, keep, ((pos_h, "position", pos.values, pos_unit, pos_scale),
+                                      (force_h, "force", frc.values, f_unit, f_scale)))
         q = pos.values * pos_scale
         f = frc.values * f_scale
         for i in np.flatnonzero(keep):
@@ -271,6 +274,17 @@ def read_profiles(paths: str | Path | Sequence[str | Path], joint: str | JointTy
     if not result:
         raise TrialError(files[0], None, None, "no rows left after leaving out those with empty or NaN cells")
     return ProfileData(kind, tuple(result), force_si, columns, units, dropped, tuple(dropped_rows[:5]))
+
+
+def _check_magnitudes(raw: RawTable, keep: np.ndarray,
+                      columns: Sequence[tuple[str, str, np.ndarray, str, float]]) -> None:
+    """Refuse the first kept value beyond :data:`MAX_MAGNITUDE` (SI) of each of ``columns`` (header, quantity,
+    values as read, their unit, its scale to SI): the fit of such values overflows."""
+    for header, role, values, unit, scale in columns:
+        i = check_magnitude(np.where(keep, values, 0.0), role, scale)
+        if i is not None:
+            problem = magnitude_problem(float(values[i]), unit, role, scale)
+            raise TrialError(raw.file, None, header, f"{raw.where(i)} {problem}")
 
 
 def _other(joint: JointType) -> JointType:

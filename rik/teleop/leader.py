@@ -33,6 +33,17 @@ class LeaderError(RikError):
     """A leader arm cannot drive this robot, has no calibration, or cannot be reached."""
 
 
+MAX_CALIBRATION_BYTES = 2**20
+"""Largest calibration file read (LeRobot's are about 1 kB)."""
+CALIBRATION_FIELDS = {"id": (0, 253), "drive_mode": (0, 1), "homing_offset": (-2047, 2047), "range_min": (0, 4095),
+                      "range_max": (0, 4095)}
+"""Each motor's fields in LeRobot's calibration file and the values an STS3215 holds (ids 0..253, a homing offset of
+11 bits and a sign, positions of 12 bits)."""
+BUS_ERRORS = (ConnectionError, OSError, RuntimeError)
+"""What LeRobot's Feetech bus raises when the port cannot be opened or the servos do not answer (a RuntimeError
+when the servos it pings are missing)."""
+
+
 def check_leader(device: str, robot: Robot | None) -> None:
     """A leader drives the simulated arm of its own type only (``so101-leader`` the ``so101``); one line otherwise."""
     want, _ = LEADERS[device]
@@ -57,7 +68,7 @@ def calibration_file(device: str, leader_id: str | None, directory: Path | None,
     """(leader id, its calibration file): ``--leader-id`` or, without one, the only file in the calibration folder;
     a missing file is one line saying how ``lerobot-calibrate`` makes it."""
     folder = calibration_dir(directory)
-    found = sorted(f.stem for f in folder.glob("*.json")) if folder.is_dir() else []
+    found = sorted(f.stem for f in folder.glob("*.json") if f.is_file()) if folder.is_dir() else []
     _, teleop_type = LEADERS[device]
     make = (f"make one with: lerobot-calibrate --teleop.type={teleop_type} --teleop.port={port} "
             f"--teleop.id={leader_id or 'my_leader'}"
@@ -77,6 +88,78 @@ def calibration_file(device: str, leader_id: str | None, directory: Path | None,
     return leader_id, file
 
 
+def read_calibration(file: Path, motors: list[str]) -> dict[str, dict[str, int]]:
+    """LeRobot's calibration of a leader arm, ``{motor: {"id", "drive_mode", "homing_offset", "range_min",
+    "range_max"}}`` for each of ``motors``, checked before LeRobot reads it (it would end in a traceback): one
+    line naming the file (and the motor and field) when it is unreadable, not JSON (cut short), or of another shape."""
+    from rik.paths import read_json
+
+    try:
+        data = read_json(file, MAX_CALIBRATION_BYTES)
+    except OSError as exc:
+        raise LeaderError(f"{file}: cannot read the leader's calibration ({exc.strerror or exc})") from None
+    except ValueError as exc:  # too large, not UTF-8, not JSON (cut short), nested too deeply
+        raise LeaderError(f"{file}: not a calibration file of LeRobot ({_json_problem(exc)}); make it again with "
+                          "lerobot-calibrate") from None
+    if not isinstance(data, dict):
+        raise LeaderError(f"{file}: not a calibration file of LeRobot (a JSON object of the motors {', '.join(motors)} "
+                          "is expected); make it again with lerobot-calibrate")
+    missing = [m for m in motors if m not in data]
+    extra = [str(m) for m in data if m not in motors]
+    if missing or extra:
+        what = (f"lacks the motors {', '.join(missing)}" if missing else
+                f"has motors this leader does not ({', '.join(extra)})")
+        raise LeaderError(f"{file}: the calibration {what}; the leader's motors are {', '.join(motors)}")
+    return {m: _motor_calibration(file, m, data[m]) for m in motors}
+
+
+def _json_problem(exc: ValueError) -> str:
+    """Why a JSON file could not be read, in words: a cut-short file is not JSON."""
+    import json
+
+    if isinstance(exc, json.JSONDecodeError):
+        return f"not JSON, or cut short: {exc}"
+    if isinstance(exc, UnicodeDecodeError):
+        return "not UTF-8 text"
+    return str(exc)
+
+
+def _motor_calibration(file: Path, motor: str, entry: object) -> dict[str, int]:
+    """One motor's calibration entry, its fields whole numbers within what the servo holds; one line otherwise."""
+    if not isinstance(entry, dict) or set(entry) != set(CALIBRATION_FIELDS):
+        raise LeaderError(f"{file}: motor {motor}: give an object of the fields {', '.join(CALIBRATION_FIELDS)}")
+    for field, (lo, hi) in CALIBRATION_FIELDS.items():
+        value = entry[field]
+        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+            raise LeaderError(f"{file}: motor {motor}: {field} {_json_repr(value)}: give a whole number from {lo} to "
+                              f"{hi}")
+    if entry["range_min"] >= entry["range_max"]:
+        raise LeaderError(f"{file}: motor {motor}: range_min {entry['range_min']} is not below range_max "
+                          f"{entry['range_max']}; calibrate the arm again with lerobot-calibrate")
+    return entry
+
+
+def _json_repr(value: object, limit: int = 40) -> str:
+    """``value`` as JSON, cut to ``limit`` characters (for a message)."""
+    import json
+
+    text = json.dumps(value)
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+def _no_answer(port: str, exc: BaseException) -> LeaderError:
+    """The one line for a leader on ``port`` that cannot be opened or whose servos do not answer (``exc``, LeRobot's
+    error, whose text is several lines: the servos it missed are named)."""
+    import re
+
+    text = str(exc.__cause__ or exc).strip()
+    missing = re.findall(r"^\s*- (\d+) \(expected model", text, flags=re.MULTILINE)
+    reason = (f"servos {', '.join(missing)} do not answer" if missing and "incorrect model" not in text
+              else " ".join(text.splitlines()[0].split()) if text else type(exc).__name__)
+    return LeaderError(f"--port {port}: the leader arm does not answer ({reason.rstrip(':')}); check the port "
+                       "(lerobot-find-port), the cable and the arm's power")
+
+
 @dataclass
 class LeaderArm:
     """A connected LeRobot teleoperator (anything with ``get_action()`` giving ``<joint>.pos`` numbers) and the
@@ -90,7 +173,11 @@ class LeaderArm:
     def read(self) -> tuple[np.ndarray, float]:
         """The leader's position now as the simulated arm's joint targets (rad, the robot's joint order) and grip
         command (0 open .. 1 closed)."""
-        return self.joint_targets(self.teleop.get_action())
+        try:
+            action = self.teleop.get_action()
+        except BUS_ERRORS as exc:  # unplugged, or its power lost, while it drives the arm
+            raise _no_answer(getattr(getattr(self.teleop, "config", None), "port", "?"), exc) from None
+        return self.joint_targets(action)
 
     def joint_targets(self, action: dict[str, float]) -> tuple[np.ndarray, float]:
         """A LeRobot action (``{"shoulder_pan.pos": deg, ..., "gripper.pos": 0..100}``) as joint targets and grip."""
@@ -126,19 +213,42 @@ def open_leader(device: str, robot: Robot | None, port: str, *, leader_id: str |
         raise LeaderError(f"--port {port}: no such device; plug the leader arm in and find its port with "
                           "lerobot-find-port")
     leader_id, file = calibration_file(device, leader_id, calibration, port)
+    from rik.sim.robots.layout import robot_layout
+
+    read_calibration(file, [n.removesuffix(".pos") for n in robot_layout(robot).action_names])
     from lerobot.teleoperators.so_leader import SOLeader, SOLeaderTeleopConfig
 
     teleop = SOLeader(SOLeaderTeleopConfig(port=port, id=leader_id, calibration_dir=file.parent))
     try:
-        teleop.connect(calibrate=False)
-    except (ConnectionError, OSError) as exc:
-        cause = exc.__cause__ or exc
-        raise LeaderError(f"--port {port}: the leader arm does not answer ({str(cause).strip().splitlines()[0]}); "
-                          "check the port (lerobot-find-port), the cable and the arm's power") from None
+        teleop.connect(calibrate=False)  # LeRobot pings each servo, each within its packet timeout
+    except BUS_ERRORS as exc:
+        _close_port(teleop)
+        raise _no_answer(port, exc) from None
     try:
         if not teleop.is_calibrated:
             teleop.bus.write_calibration(teleop.calibration)
         return leader_arm(device, teleop, robot)
+    except BUS_ERRORS as exc:
+        _disconnect(teleop)
+        raise _no_answer(port, exc) from None
     except BaseException:
-        teleop.disconnect()
+        _disconnect(teleop)
         raise
+
+
+def _disconnect(teleop: Any) -> None:
+    """Disconnect a leader that failed half way, quietly (the first error is the one to report), its port closed
+    even when its servos do not answer LeRobot's torque-off."""
+    try:
+        teleop.disconnect()
+    except BUS_ERRORS:
+        pass
+    finally:
+        _close_port(teleop)
+
+
+def _close_port(teleop: Any) -> None:
+    """Close the serial port of a leader that LeRobot opened but could not connect (its servos did not answer)."""
+    handler = getattr(getattr(teleop, "bus", None), "port_handler", None)
+    if handler is not None and getattr(handler, "is_open", False):
+        handler.closePort()

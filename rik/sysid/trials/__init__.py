@@ -34,7 +34,8 @@ their line number in the file (the header is line 1).
 
 Checks
 ------
-Every value finite (no NaN, inf, empty cell); time strictly increasing within a trial; at least ``min_samples``
+Every value finite (no NaN, inf, empty cell) and, in SI, within :data:`MAX_MAGNITUDE` (1 km or rad, 1 km/s,
+1 MN or MN·m: beyond it the fit would overflow); time strictly increasing within a trial; at least ``min_samples``
 samples (default :data:`MIN_SAMPLES`); the position spanning at least ``min_motion`` (default
 :data:`MIN_MOTION`: 1 mm or 0.5°); the force spanning at least ``min_force_range`` (default
 :data:`MIN_FORCE_RANGE`: 0.01 N or 0.001 N·m). A failure raises :class:`TrialError`: one line naming the file,
@@ -59,6 +60,7 @@ from __future__ import annotations
 from rik.sysid.trials.errors import TrialError
 from rik.sysid.trials.lerobot import load_lerobot_trials
 from rik.sysid.trials.load import (
+    MAX_MAGNITUDE,
     MAX_SAMPLE_INTERVAL,
     MIN_FORCE_RANGE,
     MIN_MOTION,
@@ -101,9 +103,10 @@ from rik.sysid.trials.write import (
 )
 
 __all__ = [
-    "COLUMN_NAMES", "ColumnMap", "EMPTY_FILE", "FORCE_UNITS", "MAX_FILE_BYTES", "MAX_ROWS", "MAX_SAMPLE_INTERVAL",
-    "MIN_FORCE_RANGE", "MIN_MOTION", "MIN_SAMPLES", "NOT_UTF8", "POSITION_UNITS", "ROLES", "RawTable", "SUFFIXES",
-    "TIME_UNITS", "TRIAL_COLUMN", "TRUTH_FILE", "Trial", "TrialError", "VELOCITY_UNITS", "check_size",
+    "COLUMN_NAMES", "ColumnMap", "EMPTY_FILE", "FORCE_UNITS", "MAX_FILE_BYTES", "MAX_MAGNITUDE", "MAX_ROWS",
+    "MAX_SAMPLE_INTERVAL", "MIN_FORCE_RANGE", "MIN_MOTION", "MIN_SAMPLES", "NOT_UTF8", "POSITION_UNITS", "ROLES",
+    "RawTable", "SUFFIXES", "TIME_UNITS", "TRIAL_COLUMN", "TRUTH_FILE", "Trial", "TrialError", "VELOCITY_UNITS",
+    "check_size",
     "is_simulated", "joint_type", "load_lerobot_trials", "load_trials", "match_header", "parse_header",
     "read_table", "si_columns", "simulated_folder", "unit_option", "unit_scale", "write_csv_trials",
     "write_simulated",

@@ -37,6 +37,10 @@ MIN_MOTION = {JointType.slide: 1e-3, JointType.hinge: math.radians(0.5)}
 """Smallest position range (max − min) of a trial, m (slide: 1 mm) or rad (hinge: 0.5°)."""
 MIN_FORCE_RANGE = {JointType.slide: 0.01, JointType.hinge: 0.001}
 """Smallest force range (max − min) of a trial, N (slide) or N·m (hinge): below it the force is constant."""
+MAX_MAGNITUDE = {"position": 1e3, "velocity": 1e3, "force": 1e6}
+"""Largest magnitude of a measured value, SI (m or rad, m/s or rad/s, N or N·m): far beyond any furniture joint
+(a kilometre, a meganewton), and small enough that the fit's squares and sums of millions of samples stay finite
+(forces of 1e300 N overflowed into NaN gains). A value beyond it is a wrong unit or a damaged file."""
 MAX_SAMPLE_INTERVAL = 1.0
 """Largest median interval between a trial's samples, s: data sampled slower than 1 Hz cannot show a joint's
 dynamics (the smoothing window is 0.1 s), and such intervals are what milliseconds (of a logger at 500 Hz or
@@ -288,6 +292,29 @@ def _check_finite(src: Source) -> None:
     raise src.error(role, f"{src.where(i)} is {what}; every value must be a finite number")
 
 
+def check_magnitude(values: np.ndarray, role: str, scale: float) -> int | None:
+    """The index of the first of ``values`` (of quantity ``role``, ``scale`` to SI) beyond :data:`MAX_MAGNITUDE`,
+    else None (compared in the values' own unit: their SI values may overflow)."""
+    bad = np.flatnonzero(np.abs(values) > MAX_MAGNITUDE[role] / scale)
+    return int(bad[0]) if bad.size else None
+
+
+def magnitude_problem(value: float, unit: str, role: str, scale: float) -> str:
+    """What is wrong with ``value`` (in ``unit``, ``scale`` to SI) beyond :data:`MAX_MAGNITUDE` of ``role``."""
+    return (f"is {_num(value)} {unit}, beyond ±{_num(MAX_MAGNITUDE[role] / scale)} {unit}, far more than any furniture "
+            "joint: too large to fit; is the unit right?")
+
+
+def _check_magnitude(src: Source) -> None:
+    for role in ("position", "velocity", "force"):
+        if role not in src.values:
+            continue
+        i = check_magnitude(src.values[role], role, src.scales[role])
+        if i is not None:
+            value = float(src.values[role][i])
+            raise src.error(role, f"{src.where(i)} {magnitude_problem(value, src.units[role], role, src.scales[role])}")
+
+
 def _check_time(src: Source) -> None:
     t = src.values["time"]
     steps = np.diff(t)
@@ -340,6 +367,7 @@ def _check_range(src: Source, role: str, minimum_si: float) -> None:
 def build_trial(src: Source, limits: _Thresholds) -> Trial:
     """Check a trial's data (in the order of :mod:`rik.sysid.trials`' checks) and convert it to SI."""
     _check_finite(src)
+    _check_magnitude(src)
     _check_time(src)
     _check_time_unit(src)
     n = len(src.values["time"])
