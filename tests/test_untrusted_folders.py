@@ -9,6 +9,7 @@ normalisers' state files), then damaged the way a folder from elsewhere could be
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import json
 import os
@@ -16,6 +17,7 @@ import pickle
 import re
 import shutil
 import sys
+import types
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -30,34 +32,57 @@ DRAW = ("--types", "knob", "--presets", "smooth", "-n", "1", "--videos", "0", "-
         "--episode-length", "5")
 
 
-@pytest.fixture(scope="module")
-def saved_policy(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A tiny state-only ACT policy for the Hand-E (11 state numbers, the front's 13, 7 actions), saved by
-    LeRobot with its processors."""
-    import torch
+def _features() -> dict[str, Any]:
+    """The Hand-E's state-only features (11 state numbers, the front's 13, 7 actions), normalised by mean and
+    standard deviation."""
     from lerobot.configs.types import FeatureType, NormalizationMode, PolicyFeature
-    from lerobot.policies.act.configuration_act import ACTConfig
-    from lerobot.policies.act.modeling_act import ACTPolicy
+
+    mode = NormalizationMode.MEAN_STD
+    return {"input_features": {"observation.state": PolicyFeature(FeatureType.STATE, (11,)),
+                               "observation.environment_state": PolicyFeature(FeatureType.ENV, (13,))},
+            "output_features": {"action": PolicyFeature(FeatureType.ACTION, (7,))},
+            "normalization_mapping": {"VISUAL": mode, "STATE": mode, "ENV": mode, "ACTION": mode}}
+
+
+def _save(policy_class: Any, config: Any, folder: Path) -> Path:
+    """A policy of ``config`` saved by LeRobot into ``folder`` with its processors (zero means, unit deviations)."""
+    import torch
     from lerobot.policies.factory import make_pre_post_processors
 
     widths = {"observation.state": 11, "observation.environment_state": 13, "action": 7}
-    mode = NormalizationMode.MEAN_STD
-    config = ACTConfig(
-        device="cpu", push_to_hub=False, pretrained_backbone_weights=None, dim_model=8, dim_feedforward=16,
-        n_heads=2, n_encoder_layers=1, n_decoder_layers=1, chunk_size=2, n_action_steps=2, latent_dim=4,
-        use_vae=False,
-        input_features={"observation.state": PolicyFeature(FeatureType.STATE, (11,)),
-                        "observation.environment_state": PolicyFeature(FeatureType.ENV, (13,))},
-        output_features={"action": PolicyFeature(FeatureType.ACTION, (7,))},
-        normalization_mapping={"VISUAL": mode, "STATE": mode, "ENV": mode, "ACTION": mode})
     torch.manual_seed(0)
-    policy = ACTPolicy(config)
+    policy = policy_class(config)
     stats = {k: {"mean": torch.zeros(n), "std": torch.ones(n)} for k, n in widths.items()}
     pre, post = make_pre_post_processors(config, dataset_stats=stats)
-    folder = tmp_path_factory.mktemp("saved") / "pretrained_model"
     for part in (policy, pre, post):
         part.save_pretrained(folder)
     return folder
+
+
+@pytest.fixture(scope="module")
+def saved_policy(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A tiny state-only ACT policy for the Hand-E, saved by LeRobot with its processors."""
+    from lerobot.policies.act.configuration_act import ACTConfig
+    from lerobot.policies.act.modeling_act import ACTPolicy
+
+    config = ACTConfig(
+        device="cpu", push_to_hub=False, pretrained_backbone_weights=None, dim_model=8, dim_feedforward=16,
+        n_heads=2, n_encoder_layers=1, n_decoder_layers=1, chunk_size=2, n_action_steps=2, latent_dim=4,
+        use_vae=False, **_features())
+    return _save(ACTPolicy, config, tmp_path_factory.mktemp("saved") / "pretrained_model")
+
+
+@pytest.fixture(scope="module")
+def saved_diffusion(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A tiny state-only diffusion policy for the Hand-E, saved as ``saved_policy``."""
+    from lerobot.policies.diffusion.configuration_diffusion import DiffusionConfig
+    from lerobot.policies.diffusion.modeling_diffusion import DiffusionPolicy
+
+    config = DiffusionConfig(
+        device="cpu", push_to_hub=False, pretrained_backbone_weights=None, n_obs_steps=1, horizon=4,
+        n_action_steps=2, down_dims=(8, 16), kernel_size=3, n_groups=2, diffusion_step_embed_dim=8,
+        num_train_timesteps=10, **_features())
+    return _save(DiffusionPolicy, config, tmp_path_factory.mktemp("diffusion") / "pretrained_model")
 
 
 def _copy(saved: Path, tmp_path: Path, name: str = "policy") -> Path:
@@ -166,6 +191,46 @@ def test_processor_files_of_the_wrong_shape(rik, saved_policy: Path, tmp_path: P
                                                      "got an unexpected keyword argument 'devise'")
 
 
+@pytest.mark.parametrize(("file", "step", "field", "value", "expected"), [
+    (PRE, 3, "eps", "abc", "'abc' is not a number above 0 and at most 1 (LeRobot writes 1e-08)"),
+    (POST, 0, "eps", float("inf"), "Infinity is not a number above 0 and at most 1"),
+    (POST, 1, "device", "meta", "'meta' is not a device (cpu, cuda, cuda:N, mps or xpu)"),
+    (POST, 1, "device", "mps", "'mps' is not a device this machine has (0 mps devices; cpu always works)"),
+    (PRE, 2, "device", "cuda:x", "'cuda:x' is not a device (cpu, cuda, cuda:N, mps or xpu)"),
+    (PRE, 2, "float_dtype", "bfloat16", "'bfloat16' is not null or float32: rik runs policies in float32"),
+    (PRE, 3, "norm_map", {"STATE": "MEAN_STD", "BOGUS": "MIN_MAX"}, "'BOGUS' is not one of STATE, VISUAL, "),
+    (PRE, 3, "normalize_observation_keys", "observation.state",
+     "'observation.state' is not null or a list of feature names"),
+    (PRE, 3, "dtype", "float16", "'float16' is not null (LeRobot writes none; the statistics are float32)"),
+    (PRE, 1, "to_batch_action_processor", {}, "not a setting rik reads for to_batch_processor (it reads none)"),
+])
+def test_processor_step_value_that_would_stop_the_evaluation(rik, saved_policy: Path, tmp_path: Path, file: str,
+                                                              step: int, field: str, value: Any,
+                                                              expected: str) -> None:
+    """Every field of a step's config has a value the step runs with, checked before LeRobot builds the steps
+    (LeRobot 0.6.1 takes eps 'abc' or the device 'meta' and the evaluation stops at its first step)."""
+    policy = _copy(saved_policy, tmp_path)
+    _edit_json(policy / file, lambda d: d["steps"][step]["config"].__setitem__(field, value))
+    msg = _refused(rik, policy, tmp_path)
+    assert msg.startswith(f"{policy / file}: step {step} field 'config.{field}': {expected}"), msg
+
+
+def test_processor_features_and_renames_agree_with_the_config(rik, saved_policy: Path, tmp_path: Path) -> None:
+    """A normaliser's feature of another shape than config.json's (its statistics would not fit the data), and a
+    rename of one of the policy's inputs (the policy would never get it), are refused by field."""
+    policy = _copy(saved_policy, tmp_path, "shape")
+    _edit_json(policy / PRE, lambda d: d["steps"][3]["config"]["features"]["observation.state"].__setitem__(
+        "shape", [5]))
+    assert _refused(rik, policy, tmp_path / "a") == (
+        f"{policy / PRE}: step 3 field 'config.features.observation.state': {{\"type\": \"STATE\", \"shape\": [5]}} "
+        f"is not the feature config.json gives it, {{\"type\": \"STATE\", \"shape\": [11]}}")
+    policy = _copy(saved_policy, tmp_path, "rename")
+    _edit_json(policy / PRE, lambda d: d["steps"][0]["config"]["rename_map"].__setitem__("observation.state", "x"))
+    assert _refused(rik, policy, tmp_path / "b") == (
+        f"{policy / PRE}: step 0 field 'config.rename_map.observation.state': 'x': renames the policy's input "
+        "'observation.state' away, so the policy would never get it")
+
+
 # ---- config.json ---------------------------------------------------------------------------------------------
 @pytest.mark.parametrize(("field", "value", "expected"), [
     ("dim_model", "eight", "field 'dim_model': 'eight' is not an integer"),
@@ -207,6 +272,86 @@ def test_config_that_is_not_a_json_object(rik, saved_policy: Path, tmp_path: Pat
     (policy / "config.json").write_text("[]")
     assert _refused(rik, policy, tmp_path / "b") == (f"{policy / 'config.json'}: field 'type' (the policy type, e.g. "
                                                      "act) is missing")
+
+
+@contextlib.contextmanager
+def _address_space_cap(extra: int = 2**30):
+    """This process may map at most ``extra`` bytes more than it has now (what rik eval allocates then fails with
+    a MemoryError instead of taking the machine's memory)."""
+    import resource
+
+    with open("/proc/self/status") as f:
+        size = next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmSize:"))
+    before = resource.getrlimit(resource.RLIMIT_AS)
+    resource.setrlimit(resource.RLIMIT_AS, (size + extra, before[1]))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_AS, before)
+
+
+@pytest.mark.parametrize(("policy_type", "change", "expected"), [
+    ("diffusion", {"num_train_timesteps": 10**8},
+     "field 'num_train_timesteps': 100000000 is not an integer from 1 to 10000; it sizes what LeRobot builds for "
+     "the policy"),
+    ("diffusion", {"num_inference_steps": 11},
+     "field 'num_inference_steps': 11 is not an integer from 1 to 10 (its num_train_timesteps)"),
+    ("diffusion", {"down_dims": [8, 10**9]}, "field 'down_dims': [8, 1000000000] is not a list of 1 to 16 integers, "
+                                             "each from 1 to 8192"),
+    ("act", {"chunk_size": 10**9, "use_vae": True}, "field 'chunk_size': 1000000000 is not an integer from 1 to 1024"),
+    ("act", {"dim_feedforward": 10**9}, "field 'dim_feedforward': 1000000000 is not an integer from 1 to 16384"),
+    ("act", {"input_features": {"observation.state": {"type": "STATE", "shape": [11]},
+                                "observation.images.front": {"type": "VISUAL", "shape": [3, 100_000, 100_000]}}},
+     "field 'input_features.observation.images.front.shape': [3, 100000, 100000] is more than rik eval runs: at most "
+     "3 dimensions of at most 4194304 numbers in all"),
+])
+def test_config_number_that_sizes_an_allocation_is_bounded(rik, saved_policy: Path, saved_diffusion: Path,
+                                                           tmp_path: Path, policy_type: str, change: dict[str, Any],
+                                                           expected: str) -> None:
+    """Every number of config.json that sizes what LeRobot allocates is checked before anything is built: a
+    diffusion policy's num_train_timesteps of 1e8 made LeRobot's noise scheduler take 3.5-7 GB while rik checked the
+    weights on the meta device; ACT's chunk_size (with the VAE) a table of Python floats. The evaluation runs here
+    with less than 1 GiB more address space than the process has."""
+    policy = _copy(saved_diffusion if policy_type == "diffusion" else saved_policy, tmp_path)
+    _edit_json(policy / "config.json", lambda d: d.update(change))
+    with _address_space_cap():
+        msg = _refused(rik, policy, tmp_path)
+    assert msg.startswith(f"{policy / 'config.json'}: {expected}"), msg
+
+
+def test_a_model_too_large_to_build_is_refused(rik, saved_policy: Path, tmp_path: Path) -> None:
+    """Numbers each within its bound can still describe a model of more than MAX_PARAMETERS (here 13 billion): it is
+    refused from its shape on the meta device, before its weights are read or anything is allocated."""
+    policy = _copy(saved_policy, tmp_path)
+    _edit_json(policy / "config.json", lambda d: d.update(dim_model=4096, dim_feedforward=16384, n_encoder_layers=64))
+    with _address_space_cap():
+        msg = _refused(rik, policy, tmp_path)
+    assert re.fullmatch(rf"{re.escape(str(policy / 'config.json'))}: describes a act policy of [0-9,]+ parameters; rik "
+                        r"eval builds policies of at most 1,073,741,824 \(4 GiB of float32\)", msg), msg
+
+
+def test_every_integer_field_of_the_policy_configs_has_a_bound() -> None:
+    """The table of bounds covers every integer (or list of integers) field of the config classes of the policy
+    types rik runs, but those only lerobot-train reads; a LeRobot upgrade that adds one fails here."""
+    import dataclasses
+    import typing
+
+    import lerobot.policies  # noqa: F401  (registers the policy types)
+    from lerobot.configs.policies import PreTrainedConfig
+
+    from rik.evaluation.policy_files import POLICY_TYPES, SIZES, TRAINING_ONLY
+
+    def integers(hint: Any) -> bool:
+        args = [a for a in typing.get_args(hint) if a is not type(None) and a is not Ellipsis]
+        if typing.get_origin(hint) in (typing.Union, types.UnionType, tuple, list):
+            return bool(args) and all(a is int or integers(a) for a in args)
+        return hint is int
+
+    for kind in POLICY_TYPES:
+        cls = PreTrainedConfig.get_choice_class(kind)
+        hints = typing.get_type_hints(cls)
+        fields = {f.name for f in dataclasses.fields(cls) if f.init and integers(hints[f.name])}
+        assert fields - set(TRAINING_ONLY) == set(SIZES[kind]), kind
 
 
 # ---- weights and state files -----------------------------------------------------------------------------------

@@ -19,11 +19,18 @@ So rik accepts only what it has read:
 - every file read (the JSON files, the steps' ``state_file``, ``model.safetensors``) is a regular file inside the
   folder (no ``..``, no absolute path, no symbolic link out of it); the JSON files are at most
   :data:`MAX_JSON_BYTES`, checked before they are read; ``config.json``'s fields have the types LeRobot's config
-  class declares (draccus's own complaints are turned into one line naming the field);
+  class declares (draccus's own complaints are turned into one line naming the field), and every number of it that
+  sizes something LeRobot allocates (:data:`SIZES`; a feature's shape, :data:`MAX_FEATURE_NUMBERS`) is within a
+  bound, checked before anything is built (a diffusion policy's ``num_train_timesteps`` sizes the arrays its noise
+  scheduler makes at once; ACT's ``chunk_size`` a table of Python floats);
+- every field of a processor step's config has the type and a value the step can run with (:data:`STEP_CHECKS`:
+  a normaliser's ``eps`` a small positive number, its features those of ``config.json``; a device one rik can
+  use), checked before LeRobot builds the steps;
 - weights are safetensors, read through their header only (no pickle anywhere): ``model.safetensors`` has
   exactly the tensors, with the shapes, of the model ``config.json`` describes (built on PyTorch's ``meta`` device,
-  which allocates nothing), and a normaliser's state file has every statistic its features need, of their shapes
-  (LeRobot's normaliser silently skips a feature whose statistics are missing).
+  which allocates nothing; at most :data:`MAX_PARAMETERS` of them), and a normaliser's state file has every
+  statistic its features need, of their shapes (LeRobot's normaliser silently skips a feature whose statistics are
+  missing).
 
 Anything else is a one-line :class:`rik.errors.RikError` naming the file, the step and the field.
 """
@@ -31,6 +38,9 @@ Anything else is a one-line :class:`rik.errors.RikError` naming the file, the st
 from __future__ import annotations
 
 import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any
 
@@ -55,6 +65,54 @@ STATISTICS = {"MEAN_STD": ("mean", "std"), "MIN_MAX": ("min", "max"), "QUANTILES
               "QUANTILE10": ("q10", "q90"), "IDENTITY": ()}
 """The statistics each normalisation mode reads (LeRobot's ``_NormalizationMixin._apply_transform``)."""
 FEATURE_TYPES = ("STATE", "VISUAL", "ENV", "ACTION", "REWARD", "LANGUAGE")
+MAX_FEATURE_NUMBERS = 2**22
+"""Most numbers in one feature (its shape's product): a 3 x 1080 x 1280 image fits. Images are rendered at the
+size a policy's feature gives, and its state vectors size its layers."""
+MAX_FEATURE_DIMS = 3
+"""Most dimensions of a feature's shape (an image's channels, height and width)."""
+MAX_PARAMETERS = 2**30
+"""Most parameters (and buffers) of a model rik eval builds: 4 GiB of float32; LeRobot's largest default of these
+types, diffusion's, has about 263 million."""
+
+Bound = tuple[int, int | tuple[str, ...]]
+"""(least, most) of an integer field, or of each integer of a list field; most is a number or the fields of the
+same config whose sum bounds it."""
+SIZES: dict[str, dict[str, Bound]] = {
+    "act": {
+        "n_obs_steps": (1, 64), "chunk_size": (1, 1024), "n_action_steps": (1, 1024),
+        "replace_final_stride_with_dilation": (0, 1), "dim_model": (1, 4096), "n_heads": (1, 128),
+        "dim_feedforward": (1, 16384), "n_encoder_layers": (0, 64), "n_decoder_layers": (0, 64),
+        "latent_dim": (1, 4096), "n_vae_encoder_layers": (0, 64),
+    },
+    "diffusion": {
+        "n_obs_steps": (1, 64), "horizon": (1, 1024), "n_action_steps": (1, ("horizon",)),
+        "resize_shape": (1, 2048), "crop_shape": (1, 2048), "spatial_softmax_num_keypoints": (1, 1024),
+        "down_dims": (1, 8192), "kernel_size": (1, 64), "n_groups": (1, 1024), "diffusion_step_embed_dim": (1, 8192),
+        "num_train_timesteps": (1, 10_000), "num_inference_steps": (1, ("num_train_timesteps",)),
+    },
+    "tdmpc": {
+        "n_obs_steps": (1, 64), "n_action_repeats": (1, 64), "horizon": (1, 256), "n_action_steps": (1, ("horizon",)),
+        "image_encoder_hidden_dim": (1, 4096), "state_encoder_hidden_dim": (1, 16384), "latent_dim": (1, 4096),
+        "q_ensemble_size": (1, 64), "mlp_dim": (1, 16384), "cem_iterations": (1, 256),
+        "n_gaussian_samples": (1, 8192), "n_pi_samples": (0, 8192),
+        "n_elites": (1, ("n_gaussian_samples", "n_pi_samples")),
+    },
+    "vqbet": {
+        "n_obs_steps": (1, 64), "n_action_pred_token": (1, 64), "action_chunk_size": (1, 256),
+        "crop_shape": (1, 2048), "spatial_softmax_num_keypoints": (1, 1024), "vqvae_n_embed": (1, 4096),
+        "vqvae_embedding_dim": (1, 4096), "vqvae_enc_hidden_dim": (1, 8192), "gpt_block_size": (1, 4096),
+        "gpt_input_dim": (1, 8192), "gpt_output_dim": (1, 8192), "gpt_n_layer": (1, 64), "gpt_n_head": (1, 128),
+        "gpt_hidden_dim": (1, 8192),
+    },
+}
+"""Every integer field of a policy type's config that sizes what LeRobot builds or allocates when it runs the
+policy (layers, buffers, the noise scheduler's tables, the planner's samples, the images it crops), with its bounds:
+10 to 100 times LeRobot's defaults, so that no folder makes rik eval allocate more than a few GB. A field of a list
+(``down_dims``, ``crop_shape``) bounds each of its numbers."""
+TRAINING_ONLY = ("drop_n_last_frames", "scheduler_warmup_steps", "n_vqvae_training_steps")
+"""Integer fields read by ``lerobot-train`` only (they size nothing rik eval runs)."""
+MAX_LIST = 16
+"""Most numbers of a list field of :data:`SIZES` (``down_dims`` has 3, a crop shape 2)."""
 _QUOTE = 60
 
 
@@ -177,6 +235,50 @@ def _check_features(where: str, field: str, value: Any) -> None:
         if (not isinstance(shape, list) or not shape
                 or any(isinstance(n, bool) or not isinstance(n, int) or n < 1 for n in shape)):
             raise RikError(f"{name}.shape': {_short(shape)} is not a list of positive integers")
+        if len(shape) > MAX_FEATURE_DIMS or math.prod(shape) > MAX_FEATURE_NUMBERS:
+            raise RikError(f"{name}.shape': {_short(shape)} is more than rik eval runs: at most {MAX_FEATURE_DIMS} "
+                           f"dimensions of at most {MAX_FEATURE_NUMBERS} numbers in all (a 3 x 1080 x 1280 image)")
+
+
+def _size_defaults(cls: type, kind: str) -> dict[str, Any]:
+    """The defaults of the fields of :data:`SIZES` of the config class ``cls`` of policy type ``kind``."""
+    import dataclasses
+
+    out: dict[str, Any] = {}
+    for field in dataclasses.fields(cls):
+        if field.name in SIZES[kind]:
+            factory = field.default_factory
+            out[field.name] = field.default if factory is dataclasses.MISSING else factory()
+    return out
+
+
+def _most(values: dict[str, Any], most: int | tuple[str, ...]) -> tuple[int, str]:
+    """The largest value a bound allows, given the config's ``values``, and the fields it comes from."""
+    if isinstance(most, int):
+        return most, ""
+    return sum(values[f] for f in most), f" (its {' + '.join(most)})"
+
+
+def check_sizes(file: Path, cls: type, data: dict[str, Any]) -> None:
+    """Every field of :data:`SIZES` of ``config.json``'s ``data`` (a policy type's, of class ``cls``; LeRobot's
+    default where the file has none) within its bounds: read before LeRobot parses, builds or allocates anything."""
+    import typing
+
+    kind = data["type"]
+    hints = typing.get_type_hints(cls)
+    values = {**_size_defaults(cls, kind), **{k: v for k, v in data.items() if k in SIZES[kind]}}
+    for name, (least, most) in SIZES[kind].items():
+        value = values[name]
+        if value is None:
+            continue
+        top, source = _most(values, most)
+        listed = "tuple[" in str(hints[name])  # down_dims, crop_shape, resize_shape
+        numbers = value if listed and isinstance(value, (list, tuple)) else [value]
+        if (listed and not (isinstance(value, (list, tuple)) and 0 < len(value) <= MAX_LIST)) or any(
+                not isinstance(n, int) or not least <= n <= top for n in numbers):  # true, false: 1, 0 (_wrong_type)
+            what = f"a list of 1 to {MAX_LIST} integers, each" if listed else "an integer"
+            raise RikError(f"{file}: field '{name}': {_short(value)} is not {what} from {least} to {top}{source}; "
+                           "it sizes what LeRobot builds for the policy")
 
 
 def parsed_config(policy_dir: Path, data: dict[str, Any]) -> Any:
@@ -214,9 +316,10 @@ def parsed_config(policy_dir: Path, data: dict[str, Any]) -> Any:
         if backbone not in torchvision.models.list_models(module=torchvision.models):
             raise RikError(f"{file}: field 'vision_backbone': {_short(backbone)} is not one of torchvision's "
                            "image models (e.g. resnet18)")
+    check_sizes(file, cls, data)
     body = {k: v for k, v in data.items() if k != "type"}
     try:
-        return draccus.decode(cls, body)
+        config = draccus.decode(cls, body)
     except DecodingError as e:
         field = ".".join(map(str, e.key_path))
         where = f"field '{field}'" if field else "its fields"
@@ -224,6 +327,10 @@ def parsed_config(policy_dir: Path, data: dict[str, Any]) -> Any:
     except (ParsingError, ValueError, TypeError, KeyError) as e:
         cause = e.__cause__ or e
         raise RikError(f"{file}: LeRobot's {data['type']} config refuses it: {_first_line(cause)}") from None
+    problem = _device_problem(config.device, available=True)
+    if problem:
+        raise RikError(f"{file}: field 'device': {_short(config.device)} {problem}")
+    return config
 
 
 # ---- safetensors -------------------------------------------------------------------------------------------
@@ -265,6 +372,10 @@ def _expected_tensors(policy_dir: Path, config: Any) -> tuple[dict[str, tuple[in
     groups: dict[int, set[str]] = {}
     for name, tensor in state.items():
         groups.setdefault(id(tensor), set()).add(name)
+    numbers = sum(state[min(g)].numel() for g in groups.values())
+    if numbers > MAX_PARAMETERS:
+        raise RikError(f"{Path(policy_dir) / CONFIG}: describes a {config.type} policy of {numbers:,} parameters; rik "
+                       f"eval builds policies of at most {MAX_PARAMETERS:,} (4 GiB of float32)")
     return {k: tuple(v.shape) for k, v in state.items()}, list(groups.values())
 
 
@@ -332,28 +443,168 @@ def _check_step_config(file: Path, i: int, step: dict[str, Any], cls: type) -> d
     return config
 
 
+_DEVICE_NAMES = "cpu, cuda, cuda:N, mps or xpu"
+
+
+def _device_count(family: str) -> int:
+    """How many devices of ``family`` (cuda, mps, xpu) this machine has."""
+    import torch
+
+    if family == "cuda":
+        return torch.cuda.device_count() if torch.cuda.is_available() else 0
+    if family == "mps":
+        return int(torch.backends.mps.is_available())
+    xpu = getattr(torch, "xpu", None)
+    return xpu.device_count() if xpu is not None and xpu.is_available() else 0
+
+
+def _device_problem(value: Any, available: bool) -> str | None:
+    """Why ``value`` is not a device rik can run on (None when it is): one of :data:`_DEVICE_NAMES`, and, where
+    ``available``, one this machine has."""
+    import re
+
+    if not isinstance(value, str) or not re.fullmatch(r"cpu|mps|xpu|cuda(:[0-9]{1,3})?", value):
+        return f"is not a device ({_DEVICE_NAMES})"
+    family, _, index = value.partition(":")
+    if not available or family == "cpu":
+        return None
+    count = _device_count(family)
+    if int(index or 0) >= count:
+        return f"is not a device this machine has ({count} {family} device{'s' * (count != 1)}; cpu always works)"
+    return None
+
+
+@dataclass(frozen=True)
+class _Step:
+    """A processor step whose config is checked, and what its fields are checked against."""
+
+    where: str
+    """``<file>: step <i>``: the start of its messages."""
+    name: str
+    """Its registry name (:data:`STEPS`)."""
+    postprocessor: bool
+    config: dict[str, Any]
+    policy: dict[str, Any]
+    """``config.json``'s input and output features by key (empty where not known)."""
+    inputs: tuple[str, ...]
+    """``config.json``'s input features: what rik's environment supplies."""
+
+    def refuse(self, field: str, text: str) -> RikError:
+        return RikError(f"{self.where} field 'config.{field}': {text}")
+
+
+def _check_device(step: _Step, field: str, value: Any) -> None:
+    """A device name; one this machine has, except the preprocessor's device step (rik sets it to the policy's
+    device); a normaliser's may be null (its statistics go where the data is)."""
+    if value is None and step.name in NORMALISERS:
+        return
+    problem = _device_problem(value, available=step.name != "device_processor" or step.postprocessor)
+    if problem:
+        raise step.refuse(field, f"{_short(value)} {problem}")
+
+
+def _check_float_dtype(step: _Step, field: str, value: Any) -> None:
+    if value not in (None, "float32", "float"):
+        raise step.refuse(field, f"{_short(value)} is not null or float32: rik runs policies in float32, and inputs "
+                                 "or actions of another dtype stop the evaluation")
+
+
+def _check_null(step: _Step, field: str, value: Any) -> None:
+    if value is not None:
+        raise step.refuse(field, f"{_short(value)} is not null (LeRobot writes none; the statistics are float32)")
+
+
+def _check_eps(step: _Step, field: str, value: Any) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= 1:
+        raise step.refuse(field, f"{_short(value)} is not a number above 0 and at most 1 (LeRobot writes 1e-08)")
+
+
+def _check_stats(step: _Step, field: str, value: Any) -> None:
+    raise step.refuse(field, "LeRobot keeps a normaliser's statistics in its state file; statistics in the config "
+                             "would replace them unchecked")
+
+
+def _check_step_features(step: _Step, field: str, value: Any) -> None:
+    """LeRobot features; those ``config.json`` has too of the same type and shape (the statistics are shaped by
+    these, the data by ``config.json``'s)."""
+    _check_features(step.where, f"config.{field}", value)
+    for key, feature in value.items():
+        theirs = step.policy.get(key)
+        if theirs is not None and (feature["type"], feature["shape"]) != (theirs["type"], theirs["shape"]):
+            raise step.refuse(f"{field}.{key}", f"{_short(feature)} is not the feature {CONFIG} gives it, "
+                                                f"{_short(theirs)}")
+
+
+def _check_norm_map(step: _Step, field: str, value: Any) -> None:
+    if not isinstance(value, dict):
+        raise step.refuse(field, f"{_short(value)} is not an object of feature types and normalisation modes")
+    for kind, mode in value.items():
+        if kind not in FEATURE_TYPES:
+            raise step.refuse(field, f"{_short(kind)} is not one of {', '.join(FEATURE_TYPES)}")
+        if not isinstance(mode, str) or mode not in STATISTICS:
+            raise step.refuse(f"{field}.{kind}", f"{_short(mode)} is not one of {', '.join(STATISTICS)}")
+
+
+def _check_observation_keys(step: _Step, field: str, value: Any) -> None:
+    """Null, or names of the step's own features."""
+    if value is None:
+        return
+    if not isinstance(value, list) or not all(isinstance(k, str) for k in value):
+        raise step.refuse(field, f"{_short(value)} is not null or a list of feature names")
+    features = step.config.get("features") or {}
+    for key in value:
+        if key not in features:
+            raise step.refuse(field, f"{_short(key)} is not one of the step's features ({_list(list(features))})")
+
+
+def _check_rename_map(step: _Step, field: str, value: Any) -> None:
+    """Names to names, renaming none of the policy's inputs away (the policy would never get it)."""
+    if not isinstance(value, dict) or not all(isinstance(v, str) for v in value.values()):
+        raise step.refuse(field, f"{_short(value)} is not an object of names to names")
+    for key, new in value.items():
+        if key in step.inputs and new != key:
+            raise step.refuse(f"{field}.{key}", f"{_short(new)}: renames the policy's input {key!r} away, so the "
+                                                "policy would never get it")
+
+
+StepCheck = Callable[[_Step, str, Any], None]
+_NORMALISER_CHECKS: dict[str, StepCheck] = {
+    "features": _check_step_features, "norm_map": _check_norm_map, "eps": _check_eps, "device": _check_device,
+    "dtype": _check_null, "normalize_observation_keys": _check_observation_keys, "stats": _check_stats}
+STEP_CHECKS: dict[str, dict[str, StepCheck]] = {
+    "rename_observations_processor": {"rename_map": _check_rename_map},
+    "to_batch_processor": {},
+    "device_processor": {"device": _check_device, "float_dtype": _check_float_dtype},
+    "normalizer_processor": _NORMALISER_CHECKS,
+    "unnormalizer_processor": _NORMALISER_CHECKS,
+}
+"""Each field a step's config may have (those LeRobot 0.6.1's step classes take from a file), with its check of
+type and value: a field of a step that is not here is refused (``to_batch_processor``'s are steps, which a file
+cannot give)."""
+
+
+def _check_step_fields(step: _Step) -> None:
+    """Every field of the step's config, by :data:`STEP_CHECKS`."""
+    checks = STEP_CHECKS[step.name]
+    for field, value in step.config.items():
+        if field not in checks:
+            raise step.refuse(field, f"not a setting rik reads for {step.name} (it reads "
+                                     f"{', '.join(checks) or 'none'})")
+        checks[field](step, field, value)
+
+
 def _check_statistics(file: Path, i: int, config: dict[str, Any], state: Path | None) -> None:
-    """A normaliser's state file holds every statistic its features' modes read, of the features' shapes."""
-    where = f"{file}: step {i}"
+    """A normaliser's state file holds every statistic its features' modes read, of the features' shapes (its
+    config checked by :func:`_check_step_fields`)."""
     features, norm_map = config.get("features") or {}, config.get("norm_map") or {}
-    if not isinstance(features, dict) or not isinstance(norm_map, dict):
-        raise RikError(f"{where} field 'config': 'features' and 'norm_map' are objects")
-    if "stats" in config:
-        raise RikError(f"{where} field 'config.stats': LeRobot keeps a normaliser's statistics in its state file; "
-                       "statistics in the config would replace them unchecked")
     needed: dict[str, tuple[int, ...]] = {}
     for key, feature in features.items():
-        _check_features(where, "config.features", {key: feature})
-        mode = norm_map.get(feature["type"], "IDENTITY")
-        if not isinstance(mode, str) or mode not in STATISTICS:
-            raise RikError(f"{where} field 'config.norm_map.{feature['type']}': {_short(mode)} is not one of "
-                           f"{', '.join(STATISTICS)}")
-        for stat in STATISTICS[mode]:
+        for stat in STATISTICS[norm_map.get(feature["type"], "IDENTITY")]:
             needed[f"{key}.{stat}"] = tuple(feature["shape"])
     if not needed:
         return
     if state is None:
-        raise RikError(f"{where}: no 'state_file': the statistics of {_list(list(needed))} are missing")
+        raise RikError(f"{file}: step {i}: no 'state_file': the statistics of {_list(list(needed))} are missing")
     found = tensor_shapes(state, str(state))
     for name, shape in needed.items():
         if name not in found:
@@ -365,13 +616,16 @@ def _check_statistics(file: Path, i: int, config: dict[str, Any], state: Path | 
                            f"{list(shape)}")
 
 
-def check_processors(policy_dir: Path) -> None:
-    """Both processor files: objects of LeRobot's shape whose steps are :data:`STEPS`, with their state files
+def check_processors(policy_dir: Path, policy: dict[str, Any] | None = None) -> None:
+    """Both processor files: objects of LeRobot's shape whose steps are :data:`STEPS`, their configs' fields of
+    :data:`STEP_CHECKS` (checked against ``policy``, ``config.json``'s data, where given), with their state files
     inside the folder; then LeRobot loads them (nothing it could import or call is left)."""
     from lerobot.processor.pipeline import DataProcessorPipeline
 
     allowed = allowed_steps()
     root = Path(policy_dir)
+    inputs = dict((policy or {}).get("input_features") or {})
+    features = {**inputs, **dict((policy or {}).get("output_features") or {})}
     for name in PROCESSORS:
         file = root / name
         if not file.exists() and not file.is_symlink():
@@ -388,6 +642,8 @@ def check_processors(policy_dir: Path) -> None:
         for i, step in enumerate(data["steps"]):
             registry_name, cls = _step_class(file, i, step, allowed)
             config = _check_step_config(file, i, step, cls)
+            _check_step_fields(_Step(f"{file}: step {i}", registry_name, name == PROCESSORS[1], config, features,
+                                     tuple(inputs)))
             state = None
             if "state_file" in step:
                 if not isinstance(step["state_file"], str):
@@ -412,5 +668,5 @@ def check_policy_folder(policy_dir: Path) -> None:
     if not isinstance(data, dict):
         raise RikError(f"{root / CONFIG}: not a JSON object (a LeRobot policy config)")
     config = parsed_config(root, data)
-    check_processors(root)
+    check_processors(root, data)
     check_weights(root, config)
