@@ -154,7 +154,7 @@ def record_tree(folder: Path) -> None:
     """:func:`record` every file under ``folder`` (a folder rik just published whole)."""
     for path in sorted(Path(folder).rglob("*")):
         if path.is_file() and not path.is_symlink():
-            record(path)
+            _record_quietly(path)
 
 
 # ---- what a write may replace -------------------------------------------------------------------------------------
@@ -266,7 +266,16 @@ def _publish(tmp: Path, path: Path, replaces: Replaces) -> None:
     else:
         os.unlink(tmp)
     if replaces.record:
+        _record_quietly(path)
+
+
+def _record_quietly(path: Path) -> None:
+    """:func:`record`, where a cache that cannot be written (a read-only home, a full disk) only costs the record:
+    the output is written, and a later run refuses to replace it (it cannot tell it from a person's)."""
+    try:
         record(path)
+    except OSError:
+        pass
 
 
 def _publish_text(path: Path, text: str) -> None:
