@@ -372,3 +372,17 @@ def test_two_fits_into_one_report_never_mix(rik, tmp_path: Path) -> None:
     summary = json.loads((tmp_path / "rep" / "summary.json").read_text())
     assert f"**{summary['cause']}**" in (tmp_path / "rep" / "report.md").read_text()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "rep"]  # no staging folder left
+
+
+def test_asset_tables_keep_a_users_file_and_refuse_before_the_work(rik, tmp_path: Path) -> None:
+    """``rik assets stats --out FILE`` and ``rik assets fidelity --out DIR`` write CSV tables: a file of the user's
+    at that path (not a table with rik's columns) is refused before any asset is built, and kept."""
+    mine = tmp_path / "my.csv"
+    mine.write_text("handle,my grip test\nknob/mushroom-30,ok\n")
+    (tmp_path / "fidelity.csv").write_bytes(mine.read_bytes())
+    before = tree(tmp_path)
+    for args in (("stats", "knob/mushroom-30", "--out", str(mine)),
+                 ("fidelity", "knob/mushroom-30", "--out", str(tmp_path))):
+        res = rik("assets", *args)
+        assert res.code == 2 and res.out == "" and "exists and is not a table of rik's" in one_line(res.err), args
+    assert tree(tmp_path) == before

@@ -120,12 +120,22 @@ def fidelity(ids: IdsArg = None, everything: AllOpt = False,
     Writes OUT/fidelity.csv (merged with rows already there), and OUT/<id>/fidelity.png (heatmaps as in the
     paper's Figure 5) and thumbnail.png. The repository's pictures are made with --out docs/catalog."""
     from rik.assets.fidelity import check_points
-    from rik.assets.report import FIDELITY_COLUMNS, fidelity_row, handle_ids, merge_csv, run_rows, summarise_fidelity
+    from rik.assets.report import (
+        FIDELITY_COLUMNS,
+        csv_table,
+        fidelity_row,
+        handle_ids,
+        merge_csv,
+        run_rows,
+        summarise_fidelity,
+    )
+    from rik.outputs import check_destination
     from rik.paths import check_folder
     from rik.registry.load import load_catalog
 
     check_points(points)
     check_folder(out, "--out")
+    check_destination(out / "fidelity.csv", csv_table(FIDELITY_COLUMNS), "--out")  # before any work
     cat = load_catalog(overlays(catalog))
     wanted = handle_ids(cat, ids or [], everything)
     with progress_bar() as progress:
@@ -166,12 +176,15 @@ def stats(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = 
           format: Annotated[OutputFormat, typer.Option("--format", "-f")] = OutputFormat.table,
           catalog: CatalogOption = None) -> None:
     """Mesh statistics per handle (paper Figure 3): vertices, faces, mean edge length, mean face area."""
-    from rik.assets.report import STATS_COLUMNS, handle_ids, run_rows, stats_row, write_csv
+    from rik.assets.report import STATS_COLUMNS, csv_table, handle_ids, run_rows, stats_row, write_csv
     from rik.errors import RikError
+    from rik.outputs import check_destination
     from rik.registry.load import load_catalog
 
     if out is not None and out.is_dir():
         raise RikError(f"--out {out}: a folder is there; give the path of the CSV file to write")
+    if out is not None:  # before any work: a file of the user's there is never replaced
+        check_destination(out, csv_table(STATS_COLUMNS), "--out")
 
     cat = load_catalog(overlays(catalog))
     wanted = handle_ids(cat, ids or [], everything)
