@@ -194,3 +194,18 @@ def test_the_teleop_docs_show_the_keymap_the_code_uses() -> None:
     table = text.split("| keys | what they do |\n|---|---|\n", 1)[1].split("\n\n", 1)[0]
     rows = [tuple(c.strip() for c in line.strip("|").split("|")) for line in table.splitlines()]
     assert rows == keymap_rows()
+
+
+def test_a_station_whose_thread_fails_keeps_its_episode_as_a_draft(variants: Path, tmp_path: Path) -> None:
+    """The station thread's last words when it fails (a render error, not a command): the steps recorded so far are
+    kept as a draft and the page is told where, instead of going with the thread."""
+    from rik.teleop.station import Station
+
+    s = _session(variants, tmp_path)
+    assert Station._draft_after_failure(s) == ""  # nothing recorded: nothing to keep
+    s.set_input([0, -1, 0, 0, 0, 0])
+    for _ in range(6):
+        s.tick()
+    said = Station._draft_after_failure(s)
+    draft = tmp_path / DRAFTS / s.episode
+    assert said == f"; its 6 recorded steps were kept as a draft: {draft}" and read_meta(draft).steps == 6
