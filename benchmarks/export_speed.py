@@ -240,7 +240,9 @@ def bare_inputs(catalog: Any, work: Work, warmup: bool = False) -> dict[str, Any
     """What the bare loop is given, computed beforehand: the features, the task, the state vectors and action of
     every frame (rik's own per-frame dicts without images) and the PNG paths of every frame and image key."""
     from rik.episodes.episode import read_meta
-    from rik.exporters.lerobot_frames import episode_frames, features, image_key, load_episode
+    from rik.exporters.lerobot_frames import episode_frames, load_episode
+    from rik.lerobot.features import image_key
+    from rik.lerobot.policy_io import PolicyIO
     from rik.render.streams import frame_name, read_manifest, stream_dir
 
     directory = work.episode_dir(warmup)
@@ -253,7 +255,8 @@ def bare_inputs(catalog: Any, work: Work, warmup: bool = False) -> dict[str, Any
     rows = list(frames)  # every vector feature of the frame (state, environment state, action; an arm's ee pose)
     paths = [[(image_key(cam, kind), folders[kind] / cam / frame_name(k)) for kind in folders for cam in cameras]
              for k in range(len(rows))]
-    return {"features": features(cameras, list(folders), work.res, work.res), "fps": meta.fps, "task": task,
+    io = PolicyIO(cameras=tuple(cameras), streams=tuple(folders), image_size=(work.res, work.res))
+    return {"features": io.features(), "fps": meta.fps, "task": task,
             "rows": rows, "paths": paths}
 
 

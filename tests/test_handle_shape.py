@@ -1,7 +1,8 @@
 """The handle's shape in the front's state: ``rik export-lerobot --handle-shape full`` (a spec's ``handle_shape:
 full``) ends ``observation.environment_state`` with the handle's type, mount and catalog grasp dimensions, ``kind``
 with its type and mount alone; the environment appends the same numbers (``handle_shape=``), and ``rik eval`` /
-``--env.handle_shape=auto`` read from a policy's input width which it was trained with."""
+``--env.handle_shape=auto`` read which it was trained with from its contract (tests/test_policy_io.py) or, for an
+older policy, from its input width."""
 
 from __future__ import annotations
 
@@ -45,7 +46,9 @@ def test_the_handle_shape_follows_the_catalog() -> None:
 
 def test_an_export_with_the_handle_shape_appends_it_to_the_fronts_state(rik, knob_recording: Path,
                                                                        tmp_path: Path) -> None:
-    from rik.sim.observation import ENV_STATE_NAMES, env_state_names, handle_shape_state
+    from rik.lerobot.features import env_state_names
+    from rik.lerobot.policy_io import PolicyIO
+    from rik.sim.observation import ENV_STATE_NAMES, handle_shape_state
 
     episodes, variants = knob_recording / "episodes", knob_recording / "variants"
     states = {}
@@ -56,6 +59,11 @@ def test_an_export_with_the_handle_shape_appends_it_to_the_fronts_state(rik, kno
         states[shape] = _env_states(tmp_path / shape)
         info = json.loads((tmp_path / shape / "meta" / "info.json").read_text())
         assert info["features"]["observation.environment_state"]["names"] == list(env_state_names(shape))
+        contract = PolicyIO.from_dataset(tmp_path / shape)  # its meta/rik_policy_io.json: tests/test_policy_io.py
+        assert contract == PolicyIO(handle_shape=shape) and (tmp_path / shape / "meta" / "rik_policy_io.json").is_file()
+        for key, feature in contract.features().items():  # the contract's features are the dataset's
+            assert (info["features"][key]["names"], tuple(info["features"][key]["shape"])) == (
+                feature["names"], feature["shape"]), key
     plain = states["none"]
     assert plain.shape[1] == len(ENV_STATE_NAMES) and states["full"].shape == (len(plain), 24)
     assert states["kind"].shape == (len(plain), 18)
@@ -88,8 +96,12 @@ def test_a_spec_without_the_handle_shape_keeps_its_hash_and_a_bad_one_is_one_lin
     spec.write_text(f"repo_id: local/x\nhandle_shape: true\nvariants:\n  ids: [{BOW}]\noperators:\n"
                     "  - strategy: planned\nstreams: []\n")
     r = rik("dataset", "build", str(spec), "--out", str(tmp_path / "ds"))
-    assert r.code == 2 and r.err.strip() == (f"rik: error: {spec}:2, field 'handle_shape': input should be 'none', "
-                                             "'kind' or 'full' (got True)")
+    assert r.code == 2 and r.err.strip() == (f"rik: error: {spec}:2, field 'handle_shape': input should be a valid "
+                                             "string (got True)")
+    spec.write_text(spec.read_text().replace("true", "kinds"))  # a string: the contract checks its value
+    r = rik("dataset", "build", str(spec), "--out", str(tmp_path / "ds"))
+    assert r.code == 2 and r.err.strip() == (f"rik: error: {spec}, field 'handle_shape': handle shape 'kinds': use one "
+                                             "of none, kind, full")
     assert not (tmp_path / "ds").exists()
 
 
@@ -97,7 +109,8 @@ def test_the_environment_appends_the_drawn_handles_shape(bow_variants: Path) -> 
     import gymnasium as gym
 
     import rik.envs.open_front  # noqa: F401
-    from rik.sim.observation import ENV_STATE_NAMES, env_state_names, handle_shape_state
+    from rik.lerobot.features import env_state_names
+    from rik.sim.observation import ENV_STATE_NAMES, handle_shape_state
 
     envs = {shape: gym.make("rik/OpenFront-v0", variant=BOW, variants_dir=str(bow_variants), handle_shape=shape,
                             disable_env_checker=True).unwrapped for shape in ("none", "kind", "full")}
@@ -121,22 +134,21 @@ def test_a_policys_input_width_says_which_handle_shape_it_reads(tmp_path: Path,
     from lerobot_env_rik import RikEnvConfig, env_kwargs
 
     from rik.evaluation.evaluate import EvalSpec, env_config
-    from rik.evaluation.load import policy_needs
+    from rik.lerobot.policy_io import PolicyIO, read_policy
 
     plain, kind, full, odd = (act_config_folder(tmp_path / name, env_width=width)
                               for name, width in (("plain", 13), ("kind", 18), ("full", 24), ("odd", 20)))
-    assert [policy_needs(p).handle_shape for p in (plain, kind, full)] == ["none", "kind", "full"]
+    assert [read_policy(p).io.handle_shape for p in (plain, kind, full)] == ["none", "kind", "full"]
     with pytest.raises(RikError, match=r"^.*odd/config\.json: input 'observation\.environment_state' has shape \[20\]; "
                                        r"rik's environment supplies \[13\] \(or \[18\] or \[24\] or \[16\] or \[21\] or "
                                        r"\[27\] with the handle's shape or the grasp point from the gripper\)$"):
-        policy_needs(odd)
+        read_policy(odd)
     assert RikEnvConfig().features["environment_state"].shape == (13,)  # auto, no policy: none
     assert RikEnvConfig(handle_shape="kind").features["environment_state"].shape == (18,)
-    with pytest.raises(ValueError, match=r"^--env\.handle_shape='yes': use one of auto, none, kind, full$"):
+    with pytest.raises(ValueError, match=r"^--env\.handle_shape=yes: use one of none, kind, full$"):
         RikEnvConfig(handle_shape="yes")
     monkeypatch.setattr("sys.argv", ["lerobot-eval", f"--policy.path={full}", "--env.type=rik"])
     config = RikEnvConfig()  # auto: as the command line's policy reads it
-    assert config.handle_shape == "full" and env_kwargs(config)["handle_shape"] == "full"
-    spec = EvalSpec(operator=str(kind), needs={"cameras": (), "streams": ("sim",), "image_size": (96, 128),
-                                               "handle_shape": "kind"})
-    assert env_kwargs(env_config(spec))["handle_shape"] == "kind"
+    assert config.handle_shape == "full" and env_kwargs(config)["io"].handle_shape == "full"
+    spec = EvalSpec(operator=str(kind), io=PolicyIO(handle_shape="kind"))
+    assert env_kwargs(env_config(spec))["io"].handle_shape == "kind"

@@ -1,5 +1,6 @@
 """rik's architecture as data: its packages on floors, each importing only from floors below it, read from the source
-(ast). Every import counts: at module level, inside functions and in ``if TYPE_CHECKING:`` blocks. The table
+(ast) of ``rik/`` and of the distributions in ``packages/`` (the LeRobot plugin ``lerobot_env_rik``, the top floor).
+Every import counts: at module level, inside functions and in ``if TYPE_CHECKING:`` blocks. The table
 (:data:`FLOORS`) is also what ``docs/architecture.md`` is generated from (``python tests/test_layering.py``), and a
 test keeps that page equal to it."""
 
@@ -8,6 +9,7 @@ from __future__ import annotations
 import ast
 import functools
 import re
+import subprocess
 import sys
 from collections import defaultdict
 from pathlib import Path
@@ -17,7 +19,10 @@ import pytest
 import rik
 
 PACKAGE = Path(rik.__file__).parent
-DOC = PACKAGE.parent / "docs" / "architecture.md"
+ROOT = PACKAGE.parent
+DOC = ROOT / "docs" / "architecture.md"
+PLUGIN_ROOTS = tuple(sorted(init.parent.parent for init in (ROOT / "packages").glob("*/*/__init__.py")))
+"""The import roots of the distributions in ``packages/`` (``packages/lerobot_env_rik``)."""
 
 FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
     (("rik", "The root: rik's version and the catalog format's; imports nothing."),),
@@ -45,6 +50,9 @@ FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
      ("rik.teleop", "Teleoperation: sessions, the keymap, the desktop viewer, the browser station."),
      ("rik.benchmark", "The paper's resistance benchmark (`rik bench`): F/P/S per handle type, strategy, "
                        "preset.")),
+    (("rik.lerobot", "rik's contract with LeRobot: feature keys and layouts, the `PolicyIO` a dataset, a policy "
+                     "folder and an evaluation share (written, carried, read; guessed only for older policies), "
+                     "what a policy folder may hold, the `--env.type=rik` config, the training hook."),),
     (("rik.envs", "The gymnasium environment rik/OpenFront-v0 that LeRobot and `rik eval` run policies in."),
      ("rik.exporters", "LeRobot v3.0 export: frames, features, the card, the check of a finished export."),
      ("rik.web", "The web app (`rik serve`): the catalog pages (with a 3D view), the teleop station and the page "
@@ -53,6 +61,8 @@ FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
     (("rik.dataset", "`rik dataset build`: a spec planned into units, run locally or on Ray, merged, verified."),),
     (("rik.cli", "The `rik` command (typer + rich): parses and prints, the library does the work."),),
     (("rik.__main__", "`python -m rik`."),),
+    (("lerobot_env_rik", "The LeRobot plugin: a shim that LeRobot imports at start-up; it registers rik's env "
+                         "config, its environment and the training hook."),),
 )
 """rik's packages from the bottom floor up, each with its job. A module may import its own package and the packages
 of lower floors, never a package of its own floor or of one above."""
@@ -66,6 +76,10 @@ FORBIDDEN = {
 gymnasium environment stays out of the dataset build and ``rik eval`` (they take observations from
 :mod:`rik.sim.observation`, so that none of them imports gymnasium's registration of the env)."""
 
+ONLY = {"lerobot_env_rik": ("rik.envs", "rik.lerobot")}
+"""Packages that may import only these of rik: the plugin, which LeRobot imports in every one of its commands, reaches
+rik's environment and its LeRobot contract, nothing that imports it back (``rik.evaluation`` imports the contract)."""
+
 HEAVY = ("numpy", "scipy", "mujoco", "torch", "lerobot", "mitsuba", "drjit", "coacd", "trimesh", "pyarrow", "pandas",
          "PIL", "cv2", "av", "imageio", "ray", "fastapi", "starlette", "uvicorn", "matplotlib", "gymnasium", "pydantic",
          "yaml", "manifold3d", "skimage", "sklearn", "glfw", "playwright", "huggingface_hub", "datasets")
@@ -78,13 +92,23 @@ def floor_of() -> dict[str, int]:
     return {package: i for i, floor in enumerate(FLOORS) for package, _ in floor}
 
 
-def _module(path: Path) -> str:
-    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+def _module(path: Path, root: Path = ROOT) -> str:
+    parts = path.relative_to(root).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-MODULE_FILES = {_module(p): p for p in sorted(PACKAGE.rglob("*.py"))}
-"""Every module of rik -> its file."""
+def source_files(root: Path = ROOT) -> list[tuple[Path, str]]:
+    """(file, module) of every module of ``rik/`` and of the distributions in ``packages/`` under ``root`` (a
+    checkout, or an old tree from ``git archive``)."""
+    plugins = sorted(init.parent.parent for init in (root / "packages").glob("*/*/__init__.py"))
+    return [(p, _module(p, base)) for base, folder in ((root, root / "rik"), *((d, d) for d in plugins))
+            for p in sorted(folder.rglob("*.py"))]
+
+
+MODULE_FILES = {module: path for path, module in source_files()}
+"""Every module of rik and of its plugin -> its file."""
+OURS = frozenset(m.split(".")[0] for m in MODULE_FILES)
+"""The top-level names of rik's modules: ``rik`` and the plugin's."""
 
 
 @functools.cache
@@ -137,12 +161,14 @@ def _imports(path: Path, module: str | None = None, *, types: bool = True, where
             found.update(subs)
             if not subs <= set(MODULE_FILES):
                 found.add(name)
-    return {n for n in found if n == "rik" or n.startswith("rik.")}
+    return {n for n in found if n.split(".")[0] in OURS}
 
 
 def _top(name: str) -> str:
-    """The package of a module on the floors: ``rik.sim.robots.drive`` -> ``rik.sim``, ``rik.errors`` -> itself."""
-    return ".".join(name.split(".")[:2])
+    """The package of a module on the floors: ``rik.sim.robots.drive`` -> ``rik.sim``, ``rik.errors`` -> itself, a
+    plugin's module -> the plugin (``lerobot_env_rik``)."""
+    parts = name.split(".")
+    return ".".join(parts[:2]) if parts[0] == "rik" else parts[0]
 
 
 def _breaches(rules: dict[str, tuple[str, ...]], files: list[tuple[Path, str]] | None = None) -> list[str]:
@@ -168,6 +194,25 @@ def floor_breaches(files: list[tuple[Path, str]] | None = None) -> list[str]:
             if other != own and other in floors and own in floors and floors[other] >= floors[own]:
                 out.append(f"{module} (floor {floors[own]}) imports {name} (floor {floors[other]})")
     return out
+
+
+def only_breaches(files: list[tuple[Path, str]] | None = None) -> list[str]:
+    """``<module> imports <name>`` for every import of rik by a package of :data:`ONLY` that is not one it may make."""
+    out = []
+    for path, module in files or [(p, m) for m, p in MODULE_FILES.items()]:
+        allowed = ONLY.get(_top(module))
+        if allowed is not None:
+            out += [f"{module} imports {n}" for n in sorted(_imports(path, module))
+                    if _top(n) != _top(module) and _top(n) not in allowed]
+    return out
+
+
+def package_graph(files: list[tuple[Path, str]] | None = None) -> dict[str, set[str]]:
+    """Package on the floors -> the others it imports (every import counts)."""
+    edges: dict[str, set[str]] = defaultdict(set)
+    for path, module in files or [(p, m) for m, p in MODULE_FILES.items()]:
+        edges[_top(module)] |= {_top(n) for n in _imports(path, module) if _top(n) != _top(module)}
+    return dict(edges)
 
 
 def module_graph(*, types: bool = True) -> dict[str, set[str]]:
@@ -273,6 +318,14 @@ def test_the_finer_rules_hold() -> None:
     assert _breaches(FORBIDDEN) == []
 
 
+def test_the_plugin_imports_only_the_env_and_the_contract() -> None:
+    assert only_breaches() == []
+
+
+def test_no_package_imports_another_that_imports_it_back() -> None:
+    assert circles(package_graph()) == []
+
+
 def test_no_module_imports_another_that_imports_it_back() -> None:
     """No circle between rik's modules, counting every import (also inside functions and under TYPE_CHECKING)."""
     assert circles(module_graph()) == []
@@ -338,6 +391,39 @@ def test_a_function_level_import_is_not_an_import_at_load(tmp_path: Path, monkey
     assert _heavy_at_import("rik.probe_eager", {}) == {"numpy"}
 
 
+def test_the_scan_catches_the_cycle_between_evaluation_and_the_plugin_of_c210781(tmp_path: Path) -> None:
+    """On c210781 ``rik.evaluation.evaluate`` imported the plugin inside a function and the plugin imported
+    ``rik.evaluation.load`` inside another: a cycle the scan of ``rik/`` alone could not see. The scan of ``rik/`` and
+    ``packages/`` names both arrows and the cycle; run only where git has that commit (a shallow clone may not)."""
+    git = subprocess.run(["git", "-C", str(ROOT), "cat-file", "-e", "c210781^{commit}"], capture_output=True)
+    if git.returncode != 0:
+        pytest.skip("commit c210781 is not in this clone")
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", "c210781", "rik", "packages"], capture_output=True,
+                             check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(tmp_path)], input=archive, check=True)
+    old = source_files(tmp_path)
+    floors = floor_of()
+    assert (f"rik.evaluation.evaluate (floor {floors['rik.evaluation']}) imports lerobot_env_rik "
+            f"(floor {floors['lerobot_env_rik']})") in floor_breaches(old)
+    assert "lerobot_env_rik imports rik.evaluation.load" in only_breaches(old)
+    assert ["lerobot_env_rik", "rik.evaluation"] in circles(package_graph(old))
+
+
+def test_the_plugins_arrows_are_found(tmp_path: Path) -> None:
+    """The same two arrows without git: the evaluation importing the plugin in a function runs up the floors, and the
+    plugin importing anything but the env and the contract is named."""
+    evaluate = tmp_path / "evaluate.py"
+    evaluate.write_text("def env_config():\n    import lerobot_env_rik\n", encoding="utf-8")
+    plugin = tmp_path / "__init__.py"
+    plugin.write_text("import rik.envs.open_front\ndef _fit():\n    import rik.evaluation.load\n", encoding="utf-8")
+    files = [(evaluate, "rik.evaluation.evaluate"), (plugin, "lerobot_env_rik")]
+    floors = floor_of()
+    assert floor_breaches(files) == [f"rik.evaluation.evaluate (floor {floors['rik.evaluation']}) imports "
+                                     f"lerobot_env_rik (floor {floors['lerobot_env_rik']})"]
+    assert only_breaches(files) == ["lerobot_env_rik imports rik.evaluation.load"]
+    assert circles(package_graph(files)) == [["lerobot_env_rik", "rik.evaluation"]]
+
+
 def test_circles_are_found_through_several_modules() -> None:
     edges = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": {"e"}}
     assert circles(edges) == [["a", "b", "c"]]
@@ -359,14 +445,20 @@ def architecture_page() -> str:
              "never one of its own floor or above, and no module imports another that imports it back (every "
              "import counts, also inside functions and under `TYPE_CHECKING`). `tests/test_layering.py` holds the "
              "table and fails on any import against it.", "",
+             "The scan covers `rik/` and the distributions in `packages/`: the LeRobot plugin `lerobot_env_rik` "
+             "stands on the top floor and may import only rik's environment and its LeRobot contract "
+             "(`rik/envs/`, `rik/lerobot/`).", "",
              "Where to look: robots in `rik/sim/robots/`, episodes in `rik/episodes/`, teleoperation in "
-             "`rik/teleop/`, the benchmark in `rik/benchmark/`, evaluation of policies in `rik/evaluation/`.", "",
+             "`rik/teleop/`, the benchmark in `rik/benchmark/`, rik's contract with LeRobot in `rik/lerobot/`, "
+             "evaluation of policies in `rik/evaluation/`.", "",
              "| floor | package | job | imports (today) |", "|---|---|---|---|"]
     for i in reversed(range(len(FLOORS))):
         for package, job in FLOORS[i]:
             used = ", ".join(f"`{u}`" for u in sorted(uses[package], key=lambda u: (-floors[u], u))) or "nothing"
             folder = package.replace(".", "/") + ("" if package == "rik.__main__" else "/")
-            shown = folder if (PACKAGE.parent / folder).is_dir() else package.replace(".", "/") + ".py"
+            shown = folder if (ROOT / folder).is_dir() else package.replace(".", "/") + ".py"
+            if package.split(".")[0] not in ("rik",):  # a plugin: its distribution's folder
+                shown = MODULE_FILES[package].parent.parent.relative_to(ROOT).as_posix() + "/"
             lines.append(f"| {i} | `{shown}` | {job} | {used} |")
     return "\n".join(lines) + "\n"
 

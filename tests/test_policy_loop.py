@@ -1,6 +1,8 @@
 """The policy loop through LeRobot's own tools: rik's demonstrations exported state-only, ``lerobot-train
 --env.type=rik`` with evaluation during training, ``lerobot-eval --env.type=rik`` and ``rik eval`` on the same
-seeds (the same episodes, bit for bit), the ``lerobot_env_rik`` plugin's features, and ``rik eval``'s bad input."""
+seeds (the same episodes, bit for bit), the contract carried from the export to the checkpoint and read by both (an
+older policy folder without it runs through the fallback, with a note), the ``lerobot_env_rik`` plugin's features,
+and ``rik eval``'s bad input."""
 
 from __future__ import annotations
 
@@ -62,6 +64,9 @@ def test_lerobot_train_runs_with_evaluation_in_riks_env(loop: dict[str, Path]) -
     assert config["normalization_mapping"]["ENV"] == "MEAN_STD"  # the front's state is normalised too
     videos = sorted((loop["root"] / "train" / "eval").rglob("*.mp4"))
     assert videos, "evaluation during training wrote no video"
+    # the plugin's hook copied the dataset's contract beside the checkpoint (tests/test_policy_io.py)
+    contract = json.loads((loop["root"] / "dataset" / "meta" / "rik_policy_io.json").read_text())
+    assert json.loads((policy / "rik_policy_io.json").read_text()) == contract
 
 
 def test_rik_eval_and_lerobot_eval_run_the_same_episodes(loop: dict[str, Path], rik) -> None:
@@ -73,12 +78,14 @@ def test_rik_eval_and_lerobot_eval_run_the_same_episodes(loop: dict[str, Path], 
                f"--env.variants_dir={loop['variants']}", "--eval.n_episodes=4", "--eval.batch_size=1",
                "--seed=1000", "--output_dir=lerobot-eval", "--policy.device=cpu", cwd=root)
     assert res.returncode == 0, res.stderr[-3000:]
+    assert "guessed" not in res.stderr  # the contract was read from the policy folder
     theirs = json.loads((root / "lerobot-eval" / "eval_info.json").read_text())
     out = root / "rik-eval"
     r = rik("eval", str(policy), "--split", "test", *DRAW[:2], "--presets", "smooth,high", "-n", "2",
             "--episode-length", EPISODE_LENGTH, "--seed", "1000", "--workers", "1", "--videos", "1", "--out", str(out),
             "--variants", str(loop["variants"]))
     assert r.code == 0, r.err
+    assert "note:" not in r.out
     ours = json.loads((out / "eval_info.json").read_text())
     mine, their = ours["per_task"][0]["metrics"], theirs["per_task"][0]["metrics"]
     assert mine["sum_rewards"] == their["sum_rewards"]
@@ -107,6 +114,32 @@ def test_rik_eval_and_lerobot_eval_run_the_same_episodes(loop: dict[str, Path], 
     assert far, [r["stats_sd"] for r in rows]
     warning = next(line for line in r.out.splitlines() if line.startswith("warning: "))
     assert f"in {len(far)} of 4 episodes the states fell more than 5 standard deviations outside the range" in warning
+
+
+def test_an_older_policy_folder_runs_through_the_fallback_with_a_note(loop: dict[str, Path], rik, tmp_path: Path,
+                                                                      monkeypatch: pytest.MonkeyPatch,
+                                                                      caplog: pytest.LogCaptureFixture) -> None:
+    """A policy saved before rik wrote its contract (no rik_policy_io.json, its training data gone): rik eval and
+    --env.*=auto guess its action frame and handle shape from its widths and statistics, and say so in one line."""
+    from lerobot_env_rik import RikEnvConfig
+
+    old = tmp_path / "old"
+    shutil.copytree(loop["policy"], old)
+    (old / "rik_policy_io.json").unlink()
+    (old / "train_config.json").unlink()
+    out = tmp_path / "eval"
+    r = rik("eval", str(old), "--split", "test", *DRAW, "-n", "1", "--episode-length", "5", "--workers", "1",
+            "--videos", "0", "--out", str(out), "--variants", str(loop["variants"]))
+    assert r.code == 0, r.err
+    note = next(line for line in r.out.splitlines() if line.startswith("note: "))
+    assert "no rik_policy_io.json beside the policy or its training data" in " ".join(r.out.split())
+    assert note.startswith(f"note: {old}")
+    needs = json.loads((out / "eval_info.json").read_text())["rik"]["spec"]["needs"]
+    assert needs == {"policy_type": "act", "cameras": [], "streams": [], "image_size": [96, 128]}  # world, none
+    monkeypatch.setattr("sys.argv", ["lerobot-eval", f"--policy.path={old}", "--env.type=rik"])
+    config = RikEnvConfig()  # what lerobot-eval --policy.path=OLD --env.type=rik resolves
+    assert (config.action_frame, config.handle_shape, config.cameras) == ("world", "none", "")
+    assert any("guessed from its input widths" in rec.getMessage() for rec in caplog.records)
 
 
 def _frames(path: Path) -> np.ndarray:
@@ -227,14 +260,15 @@ def test_plugin_maps_env_keys_to_the_export_features(tmp_path: Path) -> None:
     from lerobot.envs.utils import preprocess_observation
     from lerobot.utils.import_utils import register_third_party_plugins
 
-    from rik.exporters.lerobot_frames import features
+    from rik.lerobot.policy_io import PolicyIO
 
     register_third_party_plugins()
     cfg = EnvConfig.get_choice_class("rik")(cameras="front,wrist", observation_height=24, observation_width=32,
                                             split="val", handle_types="knob", presets="smooth", episode_length=5,
                                             variants_dir=str(tmp_path / "variants"))
     assert cfg.gym_kwargs["max_episode_steps"] == 5
-    exported = features(["front", "wrist"], ["sim"], 32, 24)
+    exported = PolicyIO(cameras=("front", "wrist"), streams=("sim",), image_size=(24, 32)).features()
+    assert cfg.io == PolicyIO(cameras=("front", "wrist"), streams=("sim",), image_size=(24, 32))
     assert set(cfg.features_map.values()) == set(exported)
     vec = cfg.create_envs(n_envs=1)["rik"][0]
     obs, info = vec.reset(seed=[3])

@@ -111,10 +111,10 @@ def _refused(rik, policy: Path, tmp_path: Path) -> str:
 def test_the_saved_policy_passes_every_check(saved_policy: Path) -> None:
     """LeRobot's own layout, as save_pretrained writes it, is what the checks accept (and the five steps rik
     allows are all the default processors use)."""
-    from rik.evaluation.load import policy_needs
-    from rik.evaluation.policy_files import STEPS, check_policy_folder
+    from rik.lerobot.policy_files import STEPS, check_policy_folder
+    from rik.lerobot.policy_io import read_policy
 
-    assert policy_needs(saved_policy).policy_type == "act"
+    assert read_policy(saved_policy).policy_type == "act"
     check_policy_folder(saved_policy)
     named = [s["registry_name"] for f in (PRE, POST) for s in json.loads((saved_policy / f).read_text())["steps"]]
     assert set(named) == set(STEPS)
@@ -339,7 +339,7 @@ def test_every_integer_field_of_the_policy_configs_has_a_bound() -> None:
     import lerobot.policies  # noqa: F401  (registers the policy types)
     from lerobot.configs.policies import PreTrainedConfig
 
-    from rik.evaluation.policy_files import POLICY_TYPES, SIZES, TRAINING_ONLY
+    from rik.lerobot.policy_files import POLICY_TYPES, SIZES, TRAINING_ONLY
 
     def integers(hint: Any) -> bool:
         args = [a for a in typing.get_args(hint) if a is not type(None) and a is not Ellipsis]

@@ -66,16 +66,17 @@ def export_lerobot(
     video per camera and stream (none with --streams none), a task string and rik's metadata per episode, a dataset
     card. Renders missing image streams first; crash-safe (sharded, --resume); checks every episode's frame count."""
     from rik.exporters.lerobot_export import export_lerobot as run
-    from rik.exporters.spec import ExportSpec, parse_outcomes, parse_streams
+    from rik.exporters.spec import EXPORT_IO, LABELS, ExportSpec, parse_outcomes, parse_streams
     from rik.registry.load import load_catalog
     from rik.render.streams import parse_resolution
 
     quiet_writers()
     width, height = parse_resolution(res)
-    spec = ExportSpec(repo_id, parse_streams(streams),
-                      tuple(c.strip() for c in cameras.split(",") if c.strip()) if cameras else (), width, height,
-                      fps, codec, spp, denoise, variant, shard_episodes, parse_outcomes(outcomes),
-                      action_frame, handle_shape)
+    io = EXPORT_IO.with_options({"streams": parse_streams(streams), "cameras": cameras or "",
+                                 "image_size": (height, width), "action_frame": action_frame,
+                                 "handle_shape": handle_shape}, LABELS)  # the contract, once
+    spec = ExportSpec(repo_id, io, fps=fps, codec=codec, spp=spp, denoise=denoise, variant=variant,
+                      shard_episodes=shard_episodes, outcomes=parse_outcomes(outcomes))
     cat = load_catalog(overlays(catalog))
     with progress_bar() as progress:
         report = stage_progress(progress)

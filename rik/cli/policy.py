@@ -73,6 +73,7 @@ def eval_policy(
     robot."""
     from rik.errors import RikError
     from rik.evaluation.evaluate import (
+        LABELS,
         EvalSpec,
         eval_folders,
         finished_rows,
@@ -81,11 +82,11 @@ def eval_policy(
         run_eval,
         write_tables,
     )
+    from rik.lerobot.policy_io import PolicyIO
     from rik.registry.load import load_catalog
-    from rik.sim.robots.layout import ACTION_FRAMES
 
-    if action_frame not in ("auto", *ACTION_FRAMES):
-        raise RikError(f"--action-frame {action_frame}: use one of auto, {', '.join(ACTION_FRAMES)}")
+    PolicyIO().with_options({"action_frame": action_frame}, auto=True).validate(labels=LABELS)  # a frame, or auto
+    request = PolicyIO(robot=robot, action_frame=action_frame)  # the contract asked for: the policy's fills the rest
     labels, outs = labels or [], outs or [Path("eval")]
 
     def given(flag: str, n: int) -> str:
@@ -106,10 +107,13 @@ def eval_policy(
     draw = Draw.parse(split, types, presets, kinds)
     specs = [prepare(cat, EvalSpec(p, draw.split, draw.handle_types, draw.presets, draw.kinds, per_cell, seed,
                                    episode_length, rerendered, videos, str(variants),
-                                   labels[i] if labels else "", robot, action_frame))
+                                   labels[i] if labels else "", request))
              for i, p in enumerate(policies)]
     wheres = eval_folders(outs, specs)
     con = console()
+    for spec in specs:
+        if spec.note:
+            con.print(f"[yellow]note[/]: {spec.note}", soft_wrap=True)
     every: list[dict[str, Any]] = []
     for spec, where in zip(specs, wheres, strict=True):
         rows = finished_rows(where, spec)

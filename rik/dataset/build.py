@@ -24,7 +24,7 @@ from rik.dataset.engines import Done, Engine, Job
 from rik.dataset.meta import BUILD_META, DATASET_META, read_dataset_meta
 from rik.dataset.plan import EpisodeUnit, Plan, RenderUnit, ShardUnit, export_settings
 from rik.dataset.registry import register_dataset
-from rik.dataset.spec import library_versions
+from rik.dataset.spec import library_versions, policy_io
 from rik.errors import RikError
 from rik.outputs import Replaces, remove_directory, remove_file, write_text
 
@@ -193,13 +193,13 @@ def run_shard(catalog: Catalog, arg: tuple[Folders, ShardUnit, ExportSpec, dict[
     for e in unit.episodes:
         if read_meta(folders.episodes / e.episode_id).outcome not in spec.outcomes:
             continue  # left out of the dataset by the spec's outcomes
-        streams = {s: folders.work / stream_dirs[f"{e.key}/{s}"] for s in spec.streams}
+        streams = {s: folders.work / stream_dirs[f"{e.key}/{s}"] for s in spec.io.streams}
         sources.append(EpisodeSource(folders.episodes / e.episode_id, streams))
     if not sources:  # a shard whose episodes are all left out: nothing to write, nothing to merge
         return _mark(folders, "shard", unit.key, {"output": None, "episodes": 0, "frames": 0, "fps": None,
                                                   "seconds": time.perf_counter() - t0})
-    cameras = list(spec.cameras)
-    if not cameras and spec.streams:
+    cameras = list(spec.io.cameras)
+    if not cameras and spec.io.streams:
         first = next(iter(sources[0].streams.values()))
         cameras = list((read_manifest(first) or {}).get("cameras", []))
     fps = spec.fps or read_meta(sources[0].directory).fps
@@ -212,14 +212,13 @@ def run_shard(catalog: Catalog, arg: tuple[Folders, ShardUnit, ExportSpec, dict[
 
 
 def export_spec(plan: Plan) -> ExportSpec:
+    """The export settings of a plan's shards: its spec's contract (:func:`rik.dataset.spec.policy_io`) and
+    encoding."""
     from rik.exporters.spec import ExportSpec
 
     s = plan.spec
-    w, h = s.size
-    return ExportSpec(s.repo_id, streams=s.streams, cameras=s.cameras, width=w, height=h, fps=s.fps, codec=s.codec,
-                      spp=s.render.spp, denoise=s.render.denoise, variant=s.render.variant,
-                      shard_episodes=s.shard_episodes, outcomes=tuple(s.outcomes),
-                      action_frame=s.action_frame, handle_shape=s.handle_shape)
+    return ExportSpec(s.repo_id, policy_io(s), fps=s.fps, codec=s.codec, spp=s.render.spp, denoise=s.render.denoise,
+                      variant=s.render.variant, shard_episodes=s.shard_episodes, outcomes=tuple(s.outcomes))
 
 
 # ---- the scheduler ----------------------------------------------------------------------------------------------
@@ -496,7 +495,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
     from rik.exporters.layout import MERGED_FILE, MERGING
     from rik.exporters.lerobot_card import write_card
     from rik.exporters.lerobot_check import check_dataset
-    from rik.exporters.lerobot_export import aggregate_shards, order_stats, publish, quiet_encoders
+    from rik.exporters.lerobot_export import aggregate_shards, order_stats, publish, quiet_encoders, write_contract
 
     merged = folders.work / f"merged-{plan.spec_hash[:16]}"
     remove_directory(merged, MERGING)
@@ -517,6 +516,7 @@ def _merge(catalog: Catalog, plan: Plan, folders: Folders, schedule: _Schedule, 
                            robot_layout(robot.as_arm, plan.spec.action_frame))
     fps = int(checks["fps"])
     write_card(catalog, merged, schedule.xspec, fps, checks, extra=_card_text(plan), robot=plan.spec.robot)
+    write_contract(catalog, merged, plan.spec.robot)
     result.episodes, result.dataset_frames = int(checks["episodes"]), int(checks["frames"])
     result.constant = checks.get("constant", {})
     data = {"format": 1, "spec_hash": plan.spec_hash, "source": plan.source,

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rik.dataset.spec import library_versions
+from rik.dataset.spec import SPEC_FIELDS, library_versions, policy_io
 from rik.dataset.spec import spec_hash as hash_of_spec
 from rik.errors import RikError
 from rik.paths import json_sha256
@@ -20,6 +20,9 @@ if TYPE_CHECKING:
 
 SAMPLE_STREAM = 0xDA7A_5E7
 """Second word of the seed sequence that draws ``variants.sample`` (apart from the episodes' own seeds)."""
+LABELS = {"action_frame": "action frame '{}'", "handle_shape": "handle shape '{}'", "streams": "streams",
+          "cameras": "cameras", "image_size": "resolution {}"}
+"""How a problem of the spec's contract starts, after the field's name."""
 MAX_EPISODES = 1_000_000
 """Most episodes one spec may make. A plan is held in memory (about 0.7 kB per episode with two streams, measured:
 70 MB for 100,000 episodes) and a build keeps a record per unit beside it; a spec that selects more (counted on
@@ -178,19 +181,20 @@ def check_operators(spec: DatasetSpec, source: str) -> None:
             raise _field_error(source, f"operators.{i}.strategy", exc) from None
 
 
-def check_robot(catalog: Catalog, spec: DatasetSpec, source: str) -> None:
-    """The spec's robot is in the catalog, and has the spec's action frame (only the Hand-E's pose action has a
-    handle frame)."""
-    from rik.sim.robots.layout import robot_layout
+def check_contract(catalog: Catalog, spec: DatasetSpec, source: str) -> None:
+    """The spec's contract with its policies (:func:`rik.dataset.spec.policy_io`) is valid: its robot is in the
+    catalog, its action frame and handle shape are known, and the robot's action has that frame (only the Hand-E's
+    pose action has a handle or a gripper frame); one line naming the spec's field."""
+    from rik.lerobot.policy_io import ContractError
 
     try:
-        robot = catalog.robot(spec.robot)
+        catalog.robot(spec.robot)
     except RikError as exc:
         raise _field_error(source, "robot", exc) from None
     try:
-        robot_layout(robot.as_arm, spec.action_frame)
-    except RikError as exc:
-        raise _field_error(source, "action_frame", exc) from None
+        policy_io(spec).validate(catalog, LABELS)
+    except ContractError as exc:
+        raise _field_error(source, SPEC_FIELDS.get(exc.field, exc.field), exc) from None
 
 
 def check_codec(spec: DatasetSpec, source: str) -> None:
@@ -208,7 +212,7 @@ def check_codec(spec: DatasetSpec, source: str) -> None:
 
 def check_cameras(spec: DatasetSpec, source: str) -> None:
     """The spec's cameras exist in rik's scenes."""
-    from rik.sim.observation import CAMERAS
+    from rik.lerobot.features import CAMERAS
 
     for i, cam in enumerate(spec.cameras):
         if cam not in CAMERAS:
@@ -234,9 +238,9 @@ def make_plan(catalog: Catalog, spec: DatasetSpec, *, source: str = "spec", vari
     from rik.combinator.build import JOINT_FRICTION, rejected_variants, resolve_collision, spec_hash
     from rik.registry.ids import parse_variant_id
 
-    check_robot(catalog, spec, source)
-    check_operators(spec, source)
     check_cameras(spec, source)
+    check_contract(catalog, spec, source)
+    check_operators(spec, source)
     check_codec(spec, source)
     drawn = draw_episodes(catalog, spec, source)
     chosen = list(dict.fromkeys(v for v, _, _ in drawn)) if drawn else select_variants(catalog, spec, source)

@@ -6,9 +6,12 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
+from rik.lerobot.policy_io import FIELD_TYPES, PolicyIO
 from rik.schemas.dataset import DatasetSpec
 
 DEFAULT_ROBOT = "hand-e"
+SPEC_FIELDS = {"image_size": "resolution"}
+"""A field of the contract -> the spec's field that says it, where the names differ."""
 
 
 MAX_SPEC_BYTES = 4_000_000
@@ -74,6 +77,16 @@ def spec_data(spec: DatasetSpec) -> dict[str, Any]:
     if data["variants"].get("draw") is None:
         data["variants"].pop("draw", None)
     return data
+
+
+def policy_io(spec: DatasetSpec) -> PolicyIO:
+    """The contract of the dataset ``spec`` builds with the policies trained on it: the spec's fields named as the
+    contract's (:data:`SPEC_FIELDS`: the resolution is the image size, height first), unchecked
+    (:func:`rik.dataset.plan.check_contract` checks it)."""
+    width, height = spec.size
+    names = {SPEC_FIELDS.get(name, name): name for name in FIELD_TYPES}
+    options = {name: getattr(spec, field) for field, name in names.items() if field in DatasetSpec.model_fields}
+    return PolicyIO().with_options({**options, "image_size": (height, width)})
 
 
 def spec_hash(spec: DatasetSpec) -> str:

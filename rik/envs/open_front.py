@@ -4,6 +4,11 @@
   :mod:`rik.episodes.draw`: the same seed gives the same variant, front and start pose everywhere); a reset may also
   name ``options={"variant": ..., "front": ..., "preset": ...}``. The gripper starts at a randomised pose in front of
   the handle: a reset with seed ``S`` starts where ``rik record --seed S`` starts on that variant;
+- **contract** (``io=``, a :class:`rik.lerobot.policy_io.PolicyIO`): what the policy reads and writes, at once,
+  as its dataset's ``meta/rik_policy_io.json`` says it: the robot, the handle's shape, the cameras, streams and
+  image size, the action frame and the rate (rik steps at 20 Hz: another is refused). The keyword arguments
+  ``robot=``, ``handle_shape=``, ``streams=``, ``cameras=``, ``image_size=`` (and ``images=True``: the sim stream)
+  set single fields of it, and a ``handle`` or ``gripper`` ``action_mode`` its frame;
 - **robot** (``robot=``, a catalog id, :mod:`rik.sim.robots.layout`): ``hand-e`` (rik's floating gripper, the
   default), ``so100``, ``so101`` or ``panda-2f85`` (an arm at its mount beside the handle);
 - **observation** (a dict, shaped as LeRobot's environments return them): ``agent_pos`` = the robot's state as
@@ -47,15 +52,9 @@ import gymnasium as gym
 import numpy as np
 
 from rik.errors import RikError
-from rik.sim.observation import (
-    CAMERAS,
-    check_handle_shape,
-    delta_to_absolute,
-    env_state_names,
-    environment_state,
-    handle_shape_state,
-    image_name,
-)
+from rik.lerobot.features import CAMERAS, ENV_ENTRY_POINT, ENV_ID, env_state_names, image_name
+from rik.lerobot.policy_io import PolicyIO
+from rik.sim.observation import delta_to_absolute, environment_state, handle_shape_state
 from rik.sim.outcome import SUCCESS_OPENING, classify
 from rik.sim.robots.layout import ACTION_FRAMES, EE_NAMES, RobotLayout, robot_layout
 from rik.sim.scene import CONTROL_FPS, SimScene
@@ -63,7 +62,6 @@ from rik.sim.scene import CONTROL_FPS, SimScene
 if TYPE_CHECKING:
     from rik.render.renderers import FrameRenderer
 
-ENV_ID = "rik/OpenFront-v0"
 DEFAULT_VARIANT = "drawer-chest-80__two_point-bow-128__normal"
 EPISODE_LENGTH = 400
 """Control steps of an episode before it is truncated: 20 s at 20 Hz; scripted demonstrations take up to 232."""
@@ -84,33 +82,35 @@ class OpenFrontEnv(gym.Env):
     def __init__(self, variant: str | None = DEFAULT_VARIANT, front: str | None = None, *,
                  split: str | None = None, handle_types: tuple[str, ...] | None = None,
                  presets: tuple[str, ...] | None = None, kinds: tuple[str, ...] | None = None,
-                 robot: str = DEFAULT_ROBOT, action_mode: str = "delta", images: bool = False,
-                 streams: tuple[str, ...] = (),
-                 cameras: tuple[str, ...] = CAMERAS, image_size: tuple[int, int] = (96, 128), spp: int = 16,
-                 episode_length: int = EPISODE_LENGTH, variants_dir: str | Path = "variants",
-                 render_mode: str | None = None, catalog_paths: tuple[str, ...] = (),
-                 handle_shape: str = "none") -> None:
+                 io: PolicyIO | None = None, action_mode: str = "delta", images: bool = False,
+                 robot: str | None = None, streams: tuple[str, ...] | None = None,
+                 cameras: tuple[str, ...] | None = None, image_size: tuple[int, int] | None = None,
+                 handle_shape: str | None = None, spp: int = 16, episode_length: int = EPISODE_LENGTH,
+                 variants_dir: str | Path = "variants", render_mode: str | None = None,
+                 catalog_paths: tuple[str, ...] = ()) -> None:
         from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, Draw
         from rik.registry.load import load_catalog
 
-        check_handle_shape(handle_shape, "handle_shape")
         if action_mode not in ACTION_MODES:
             raise RikError(f"action_mode '{action_mode}': use one of {', '.join(ACTION_MODES)}")
         if isinstance(episode_length, bool) or not isinstance(episode_length, int) or episode_length < 1:
             raise RikError(f"episode_length {episode_length!r}: must be a whole number of control steps, at least 1")
-        streams = tuple(streams) or (("sim",) if images else ())
-        cameras = tuple(cameras)
-        if streams:
-            _check_images(streams, cameras, image_size, spp)
+        self.io = _contract(io, action_mode, images, robot=robot, streams=streams, cameras=cameras,
+                            image_size=image_size, handle_shape=handle_shape)
+        if self.io.fps != CONTROL_FPS:
+            raise RikError(f"fps {self.io.fps}: the environment steps at {CONTROL_FPS} Hz, and a policy acts at its "
+                           "dataset's rate; export the episodes at their own rate (without --fps) and train again")
+        if self.io.streams:
+            _check_images(self.io, spp)
         if isinstance(catalog_paths, str | Path):  # one path, not a tuple of its characters
             catalog_paths = (str(catalog_paths),)
         self._catalog = load_catalog([Path(p) for p in catalog_paths])
-        entry = self._catalog.robot(robot)  # an unknown id: one line with suggestions
+        entry = self._catalog.robot(self.io.robot)  # an unknown id: one line with suggestions
         self._robot = entry.as_arm
         self.layout = robot_layout(self._robot)
         if action_mode == "joints" and self.layout.is_pose:
             arms = ", ".join(r for r, e in self._catalog.robots.items() if e.as_arm is not None)
-            raise RikError(f"action_mode 'joints': robot {robot} takes a target pose (action_mode 'delta', "
+            raise RikError(f"action_mode 'joints': robot {self.io.robot} takes a target pose (action_mode 'delta', "
                            f"'absolute', 'handle' or 'gripper'); joint actions are for arms ({arms})")
         self._variants = Path(variants_dir)
         self._draw = None
@@ -120,11 +120,8 @@ class OpenFrontEnv(gym.Env):
             self._draw.check(self._catalog)
         self._variant, self._front = variant, front
         self.action_mode = action_mode
-        self.handle_shape = handle_shape
-        self._from_gripper = action_mode == "gripper"  # the grasp point from the gripper in environment_state
         self._shape: np.ndarray | None = None  # the reset handle's shape (none: no numbers)
-        self._streams = streams
-        self._cameras, self._size, self._spp = cameras, image_size, spp
+        self._spp = spp
         self._max_episode_steps = episode_length
         self.render_mode = render_mode
         self._scenes: OrderedDict[tuple[str, str | None], SimScene] = OrderedDict()
@@ -134,12 +131,12 @@ class OpenFrontEnv(gym.Env):
         self._episode: dict[str, Any] = {"seed": -1}
         first = variant if variant is not None else self._draw.episode(self._catalog, 0).variant  # type: ignore[union-attr]
         self.scene = self._scene(first, front)
-        if self._streams:
+        if self.io.streams:
             import mujoco
 
             known = [mujoco.mj_id2name(self.scene.model, mujoco.mjtObj.mjOBJ_CAMERA, i)
                      for i in range(self.scene.model.ncam)]
-            for cam in cameras:
+            for cam in self.io.cameras:
                 if cam not in known:
                     raise RikError(f"cameras: no camera {cam!r} in the scene (cameras: {', '.join(known)})")
         self.task_description = ""
@@ -149,10 +146,10 @@ class OpenFrontEnv(gym.Env):
                 -np.inf, np.inf, (len(env_state_names(self.handle_shape, self._from_gripper)),), np.float32)}
         if self.layout.ee_pose:
             spaces["ee_pose"] = gym.spaces.Box(-np.inf, np.inf, (len(EE_NAMES),), np.float32)
-        if self._streams:
-            h, w = image_size
+        if self.io.streams:
+            h, w = self.io.image_size
             spaces["pixels"] = gym.spaces.Dict({image_name(c, s): gym.spaces.Box(0, 255, (h, w, 3), np.uint8)
-                                                for s in self._streams for c in self._cameras})
+                                                for s in self.io.streams for c in self.io.cameras})
         self.observation_space = gym.spaces.Dict(spaces)
         if action_mode == "joints":
             low, high = joint_action_bounds(self.layout)
@@ -165,6 +162,16 @@ class OpenFrontEnv(gym.Env):
     def robot(self) -> str:
         """The robot's catalog id."""
         return self.layout.robot_id
+
+    @property
+    def handle_shape(self) -> str:
+        """What of the handle's shape ends ``environment_state`` (the contract's)."""
+        return self.io.handle_shape
+
+    @property
+    def _from_gripper(self) -> bool:
+        """Whether ``environment_state`` holds the grasp point from the gripper (a gripper-frame contract)."""
+        return self.io.action_frame == "gripper"
 
     # ---- scenes and images ----------------------------------------------------------------------------------
     def _scene(self, variant: str, front: str | None) -> SimScene:
@@ -189,9 +196,10 @@ class OpenFrontEnv(gym.Env):
             self._close_renderers()
             self._renderer_model = self.scene.model
         if stream not in self._renderers:
-            h, w = self._size
+            h, w = self.io.image_size
             spec = StreamSpec(stream, w, h, spp=self._spp)  # type: ignore[arg-type]
-            self._renderers[stream] = make_renderer(self.scene.model, self.scene.data, list(self._cameras), spec,
+            cameras = list(self.io.cameras) or ["front"]  # a state-only contract: the front camera films it
+            self._renderers[stream] = make_renderer(self.scene.model, self.scene.data, cameras, spec,
                                                     self._catalog.finishes)
         return self._renderers[stream]
 
@@ -243,9 +251,9 @@ class OpenFrontEnv(gym.Env):
                                                                       self._from_gripper).astype(np.float32)}
         if self.layout.ee_pose:
             obs["ee_pose"] = self.layout.ee(self.scene).astype(np.float32)
-        if self._streams:
+        if self.io.streams:
             pixels = {}
-            for stream in self._streams:
+            for stream in self.io.streams:
                 for cam, img in self._renderer(stream).render(self.scene.data, self._steps).items():
                     pixels[image_name(cam, stream)] = img
             obs["pixels"] = pixels
@@ -294,7 +302,7 @@ class OpenFrontEnv(gym.Env):
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":
             return None
-        stream = self._streams[0] if self._streams else "sim"
+        stream = self.io.streams[0] if self.io.streams else "sim"
         images = self._renderer(stream).render(self.scene.data, self._steps)
         return images.get("front", next(iter(images.values())))
 
@@ -302,25 +310,28 @@ class OpenFrontEnv(gym.Env):
         self._close_renderers()
 
 
-def _check_images(streams: tuple[str, ...], cameras: tuple[str, ...], image_size: Any, spp: int) -> None:
-    """The image options of :class:`OpenFrontEnv`, checked before anything is built: known streams, at least one
-    camera, ``image_size`` two whole numbers (height, width) and ``spp`` as a stream allows them."""
-    from typing import get_args
+def _contract(io: PolicyIO | None, action_mode: str, images: bool, **options: Any) -> PolicyIO:
+    """The environment's contract: ``io`` (default: the Hand-E's, state only, every camera where images are asked
+    for), with the keyword arguments that name its fields (None: the contract's) and ``images`` (the sim stream)
+    over it, and a ``handle`` or ``gripper`` ``action_mode``'s frame; its values checked (one line naming the
+    keyword)."""
+    base = io if io is not None else PolicyIO(cameras=CAMERAS)
+    if images and not options.get("streams") and not base.streams:
+        options["streams"] = ("sim",)
+    if action_mode in FRAME_LAYOUTS:
+        options["action_frame"] = action_mode
+    return base.with_options(options).validate()
 
-    from rik.render.streams import MAX_SIDE, MIN_SIDE, StreamKind, StreamSpec
 
-    for stream in streams:
-        if stream not in get_args(StreamKind):
-            raise RikError(f"streams: unknown stream {stream!r} (streams: {', '.join(get_args(StreamKind))})")
-    if not cameras:
+def _check_images(io: PolicyIO, spp: int) -> None:
+    """The image options the contract does not check, before anything is built: at least one camera, and ``spp`` as
+    a stream allows it."""
+    from rik.render.streams import StreamSpec
+
+    if not io.cameras:
         raise RikError("cameras: give at least one camera for the images (e.g. front, wrist)")
-    size = tuple(image_size) if isinstance(image_size, tuple | list) else ()
-    if len(size) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in size):
-        raise RikError(f"image_size {image_size!r}: give (height, width), two whole numbers of pixels")
-    if not all(MIN_SIDE <= v <= MAX_SIDE for v in size):
-        raise RikError(f"image_size {image_size!r}: give (height, width), {MIN_SIDE} to {MAX_SIDE} pixels each")
-    for stream in streams:
-        StreamSpec(stream, size[1], size[0], spp=spp)  # type: ignore[arg-type]  # sizes and spp in range
+    for stream in io.streams:
+        StreamSpec(stream, io.width, io.height, spp=spp)  # type: ignore[arg-type]  # spp in range
 
 
 def joint_action_bounds(layout: RobotLayout) -> tuple[np.ndarray, np.ndarray]:
@@ -334,4 +345,4 @@ def joint_action_bounds(layout: RobotLayout) -> tuple[np.ndarray, np.ndarray]:
 
 
 if ENV_ID not in gym.registry:
-    gym.register(id=ENV_ID, entry_point="rik.envs.open_front:OpenFrontEnv")
+    gym.register(id=ENV_ID, entry_point=ENV_ENTRY_POINT)

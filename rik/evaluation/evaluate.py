@@ -3,11 +3,12 @@
 Episodes are the seeds ``seed .. seed + cells x N - 1`` of a draw (:mod:`rik.episodes.draw`): each falls in one cell
 (handle type x preset) and names one variant, front and start pose, the same as ``lerobot-eval --env.type=rik
 --seed S`` runs. A learned policy runs through lerobot's own ``rollout`` (``lerobot.scripts.lerobot_eval``) on a
-one-environment vector env made by the ``lerobot_env_rik`` config, so both tools execute the same code per
-episode. A scripted strategy (``strategy:contact_rich``) runs its operator in the same environment, so scripted
-and learned rows are paired episode by episode. ``robot`` (a catalog id) runs either with that robot: a learned
-policy must read and write that robot's layout (:mod:`rik.sim.robots.layout`; an arm takes joint actions), a
-scripted strategy drives any robot by target poses.
+one-environment vector env made by the ``--env.type=rik`` config (:mod:`rik.lerobot.env_config`), so both tools
+execute the same code per episode, with the policy's contract (:mod:`rik.lerobot.policy_io`: read from its folder,
+not guessed, where it was trained on a rik export that wrote one). A scripted strategy (``strategy:contact_rich``)
+runs its operator in the same environment, so scripted and learned rows are paired episode by episode. ``robot`` (a
+catalog id) runs either with that robot: a learned policy must read and write that robot's layout
+(:mod:`rik.sim.robots.layout`; an arm takes joint actions), a scripted strategy drives any robot by target poses.
 
 Outputs (in ``--out``): ``table.md`` (F/P/S per handle type x preset, with Wilson intervals for S),
 ``episodes.csv`` (one row per episode), ``eval_info.json`` (lerobot-eval's layout: ``per_task``, ``per_group``,
@@ -20,14 +21,14 @@ import json
 import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 from rik.errors import RikError
-from rik.evaluation.load import policy_needs
-from rik.evaluation.policy_files import check_policy_folder
+from rik.lerobot.policy_files import check_policy_folder
+from rik.lerobot.policy_io import AUTO, PolicyIO, read_policy
 from rik.scheduling import normal_scheduling
 
 if TYPE_CHECKING:
@@ -36,6 +37,11 @@ if TYPE_CHECKING:
 STRATEGY_PREFIX = "strategy:"
 DEFAULT_SEED = 1000
 """lerobot-eval's default first seed."""
+LABELS = {"robot": "--robot {}", "action_frame": "--action-frame {}"}
+"""How a problem of the contract names ``rik eval``'s options."""
+NEEDS = ("cameras", "streams", "image_size")
+"""The fields of a policy's contract ``eval_info.json`` always names under ``needs``; the others where they are not
+their default (so that runs from before a field existed stay finished)."""
 
 
 @dataclass(frozen=True)
@@ -57,26 +63,59 @@ class EvalSpec:
     variants: str = "variants"
     label: str = ""
     """Name of the operator in tables (default: the strategy, or the policy's type and folder)."""
-    robot: str = "hand-e"
-    """The robot (catalog id) that runs the episodes."""
-    action_frame: str = "auto"
-    """A pose policy's action frame: ``world``, ``handle``, or ``auto``
-    (:func:`rik.evaluation.load.trained_action_frame`)."""
-    needs: dict[str, Any] = field(default_factory=dict)
-    """Filled by :func:`prepare`: the policy's cameras, streams and image size."""
+    io: PolicyIO = PolicyIO(action_frame=AUTO)
+    """The contract the episodes run with: as asked (the robot, and an action frame or ``auto``) until
+    :func:`prepare` fills in the policy's (:func:`rik.lerobot.policy_io.read_policy`: its cameras, streams, image
+    size, handle shape and frame)."""
+    policy_type: str = ""
+    """Filled by :func:`prepare` for a policy: its LeRobot type (``act``)."""
+    note: str = ""
+    """Filled by :func:`prepare`: one line where the policy's contract was guessed (an older policy)."""
 
     @property
     def strategy(self) -> str | None:
         return self.operator[len(STRATEGY_PREFIX):] if self.operator.startswith(STRATEGY_PREFIX) else None
 
+    @property
+    def robot(self) -> str:
+        return self.io.robot
+
     def seeds(self) -> list[int]:
         cells = len(self.handle_types) * len(self.presets)
         return list(range(self.seed, self.seed + cells * self.episodes_per_cell))
 
+    def to_data(self) -> dict[str, Any]:
+        """The spec as JSON data, as ``eval_info.json`` keeps it: the robot and action frame beside the options, the
+        policy's inputs under ``needs``; without the action frame where it is the world's and the handle's shape
+        where it is none (runs from before the handle frame and the handle's shape stay finished)."""
+        plain = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("io", "policy_type", "note")}
+        data: dict[str, Any] = json.loads(json.dumps(plain, default=list))
+        data |= {"robot": self.io.robot, "action_frame": self.io.action_frame, "needs": {}}
+        if self.policy_type:
+            data["needs"] = {"policy_type": self.policy_type}
+            for f in fields(PolicyIO):
+                value = getattr(self.io, f.name)
+                if f.name != "robot" and (f.name in NEEDS or value != getattr(PolicyIO(), f.name)):
+                    data["needs"][f.name] = list(value) if isinstance(value, tuple) else value
+        if data["action_frame"] in (AUTO, "world"):
+            del data["action_frame"]
+        return data
+
+    @classmethod
+    def from_data(cls, data: dict[str, Any]) -> EvalSpec:
+        """The spec of :meth:`to_data`'s data (an ``eval_info.json``'s ``rik.spec``)."""
+        own = {f.name for f in fields(cls)}
+        plain = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items() if k in own}
+        needs = dict(data.get("needs") or {})
+        policy_type = needs.pop("policy_type", "")
+        io = PolicyIO(robot=data.get("robot", "hand-e"), action_frame=data.get("action_frame", "world"))
+        return cls(**{**plain, "io": io.with_options(needs), "policy_type": policy_type})
+
 
 def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     """The spec checked (split, presets, types, the policy folder and its inputs, the strategy), with its label
-    and the policy's needs filled in."""
+    and the contract the episodes run with filled in: a policy's (its contract file, or the guess for an older
+    policy, noted in :attr:`EvalSpec.note`), an explicit ``--action-frame`` over it only where it was guessed."""
     from rik.episodes.draw import Draw
     from rik.episodes.operators import make_operator
 
@@ -85,19 +124,27 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     if spec.seed < 0:
         raise RikError(f"--seed {spec.seed}: must be 0 or more")
     Draw(spec.split, spec.handle_types, spec.presets, spec.kinds).check(catalog)
-    robot = catalog.robot(spec.robot)  # an unknown robot: one line with suggestions
+    catalog.robot(spec.io.robot)  # an unknown robot: one line with suggestions
+    asked = spec.io.action_frame
     if spec.strategy is not None:
         make_operator(spec.strategy)
-        return EvalSpec(**{**asdict(spec), "label": spec.label or spec.strategy})
-    from rik.sim.robots.layout import robot_layout
-
-    layout = robot_layout(robot.as_arm)
-    needs = policy_needs(Path(spec.operator), allow_rerendered=spec.allow_rerendered, layout=layout)
+        io = replace(spec.io, action_frame="world" if asked == AUTO else asked).validate(labels=LABELS)
+        prepared = replace(spec, label=spec.label or spec.strategy, io=io)
+        env_config(prepared)  # what the --env.type=rik config refuses, before anything is built
+        return prepared
+    contract = read_policy(Path(spec.operator), robot=spec.io.robot, allow_rerendered=spec.allow_rerendered)
+    io = contract.io
+    if asked != AUTO and asked != io.action_frame:
+        if contract.source is not None:
+            raise RikError(f"--action-frame {asked}: the policy's {contract.source} says {io.action_frame}; leave "
+                           f"--action-frame out (auto) or pass {io.action_frame}")
+        io = replace(io, action_frame=asked)
+    io.validate(catalog, LABELS)  # a handle frame for an arm: one line
+    label = spec.label or f"{contract.policy_type}:{run_name(Path(spec.operator))}"
+    prepared = replace(spec, label=label, io=io, policy_type=contract.policy_type, note=contract.note or "")
+    env_config(prepared)  # what the --env.type=rik config refuses (a rate the environment does not step at)
     check_policy_folder(Path(spec.operator))  # processors and weights: before anything is built or written
-    label = spec.label or f"{needs.policy_type}:{run_name(Path(spec.operator))}"
-    frame = needs.action_frame if spec.action_frame == "auto" else spec.action_frame
-    robot_layout(robot.as_arm, frame)  # a handle frame for an arm: one line
-    return EvalSpec(**{**asdict(spec), "label": label, "needs": asdict(needs), "action_frame": frame})
+    return prepared
 
 
 def run_name(policy_dir: Path) -> str:
@@ -110,17 +157,17 @@ def run_name(policy_dir: Path) -> str:
 
 
 def env_config(spec: EvalSpec) -> Any:
-    """The ``lerobot_env_rik`` config that runs ``spec``'s episodes (what ``lerobot-eval --env.*`` would say)."""
-    from lerobot_env_rik import RikEnvConfig
+    """The ``--env.type=rik`` config that runs ``spec``'s episodes (what ``lerobot-eval --env.*`` would say): its
+    contract, and the draw."""
+    from rik.lerobot.env_config import RikEnvConfig
 
-    needs = spec.needs or {"cameras": (), "streams": ("sim",), "image_size": (96, 128)}
-    h, w = needs["image_size"]
-    return RikEnvConfig(robot=spec.robot, episode_length=spec.episode_length, split=spec.split or "all",
-                        handle_types=",".join(spec.handle_types), presets=",".join(spec.presets),
-                        kinds=",".join(spec.kinds), cameras=",".join(needs["cameras"]),
-                        streams=",".join(needs["streams"]) or "sim", observation_height=h, observation_width=w,
-                        variants_dir=spec.variants, action_frame=spec.action_frame,
-                        handle_shape=needs.get("handle_shape", "none"))
+    try:
+        return RikEnvConfig.for_contract(spec.io, episode_length=spec.episode_length, split=spec.split or "all",
+                                         handle_types=",".join(spec.handle_types), presets=",".join(spec.presets),
+                                         kinds=",".join(spec.kinds), variants_dir=spec.variants)
+    except ValueError as exc:  # the config's refusals, in LeRobot's words (draccus shows them to lerobot-eval)
+        where = "" if spec.strategy is not None else f"{spec.operator}: "
+        raise RikError(f"{where}{exc}") from None
 
 
 # ---- one worker's episodes ----------------------------------------------------------------------------------
@@ -139,9 +186,8 @@ def _state_stats(pre: Any, robot: str) -> dict[str, tuple[Any, Any, Any, Any, tu
     dimensions' names: feature -> (mean, std, min, max, names)."""
     import numpy as np
 
+    from rik.lerobot.features import EE_POSE, ENV_STATE_LAYOUTS, OBS_ENV_STATE, OBS_STATE
     from rik.registry.load import load_catalog
-    from rik.sim.feature_keys import EE_POSE, OBS_ENV_STATE, OBS_STATE
-    from rik.sim.observation import ENV_STATE_LAYOUTS
     from rik.sim.robots.layout import EE_NAMES, robot_layout
 
     layout = robot_layout(load_catalog().robot(robot).as_arm)
@@ -222,7 +268,7 @@ def _context(spec: EvalSpec) -> dict[str, Any]:
                                                                      {"device": str(policy.config.device)}})
         env_pre, env_post = make_env_pre_post_processors(env_cfg=cfg, policy_cfg=policy_cfg)
         # the states are kept per step only for state policies: with images every step's frames would be copied
-        stats = {} if spec.needs.get("cameras") else _state_stats(pre, spec.robot)
+        stats = {} if spec.io.cameras else _state_stats(pre, spec.io.robot)
         ctx |= {"policy": policy, "processors": (env_pre, env_post, pre, post), "stats": stats,
                 "vec": cfg.create_envs(n_envs=1)[cfg.type][0]}
     else:
@@ -335,7 +381,7 @@ def _episode_item(spec_json: str, video_root: str, threads: int | None, catalog:
 
         torch.set_num_threads(threads)
     seed, film = (int(x) for x in item.split(":"))
-    return run_episode(EvalSpec(**json.loads(spec_json)), seed, Path(video_root) if film else None)
+    return run_episode(EvalSpec.from_data(json.loads(spec_json)), seed, Path(video_root) if film else None)
 
 
 EVAL_FILES = ("table.md", "episodes.csv", "eval_info.json", "success.png", "videos")
@@ -434,7 +480,7 @@ def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
                      workers=workers)
     items = [f"{s}:{int(i < spec.videos)}" for i, s in enumerate(seeds)]
     parallel = workers > 1 and len(items) > 1  # as map_ids decides
-    fn = partial(_episode_item, json.dumps(asdict(spec), default=list), str(out / "videos"), 1 if parallel else None)
+    fn = partial(_episode_item, json.dumps(spec.to_data()), str(out / "videos"), 1 if parallel else None)
     started = time.perf_counter()
     rows: dict[int, dict[str, Any]] = {}
     for _, row in map_ids(fn, catalog, items, workers=workers):
@@ -446,26 +492,13 @@ def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
     return ordered
 
 
-def _spec_json(spec: EvalSpec) -> Any:
-    """The spec as JSON data; without ``action_frame`` and the needs' where they are the world's, and the needs'
-    ``handle_shape`` where it is none (runs from before the handle frame and the handle's shape stay finished)."""
-    data = json.loads(json.dumps(asdict(spec), default=list))
-    if data.get("action_frame") in ("auto", "world"):
-        del data["action_frame"]
-    if data.get("needs", {}).get("action_frame") == "world":
-        del data["needs"]["action_frame"]
-    if data.get("needs", {}).get("handle_shape") == "none":
-        del data["needs"]["handle_shape"]
-    return data
-
-
 def finished_rows(out: Path, spec: EvalSpec) -> list[dict[str, Any]] | None:
     """The rows of an earlier run of exactly ``spec`` into ``out`` (its ``eval_info.json``), or None."""
     try:
         info = json.loads((out / "eval_info.json").read_text())
     except (OSError, ValueError):
         return None
-    if not isinstance(info, dict) or info.get("rik", {}).get("spec") != _spec_json(spec):
+    if not isinstance(info, dict) or info.get("rik", {}).get("spec") != spec.to_data():
         return None
     return list(info["rik"]["per_episode"])
 
@@ -542,7 +575,7 @@ def eval_info(spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) ->
     return {"per_task": [{"task_group": "rik", "task_id": 0, "metrics": metrics}],
             "per_group": {"rik": {k: v for k, v in aggregate.items() if k != "eval_s"}},
             "overall": aggregate,
-            "rik": {"spec": _spec_json(spec), "per_episode": list(rows)}}
+            "rik": {"spec": spec.to_data(), "per_episode": list(rows)}}
 
 
 def write_outputs(out: Path, spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> None:

@@ -190,7 +190,8 @@ def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str,
     import rik
     from rik.sim.robots.layout import robot_layout
 
-    layout = robot_layout(robot.as_arm, spec.action_frame)
+    layout = robot_layout(robot.as_arm, spec.io.action_frame)
+    handle_shape = spec.io.handle_shape
     images = [k for k, f in info["features"].items() if f.get("dtype") == "video"]
     sim_only = [k for k in images if not k.endswith("_rerendered")]
     from rik.sim.observation import ENV_STATE_NAMES, GRIPPER_GRASP_NAMES, HANDLE_SHAPES, ROBOT_STATE_NAMES
@@ -199,7 +200,7 @@ def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str,
         streams = f"""- **Image streams:** {', '.join(f'`{k}`' for k in images)}. Keys without a suffix are MuJoCo's own
   rendering (the sim stream); `_rerendered` keys are the same states path-traced offline by Mitsuba 3
   ({spec.spp} spp{', denoised by Intel Open Image Denoise' if spec.denoise else ''}), pixel-aligned with the sim
-  stream. Images are {spec.width}x{spec.height}, codec {spec.codec}.
+  stream. Images are {spec.io.width}x{spec.io.height}, codec {spec.codec}.
 """
         one_stream = f"""**Training on one stream.** Policies take every `observation.*` feature by default. To train on
 the sim stream only, give the policy's `input_features` just `observation.state`, \
@@ -246,21 +247,21 @@ in your data loader.
   opens (world).
 """
     if layout.action_frame == "gripper":
-        before = ", before the handle's shape" if spec.handle_shape != "none" else ""
+        before = ", before the handle's shape" if handle_shape != "none" else ""
         count = len(GRIPPER_GRASP_NAMES)
         state_text += f"""- **The grasp point from the gripper** (`--action-frame gripper`: {count} more numbers after
   the front's state{before}): {_names(GRIPPER_GRASP_NAMES)}: the handle's grasp point less the gripper base's
   position (m, world axes).
 """
-    if spec.handle_shape != "none":
-        shape = HANDLE_SHAPES[spec.handle_shape]
+    if handle_shape != "none":
+        shape = HANDLE_SHAPES[handle_shape]
         what = ("the handle's type and mount as 0/1 flags, then the catalog's length, width, projection, grip "
-                "diameter and finger clearance (depth, width; 0 where none), m" if spec.handle_shape == "full"
+                "diameter and finger clearance (depth, width; 0 where none), m" if handle_shape == "full"
                 else "the handle's type and mount as 0/1 flags")
-        state_text += f"""- **The handle's shape** (`--handle-shape {spec.handle_shape}`: {len(shape)} more numbers at
+        state_text += f"""- **The handle's shape** (`--handle-shape {handle_shape}`: {len(shape)} more numbers at
   the end of `observation.environment_state`, constant through an episode): {_names(shape)}: {what}. rik's
-  environment appends them with `handle_shape="{spec.handle_shape}"`
-  (`--env.handle_shape={spec.handle_shape}`; `rik eval` and `auto` read it from the policy's input width).
+  environment appends them with `handle_shape="{handle_shape}"`
+  (`--env.handle_shape={handle_shape}`; `rik eval` and `auto` read it from the policy's input width).
 """
     state_text += action
     if checks.get("constant"):

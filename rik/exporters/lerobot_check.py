@@ -10,7 +10,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
-from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_STATE
+from rik.exporters.lerobot_frames import LAYOUT, LAYOUT_1_STATE_NAMES
+from rik.lerobot.features import ACTION, EE_POSE, OBS_ENV_STATE, OBS_STATE
 
 if TYPE_CHECKING:
     from rik.sim.robots.layout import RobotLayout
@@ -106,8 +107,7 @@ def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> 
     (``observation.state`` of the robot in its layout, ``observation.environment_state`` of the front, with or
     without the handle's shape), 1 (one
     14-number ``observation.state``, Hand-E exports made before the split), or None (not a rik layout)."""
-    from rik.exporters.lerobot_frames import LAYOUT_1_STATE_NAMES
-    from rik.sim.observation import ENV_STATE_LAYOUTS
+    from rik.lerobot.features import ENV_STATE_LAYOUTS
     from rik.sim.robots.layout import robot_layout
 
     robot = robot or robot_layout(None)
@@ -165,7 +165,6 @@ def check_dataset(root: Path, repo_id: str, episodes: int, robot: RobotLayout | 
     missing = [c for c in ("rik/variant", "rik/outcome", "rik/seed") if c not in columns]
     if missing:
         raise RikError(f"{root}: meta/episodes lacks rik's columns {missing}")
-    from rik.exporters.lerobot_frames import LAYOUT
     from rik.sim.robots.layout import robot_layout
 
     robot = robot or robot_layout(None)

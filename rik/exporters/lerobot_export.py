@@ -19,7 +19,7 @@ import json
 import multiprocessing
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -35,10 +35,11 @@ from rik.exporters.lerobot_frames import (
     episode_frames,
     episode_layout,
     episode_metadata,
-    features,
     load_episode,
 )
 from rik.exporters.spec import ENCODER_OPTIONS, ExportSpec, check_codec_size, check_spec, keep_outcomes
+from rik.lerobot.features import TASK, dataset_features
+from rik.lerobot.policy_io import POLICY_IO_FILE, PolicyIO, io_of_info
 from rik.outputs import (
     PRIVATE,
     MadeFolder,
@@ -52,7 +53,6 @@ from rik.outputs import (
 )
 from rik.paths import check_folder, json_object
 from rik.scheduling import normal_scheduling
-from rik.sim.feature_keys import TASK
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -106,7 +106,7 @@ def one_robot(metas: dict[Path, EpisodeMeta]) -> str:
 
 
 def _plan(metas: dict[Path, EpisodeMeta], spec: ExportSpec, fps: int, robot: str = "hand-e") -> dict[str, Any]:
-    return {"spec": {**asdict(spec), "fps": fps, "layout": LAYOUT, "robot": robot},
+    return {"spec": {**spec.plan_data(), "fps": fps, "layout": LAYOUT, "robot": robot},
             "encoder_options": ENCODER_OPTIONS.get(spec.codec, {}),
             "episodes": [[m.id, m.states_sha256] for m in metas.values()]}  # an older partial export is not mixed in
 
@@ -157,7 +157,7 @@ def render_streams(catalog: Catalog, episode: LoadedEpisode, spec: ExportSpec, c
     from rik.render.episodes import render_episode
 
     return {kind: render_episode(catalog, episode.recorded, spec.stream(kind), renders=renders, variants=variants,
-                                 cameras=cameras).directory for kind in spec.streams}
+                                 cameras=cameras).directory for kind in spec.io.streams}
 
 
 def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[EpisodeSource], cameras: list[str],
@@ -177,16 +177,16 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
     check_codec_size(spec)  # rik dataset's shards come here without export_lerobot's checks
     quiet_encoders()
     metas = {s.directory: read_meta(s.directory) for s in sources}
-    layout = shard_layout(catalog, metas, spec.action_frame)
+    layout = shard_layout(catalog, metas, spec.io.action_frame)
     # every episode of the shard read and checked (its one read) before anything is rendered or written: bad input
     # costs no render; the shard holds its episodes' states (shard_episodes of them) until each is saved
-    loaded: list[LoadedEpisode | None] = [load_episode(catalog, s.directory, metas[s.directory], spec.action_frame)
-                                          for s in sources]
+    loaded: list[LoadedEpisode | None] = [load_episode(catalog, s.directory, metas[s.directory],
+                                                       spec.io.action_frame) for s in sources]
     remove_directory(root, SHARD_FOLDER)  # an unfinished shard is redone from scratch
     root.parent.mkdir(parents=True, exist_ok=True)
-    ds = LeRobotDataset.create(repo_id=repo_id, fps=fps, features=features(cameras, spec.streams, spec.width,
-                                                                             spec.height, layout, spec.handle_shape),
-                               root=root / "ds", robot_type=layout.robot_type, use_videos=bool(spec.streams),
+    features = dataset_features(layout, spec.io.handle_shape, cameras, spec.io.streams, spec.io.image_size)
+    ds = LeRobotDataset.create(repo_id=repo_id, fps=fps, features=features,
+                               root=root / "ds", robot_type=layout.robot_type, use_videos=bool(spec.io.streams),
                                video_backend="pyav",
                                rgb_encoder=RGBEncoderConfig(vcodec=spec.codec,
                                                              extra_options=dict(ENCODER_OPTIONS.get(spec.codec, {}))),
@@ -207,7 +207,7 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
             streams = source.streams if renders is None else render_streams(catalog, episode, spec, cameras,
                                                                             renders, variants)
             task, frames, count = episode_frames(catalog, episode, streams, cameras, fps, variants,
-                                                 spec.handle_shape)
+                                                 spec.io.handle_shape)
             for frame in frames:
                 ds.add_frame({**frame, TASK: task})
             extra.clear()
@@ -286,7 +286,6 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     """:func:`export_lerobot` once it holds the lock of ``out``."""
     from rik.episodes.episode import find_episodes, read_meta
     from rik.render.episodes import check_renders_outside
-    from rik.sim.observation import CAMERAS
 
     _check_out_free(out, resume)  # again, now that it is ours: another export may have finished it meanwhile
     partial_dir = out.with_name(f"{out.name}.partial")
@@ -299,7 +298,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
                           ", ".join(str(e) for e in episodes))
     dirs = list(metas)
     robot = one_robot(metas)
-    layout = [episode_layout(catalog, d, m, spec.action_frame) for d, m in metas.items()][0]  # in the catalog
+    layout = [episode_layout(catalog, d, m, spec.io.action_frame) for d, m in metas.items()][0]  # in the catalog
     fps = _episode_fps(metas, spec)
     plan = _plan(metas, spec, fps, robot)
     if partial_dir.exists():
@@ -315,12 +314,11 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         if old != json.loads(json.dumps(plan)):
             raise RikError(f"{partial_dir}: the interrupted export there was of other episodes or settings; delete "
                            "it, or run it again with the same ones")
-    cams: list[str] = []
-    if spec.streams:
+    # the cameras asked for, or those of rik's scenes (front, wrist), as rik dataset build takes them; each
+    # episode's render checks that its scene has them. No scene is built before the shards read the episodes.
+    cams = list(spec.exported_cameras())
+    if spec.io.streams:
         check_renders_outside(renders, {d: m.id for d, m in metas.items()}, "--renders")
-        # the cameras asked for, or those of rik's scenes (front, wrist), as rik dataset build takes them; each
-        # episode's render checks that its scene has them. No scene is built before the shards read the episodes.
-        cams = list(spec.cameras) or list(CAMERAS)
     created = not partial_dir.exists()
     partial_dir.mkdir(parents=True, exist_ok=True)
     write_text(partial_dir / PLAN, json.dumps(plan, indent=1) + "\n", PRIVATE)
@@ -382,11 +380,21 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     checks = lerobot_check.check_dataset(merged, spec.repo_id, len(dirs), layout)
     lerobot_card.write_card(catalog, merged, spec, fps, checks, robot=robot,
                             joint_driven=sum(m.action_kind == "joints" for m in metas.values()))
+    contract = write_contract(catalog, merged, robot)
     publish(merged, out)
     remove_partial(partial_dir)
-    return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps,
-                        sorted(features(cams, spec.streams, spec.width, spec.height, layout, spec.handle_shape)),
+    return ExportResult(out, spec.repo_id, checks["episodes"], checks["frames"], fps, sorted(contract.features(layout)),
                         len(jobs), skipped, checks, robot, layout.robot_type)
+
+
+def write_contract(catalog: Catalog, root: Path, robot: str) -> PolicyIO:
+    """Write the contract with the policies trained on the dataset being merged at ``root`` (of ``robot``'s
+    episodes) into its ``meta/rik_policy_io.json`` (:mod:`rik.lerobot.policy_io`): what the dataset's own
+    ``meta/info.json`` says (:func:`rik.lerobot.policy_io.io_of_info`), in a file of its own, beside lerobot's and
+    rik's card, so that no other file of the dataset changes."""
+    contract = io_of_info(root, robot, catalog)
+    write_text(root / "meta" / POLICY_IO_FILE, contract.to_json(), MERGED_FILE)
+    return contract
 
 
 def order_stats(root: Path) -> None:

@@ -1,5 +1,5 @@
-"""What a rik episode becomes in a LeRobot dataset: the feature schema, the per-frame dicts (resampled to the
-dataset's rate) and the per-episode metadata.
+"""What a rik episode becomes in a LeRobot dataset: the per-frame dicts (resampled to the dataset's rate) of the
+features of its contract (:meth:`rik.lerobot.policy_io.PolicyIO.features`) and the per-episode metadata.
 
 Features follow LeRobot's conventions: ``observation.state`` (the robot's state) and
 ``observation.environment_state`` (the front's state), named, as the gym environment's ``agent_pos`` and
@@ -18,14 +18,13 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from rik.errors import RikError
+from rik.lerobot.features import ACTION, EE_POSE, OBS_ENV_STATE, OBS_STATE, image_key
 from rik.render.episodes import RecordedEpisode
-from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
-from rik.sim.observation import image_name
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -51,36 +50,6 @@ one 14-number ``observation.state`` (:data:`LAYOUT_1_STATE_NAMES`), exports made
 LAYOUT_1_STATE_NAMES = ("x", "y", "z", "pitch", "yaw", "roll", "jaw_opening", "front_qpos", "front_qvel", "tcp_x",
                         "tcp_y", "tcp_z", "opening", "contact_normal_force")
 """The single state vector of layout 1."""
-
-
-def image_key(camera: str, stream: str) -> str:
-    """The dataset feature of a camera's stream, e.g. ``observation.images.front_rerendered``."""
-    return f"{OBS_IMAGES}.{image_name(camera, stream)}"
-
-
-def _vector(names: Sequence[str]) -> dict[str, Any]:
-    return {"dtype": "float32", "shape": (len(names),), "names": list(names)}
-
-
-def features(cameras: Sequence[str], streams: Sequence[str], width: int, height: int,
-             layout: RobotLayout | None = None, handle_shape: str = "none") -> dict[str, dict[str, Any]]:
-    """The LeRobot feature dict of an export of one robot's episodes (``layout``; None: the Hand-E's), the front's
-    state followed by the grasp point from the gripper (a gripper-frame layout's) and the handle's shape
-    ``handle_shape`` (:data:`rik.sim.observation.HANDLE_SHAPES`)."""
-    from rik.sim.observation import env_state_names
-    from rik.sim.robots.layout import EE_NAMES, robot_layout
-
-    layout = layout or robot_layout(None)
-    out: dict[str, dict[str, Any]] = {OBS_STATE: _vector(layout.state_names)}
-    if layout.ee_pose:
-        out[EE_POSE] = _vector(EE_NAMES)
-    out[OBS_ENV_STATE] = _vector(env_state_names(handle_shape, layout.action_frame == "gripper"))
-    out[ACTION] = _vector(layout.action_names)
-    for cam in cameras:
-        for stream in streams:
-            out[image_key(cam, stream)] = {"dtype": "video", "shape": (height, width, 3),
-                                           "names": ["height", "width", "channels"]}
-    return out
 
 
 def episode_layout(catalog: Catalog, directory: Path, meta: EpisodeMeta, action_frame: str = "world"

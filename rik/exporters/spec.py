@@ -1,6 +1,7 @@
-"""What an export writes (:class:`ExportSpec`) and the checks of it made before any work: the streams, codecs and
-frame rates offered, and the narrowest frame a codec encodes. Read by the export (:mod:`rik.exporters.lerobot_export`),
-its card (:mod:`rik.exporters.lerobot_card`), ``rik dataset build`` and the CLI."""
+"""What an export writes (:class:`ExportSpec`: rik's contract with LeRobot, :class:`~rik.lerobot.policy_io.PolicyIO`,
+and how it is encoded) and the checks of it made before any work: the streams, codecs and frame rates offered, and the
+narrowest frame a codec encodes. Read by the export (:mod:`rik.exporters.lerobot_export`), its card
+(:mod:`rik.exporters.lerobot_card`), ``rik dataset build`` and the CLI."""
 
 from __future__ import annotations
 
@@ -8,13 +9,12 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
-from rik.sim.observation import STREAM_SUFFIX
+from rik.lerobot.features import CAMERAS, STREAMS
+from rik.lerobot.policy_io import PolicyIO
 
 if TYPE_CHECKING:
     from rik.render.streams import StreamSpec
 
-STREAMS = tuple(STREAM_SUFFIX)
-"""The image streams an export can hold: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
 NO_STREAMS = "none"
 """``--streams none``: a state-only export (no video features, nothing rendered)."""
 CODECS = ("libsvtav1", "h264", "hevc")
@@ -33,44 +33,67 @@ smallest size (8 a side)."""
 MAX_FPS = 240
 """Highest ``--fps`` of an export, Hz: SVT-AV1 (the default codec) encodes at most 240 frames per second (rik records
 at 20 Hz; resampling above it only repeats rows and frames)."""
+EXPORT_IO = PolicyIO(streams=STREAMS, image_size=(256, 256))
+"""An export's contract unless told otherwise: both streams of every camera at 256x256 px, the world frame, no
+handle shape (its robot is the episodes')."""
+LABELS = {"action_frame": "--action-frame {}", "handle_shape": "--handle-shape {}", "streams": "--streams",
+          "cameras": "--cameras", "image_size": "--res {}", "robot": "--robot {}"}
+"""How a problem of the contract names ``rik export-lerobot``'s options."""
+SIZE_OPTIONS = ("width", "height")
+"""Keyword arguments of :class:`ExportSpec` that set one side of the contract's image size (px)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class ExportSpec:
-    """What an export writes."""
+    """What an export writes: the dataset's id, its contract (:attr:`io`; cameras none: every camera of rik's
+    scenes) and how it is encoded. Keyword arguments named as a field of the contract (``streams=()``,
+    ``action_frame="handle"``, ``width=``/``height=`` for its image size) set that field of :data:`EXPORT_IO`."""
 
     repo_id: str
-    streams: tuple[str, ...] = STREAMS
-    """Image streams to export (empty: a state-only dataset, nothing rendered)."""
-    cameras: tuple[str, ...] = ()
-    """Cameras to export (empty: those of rik's scenes, :data:`rik.sim.observation.CAMERAS`)."""
-    width: int = 256
-    height: int = 256
-    fps: int | None = None
+    io: PolicyIO
+    fps: int | None
     """Dataset frame rate, Hz (None: the episodes' own rate, which must then agree)."""
-    codec: str = "libsvtav1"
-    spp: int = 16
-    denoise: bool = True
-    variant: str = "auto"
-    shard_episodes: int = 16
-    outcomes: tuple[str, ...] = ("F", "P", "S")
+    codec: str
+    spp: int
+    denoise: bool
+    variant: str
+    shard_episodes: int
+    outcomes: tuple[str, ...]
     """Outcomes of the episodes exported (``("S",)``: the successful demonstrations only); the others are left out."""
-    action_frame: str = "world"
-    """The Hand-E's ``action`` position: in the world (``world``), from the handle's grasp point (``handle``,
-    :data:`rik.sim.robots.layout.HANDLE_ACTION_NAMES`) or from the gripper base (``gripper``,
-    :data:`rik.sim.robots.layout.GRIPPER_ACTION_NAMES`, with the grasp point from the gripper in the environment
-    state); an arm's joint action is always ``world``."""
-    handle_shape: str = "none"
-    """What of the handle's shape ends ``observation.environment_state``
-    (:data:`rik.sim.observation.HANDLE_SHAPES`): ``none``, ``kind`` (its type and mount), ``full`` (and its grasp
-    dimensions)."""
+
+    def __init__(self, repo_id: str, io: PolicyIO | None = None, *, fps: int | None = None, codec: str = "libsvtav1",
+                 spp: int = 16, denoise: bool = True, variant: str = "auto", shard_episodes: int = 16,
+                 outcomes: tuple[str, ...] = ("F", "P", "S"), **contract: Any) -> None:
+        io = io or EXPORT_IO
+        if any(k in contract for k in SIZE_OPTIONS):
+            height, width = io.image_size
+            contract["image_size"] = (contract.pop("height", height), contract.pop("width", width))
+        values = {"repo_id": repo_id, "io": io.with_options(contract, LABELS), "fps": fps, "codec": codec,
+                  "spp": spp, "denoise": denoise, "variant": variant, "shard_episodes": shard_episodes,
+                  "outcomes": tuple(outcomes)}
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
 
     def stream(self, kind: str) -> StreamSpec:
         """The image stream ``kind`` (``sim`` or ``rerendered``) at this export's size and quality."""
         from rik.render.streams import StreamSpec
 
-        return StreamSpec(kind, self.width, self.height, spp=self.spp, denoise=self.denoise,  # type: ignore[arg-type]
-                          variant=self.variant)
+        return StreamSpec(kind, self.io.width, self.io.height, spp=self.spp,  # type: ignore[arg-type]
+                          denoise=self.denoise, variant=self.variant)
+
+    def exported_cameras(self) -> tuple[str, ...]:
+        """The cameras exported: the contract's, or every camera of rik's scenes; none without streams."""
+        return (self.io.cameras or CAMERAS) if self.io.streams else ()
+
+    def plan_data(self) -> dict[str, Any]:
+        """The settings as an interrupted export's ``plan.json`` records them (the contract's fields beside the
+        others, the image size as ``width`` and ``height``), so that exports interrupted before the contract
+        existed are continued."""
+        io = self.io
+        return {"repo_id": self.repo_id, "streams": list(io.streams), "cameras": list(io.cameras),
+                "width": io.width, "height": io.height, "fps": self.fps, "codec": self.codec, "spp": self.spp,
+                "denoise": self.denoise, "variant": self.variant, "shard_episodes": self.shard_episodes,
+                "outcomes": list(self.outcomes), "action_frame": io.action_frame, "handle_shape": io.handle_shape}
 
 
 OUTCOMES = ("F", "P", "S")
@@ -114,21 +137,16 @@ def parse_streams(text: str) -> tuple[str, ...]:
 
 
 def check_spec(spec: ExportSpec) -> None:
-    """Refuse (one line) a spec the export cannot write: unknown streams or codec, cameras without streams, a
-    repo id not OWNER/NAME, a frame rate or samples per pixel out of range, a size the codec cannot encode."""
-    for s in spec.streams:
+    """Refuse (one line) a spec the export cannot write: a contract that is not valid (unknown streams, cameras,
+    frame, handle shape), cameras without streams, an unknown codec, a repo id not OWNER/NAME, a frame rate or
+    samples per pixel out of range, a size the codec cannot encode."""
+    for s in spec.io.streams:
         if s not in STREAMS:
             raise RikError(f"--streams: unknown stream '{s}' (streams: {', '.join(STREAMS)}, or {NO_STREAMS})")
-    if not spec.streams and spec.cameras:
-        raise RikError(f"--cameras {','.join(spec.cameras)}: a state-only export (--streams {NO_STREAMS}) has no "
+    if not spec.io.streams and spec.io.cameras:
+        raise RikError(f"--cameras {','.join(spec.io.cameras)}: a state-only export (--streams {NO_STREAMS}) has no "
                        "cameras; drop --cameras or give --streams")
-    from rik.sim.robots.layout import ACTION_FRAMES
-
-    if spec.action_frame not in ACTION_FRAMES:
-        raise RikError(f"--action-frame {spec.action_frame}: use one of {', '.join(ACTION_FRAMES)}")
-    from rik.sim.observation import check_handle_shape
-
-    check_handle_shape(spec.handle_shape)
+    spec.io.validate(labels=LABELS)
     if spec.codec not in CODECS:
         raise RikError(f"--codec: '{spec.codec}' is not offered (codecs: {', '.join(CODECS)})")
     if spec.repo_id.count("/") != 1 or not all(spec.repo_id.split("/")):
@@ -137,7 +155,7 @@ def check_spec(spec: ExportSpec) -> None:
         raise RikError(f"--fps {spec.fps}: give 1 to {MAX_FPS} Hz")
     from rik.render.streams import MAX_SPP
 
-    if "rerendered" in spec.streams and not 1 <= spec.spp <= MAX_SPP:  # as StreamSpec says, before the codec's size
+    if "rerendered" in spec.io.streams and not 1 <= spec.spp <= MAX_SPP:  # as StreamSpec says, before the size
         raise RikError(f"--spp {spec.spp}: give 1 to {MAX_SPP} samples per pixel")
     check_codec_size(spec)
 
@@ -152,8 +170,8 @@ def least_width(codec: str, width: int, images: bool) -> int | None:
 def check_codec_size(spec: ExportSpec) -> None:
     """Refuse (one line) an image size that ``spec.codec`` cannot encode (:data:`MIN_WIDTH`), before any work: the
     encoder would otherwise crash its process once the frames are rendered."""
-    least = least_width(spec.codec, spec.width, bool(spec.streams))
+    least = least_width(spec.codec, spec.io.width, bool(spec.io.streams))
     if least is not None:
-        raise RikError(f"--res {spec.width}x{spec.height}: --codec {spec.codec} encodes frames at least {least} "
+        raise RikError(f"--res {spec.io.width}x{spec.io.height}: --codec {spec.codec} encodes frames at least {least} "
                        f"pixels wide (narrower ones crash its encoder); give a width of {least} or more, or "
                        f"--codec h264")

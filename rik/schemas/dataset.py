@@ -117,14 +117,15 @@ class DatasetSpec(Frozen):
     outcomes: tuple[Literal["F", "P", "S"], ...] = Field(default=("F", "P", "S"), min_length=1)
     """Outcomes of the episodes exported into the dataset: ``[S]`` keeps the successful demonstrations only (every
     episode is recorded, and counted in the build's outcomes, either way)."""
-    action_frame: Literal["world", "handle", "gripper"] = "world"
-    """The Hand-E's exported ``action`` position: in the world, from the handle's grasp point (``handle``:
-    ``target_dx``, ``target_dy``, ``target_dz``, the target minus the grasp point) or from the gripper base
-    (``gripper``: the target minus the gripper base's position, with the grasp point from the gripper in
-    ``observation.environment_state``); arms' joint actions: world."""
-    handle_shape: Literal["none", "kind", "full"] = "none"
-    """What of the handle's shape ends ``observation.environment_state`` (:data:`rik.sim.observation.HANDLE_SHAPES`):
-    ``kind`` its type and mount flags, ``full`` those and the catalog's grasp dimensions."""
+    action_frame: str = "world"
+    """The Hand-E's exported ``action`` position: ``world``, ``handle`` (from the handle's grasp point) or
+    ``gripper`` (from the gripper base); arms' joint actions: world. A field of the dataset's contract with its
+    policies (``robot``, ``action_frame``, ``handle_shape``, ``cameras``, ``streams``, ``resolution``: one
+    :class:`rik.lerobot.policy_io.PolicyIO`, :func:`rik.dataset.spec.policy_io`), which checks it when the spec is
+    planned."""
+    handle_shape: str = "none"
+    """What of the handle's shape ends ``observation.environment_state``: ``none``, ``kind`` (its type and mount
+    flags) or ``full`` (and the catalog's grasp dimensions); a field of the contract, as ``action_frame``."""
 
     @field_validator("resolution")
     @classmethod

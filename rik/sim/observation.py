@@ -14,7 +14,8 @@ Two state vectors, split as LeRobot's policies expect them (ACT and diffusion al
   :data:`HANDLE_KIND_WIDTH` of them). The front's state alone does not say whether the grasp point is a knob's
   head, a bar or a lip.
 
-Images are uint8 HxWx3 of the :data:`CAMERAS`. Units are SI: m, rad, m/s or rad/s, N.
+Units are SI: m, rad, m/s or rad/s, N. How these vectors become LeRobot's features (and images, cameras and streams
+are named) is :mod:`rik.lerobot.features`.
 """
 
 from __future__ import annotations
@@ -22,8 +23,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-
-from rik.errors import RikError
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -55,23 +54,9 @@ GRIPPER_GRASP_NAMES = ("grasp_from_gripper_x", "grasp_from_gripper_y", "grasp_fr
 """The handle's grasp point less the gripper base's position (m, world axes): what a policy whose action is measured
 from the gripper (``--action-frame gripper``) reads after the front's state, so that where to go and how far are one
 input away from each other."""
-ENV_STATE_LAYOUTS = {(shape, from_gripper): ENV_STATE_NAMES + (GRIPPER_GRASP_NAMES if from_gripper else ()) + names
-                     for from_gripper in (False, True) for shape, names in HANDLE_SHAPES.items()}
-"""(``--handle-shape``, grasp point from the gripper) -> the names of the front's state: :data:`ENV_STATE_NAMES`,
-then :data:`GRIPPER_GRASP_NAMES` where asked, then the shape's. Every layout has its own width."""
-CAMERAS = ("front", "wrist")
-"""The scene's cameras: ``front`` looks at the base unit, ``wrist`` rides on the gripper."""
-STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
-"""Image stream -> suffix of its camera names: ``front`` is MuJoCo's image, ``front_rerendered`` Mitsuba's."""
 MAX_DELTA = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1])
 """Largest change of the target pose per control step: m for x, y, z; rad for pitch, yaw, roll."""
 TYPE_WORDS = {"two_point": "handle", "knob": "knob", "finger_pull": "finger pull"}
-
-
-def image_name(camera: str, stream: str) -> str:
-    """A camera's image of a stream, as the environment's ``pixels`` key (``front_rerendered``); the dataset
-    feature is ``observation.images.<name>``."""
-    return f"{camera}{STREAM_SUFFIX[stream]}"
 
 
 def instruction(catalog: Catalog, handle_id: str, front_kind: str) -> str:
@@ -87,24 +72,6 @@ def robot_state(scene: SimScene) -> np.ndarray:
     """The :data:`ROBOT_STATE_NAMES` of a scene, float64."""
     return np.concatenate([scene.pose(), [scene.finger_opening()], scene.tcp(),
                            [scene.contact_summary()["normal_force"]]]).astype(np.float64)
-
-
-def env_state_names(handle_shape: str = "none", from_gripper: bool = False) -> tuple[str, ...]:
-    """The names of the front's state, followed by the grasp point from the gripper (``from_gripper``:
-    :data:`GRIPPER_GRASP_NAMES`) and those of the handle's shape ``handle_shape`` (:data:`HANDLE_SHAPES`)."""
-    return ENV_STATE_LAYOUTS[(handle_shape, from_gripper)]
-
-
-def env_layout_of_width(width: int) -> tuple[str, bool] | None:
-    """(``handle_shape``, grasp point from the gripper) of the front's state that is ``width`` numbers wide (None:
-    no such width)."""
-    return next((key for key, names in ENV_STATE_LAYOUTS.items() if len(names) == width), None)
-
-
-def check_handle_shape(handle_shape: str, where: str = "--handle-shape") -> None:
-    """Refuse (one line) a ``handle_shape`` that is not one of :data:`HANDLE_SHAPES`."""
-    if handle_shape not in HANDLE_SHAPES:
-        raise RikError(f"{where} {handle_shape}: use one of {', '.join(HANDLE_SHAPES)}")
 
 
 def handle_shape_state(catalog: Catalog, handle_id: str, handle_shape: str = "full") -> np.ndarray:

@@ -188,12 +188,6 @@ def robot_layout(robot: Robot | None, action_frame: str = "world") -> RobotLayou
                              for j in robot.lerobot.joints), robot)
 
 
-def action_frame_of(names: list[str] | tuple[str, ...]) -> str:
-    """The frame of a pose action from its names (a dataset's ``action`` names, :data:`FRAME_ACTION_NAMES`;
-    ``world`` for any others)."""
-    return next((frame for frame, known in FRAME_ACTION_NAMES.items() if tuple(names) == known), "world")
-
-
 def joint_zero(robot: Robot, joint: str) -> float:
     """The position (rad) of ``joint`` that LeRobot's calibration reads as 0: the middle of its range."""
     assert robot.joints is not None

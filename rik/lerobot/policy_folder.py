@@ -1,13 +1,14 @@
-"""A saved LeRobot policy, and what rik's environment must supply to run it.
+"""What a saved LeRobot policy reads, from its folder: its ``config.json`` (checked by
+:mod:`rik.lerobot.policy_files`), its inputs checked against what rik's environment supplies for a robot and a
+front's-state layout, and, for policies trained before rik wrote its contract (:mod:`rik.lerobot.policy_io`), the
+fallback that tells a pose action's frame from the training statistics in the folder.
 
 ``POLICY_DIR`` is a folder that ``lerobot-train`` wrote (``outputs/train/<run>/checkpoints/last/pretrained_model``)
 or any folder with a policy's ``config.json``, processors and weights, of a type rik runs (``act``, ``diffusion``,
-``tdmpc``, ``vqbet``; :mod:`rik.evaluation.policy_files` checks the folder before LeRobot reads it). Its
-input features say what the environment renders: ``observation.images.<camera>`` asks for MuJoCo's image of that
-camera, ``observation.images.<camera>_rerendered`` for Mitsuba's (only when the re-render is allowed: it is slow
-without a GPU), at the size the policy was trained on. Its state and action must be those of the robot it runs
-with (``--robot``, :mod:`rik.sim.robots.layout`): a policy trained on an arm's export reads that arm's joints and
-writes its joint targets.
+``tdmpc``, ``vqbet``). Its input features say what the environment renders: ``observation.images.<camera>`` asks
+for MuJoCo's image of that camera, ``observation.images.<camera>_rerendered`` for Mitsuba's (only when the
+re-render is allowed: it is slow without a GPU), at the size the policy was trained on. Its state and action must be
+those of the robot it runs with (:mod:`rik.sim.robots.layout`).
 """
 
 from __future__ import annotations
@@ -17,45 +18,47 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
-from rik.evaluation.policy_files import CONFIG, PROCESSORS, member, parsed_config, read_json
-from rik.sim.feature_keys import ACTION, EE_POSE, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
-from rik.sim.observation import (
+from rik.lerobot.features import (
+    ACTION,
     CAMERAS,
+    EE_POSE,
     ENV_STATE_LAYOUTS,
-    GRASP_POINT,
+    OBS_ENV_STATE,
+    OBS_IMAGES,
+    OBS_STATE,
     STREAM_SUFFIX,
     env_layout_of_width,
     env_state_names,
 )
+from rik.lerobot.policy_files import CONFIG, PROCESSORS, member, parsed_config, read_json
+from rik.sim.observation import GRASP_POINT
+from rik.sim.robots.layout import EE_NAMES, POSE_ACTION_NAMES
 
 if TYPE_CHECKING:
     from rik.sim.robots.layout import RobotLayout
 
 OLD_STATE_WIDTH = 14
 """``observation.state`` of exports made before the state split (robot and front state in one vector)."""
+DEFAULT_IMAGE_SIZE = (96, 128)
+"""(height, width) px of a policy that reads no image (what the environment renders for a video of it)."""
 
 
 @dataclass(frozen=True)
-class PolicyNeeds:
-    """What a policy reads, as environment options."""
+class PolicyInputs:
+    """What a policy's ``config.json`` says it reads, checked against rik's environment."""
 
     policy_type: str
     cameras: tuple[str, ...]
     streams: tuple[str, ...]
     image_size: tuple[int, int]
-    """(height, width) of its images, px ((96, 128) when it takes none)."""
-    action_frame: str = "world"
-    """The frame of its pose action (:func:`trained_action_frame`); an arm's joint action: ``world``."""
-    handle_shape: str = "none"
-    """What of the handle's shape ends its ``observation.environment_state`` (it was trained on an export made with
-    ``--handle-shape kind`` or ``full``; :data:`rik.sim.observation.HANDLE_SHAPES`), told by that input's width
-    (as is the ``gripper`` action frame, whose environment state holds the grasp point from the gripper)."""
+    """(height, width) of its images, px (:data:`DEFAULT_IMAGE_SIZE` when it reads none)."""
+    env_layout: tuple[str, bool]
+    """(handle shape, grasp point from the gripper) of the front's state it reads (:data:`ENV_STATE_LAYOUTS`)."""
 
 
 def policy_config(policy_dir: Path) -> dict[str, Any]:
-    """The ``config.json`` of a saved policy, checked to be one: read only when small (a JSON file of a policy
-    folder is at most :data:`rik.evaluation.policy_files.MAX_JSON_BYTES`), of a policy type rik runs, its fields of
-    the types LeRobot declares (:func:`rik.evaluation.policy_files.parsed_config`)."""
+    """The ``config.json`` of a saved policy, checked to be one: read only when small, of a policy type rik runs, its
+    fields of the types LeRobot declares (:func:`rik.lerobot.policy_files.parsed_config`)."""
     file = Path(policy_dir) / CONFIG
     if not Path(policy_dir).is_dir():
         raise RikError(f"{policy_dir}: no such folder (give a saved policy, e.g. "
@@ -70,13 +73,18 @@ def policy_config(policy_dir: Path) -> dict[str, Any]:
     return data
 
 
-def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: RobotLayout | None = None) -> PolicyNeeds:
-    """What the policy in ``policy_dir`` reads, checked against what rik's environment supplies with the robot of
-    ``layout`` (default: the Hand-E's)."""
-    from rik.sim.robots.layout import EE_NAMES, robot_layout
+def env_state_width(config: dict[str, Any]) -> int | None:
+    """The width of the ``observation.environment_state`` a policy's ``config.json`` reads (None: it reads none, or
+    not as one vector)."""
+    shape = tuple((config.get("input_features") or {}).get(OBS_ENV_STATE, {}).get("shape", ()))
+    return int(shape[0]) if len(shape) == 1 else None
 
-    layout = layout or robot_layout(None)
-    config = policy_config(policy_dir)
+
+def policy_inputs(policy_dir: Path, config: dict[str, Any], layout: RobotLayout, env_layout: tuple[str, bool] | None,
+                  *, allow_rerendered: bool = False, said: str = "") -> PolicyInputs:
+    """The inputs of the policy in ``policy_dir`` (its ``config``), checked against what rik's environment supplies
+    with the robot of ``layout`` and the front's state ``env_layout`` (None: the one its width names, a policy
+    trained before rik wrote its contract); ``said``: where ``env_layout`` comes from, named when they disagree."""
     file = Path(policy_dir) / CONFIG
     inputs = config.get("input_features") or {}
     cameras: list[str] = []
@@ -90,10 +98,11 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
     if action is not None and tuple(action.get("shape", ())) != (len(layout.action_names),):
         raise RikError(f"{file}: output 'action' has shape {list(action.get('shape', ()))}; robot {robot} takes "
                        f"[{len(layout.action_names)}] ({hint})")
-    env_width = tuple((inputs.get(OBS_ENV_STATE) or {}).get("shape", ()))
-    handle_shape, from_gripper = (env_layout_of_width(env_width[0]) if len(env_width) == 1 else None) or ("none",
-                                                                                                       False)
-    widths = {OBS_STATE: len(layout.state_names), OBS_ENV_STATE: len(env_state_names(handle_shape, from_gripper))}
+    width = env_state_width(config)
+    guessed = env_layout is None
+    if env_layout is None:
+        env_layout = (env_layout_of_width(width) if width is not None else None) or ("none", False)
+    widths = {OBS_STATE: len(layout.state_names), OBS_ENV_STATE: len(env_state_names(*env_layout))}
     if layout.ee_pose:
         widths[EE_POSE] = len(EE_NAMES)
     for key, feature in inputs.items():
@@ -109,6 +118,12 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
             if key == OBS_STATE and shape != (widths[key],):
                 raise RikError(f"{file}: input '{key}' has shape {list(shape)}; robot {robot} supplies "
                                f"[{widths[key]}] ({hint})")
+            if key == OBS_ENV_STATE and shape != (widths[key],) and not guessed:
+                shape_name, from_gripper = env_layout
+                raise RikError(f"{file}: input '{key}' has shape {list(shape)}; {said} says [{widths[key]}] "
+                               f"(handle shape {shape_name}"
+                               f"{', the grasp point from the gripper' if from_gripper else ''}): the policy was "
+                               "not trained on that dataset")
             if shape != (widths[key],):
                 raise RikError(f"{file}: input '{key}' has shape {list(shape)}; rik's environment supplies "
                                f"[{widths[key]}]" + (" (or " + " or ".join(
@@ -117,7 +132,7 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
                                    + " with the handle's shape or the grasp point from the gripper)"
                                    if key == OBS_ENV_STATE else ""))
             continue
-        camera, stream = _image_feature(key)
+        camera, stream = image_feature(key)
         if camera is None:
             raise RikError(f"{file}: input '{key}' is not something rik's environment supplies (it gives "
                            "observation.state, observation.environment_state, observation.ee_pose for arms that "
@@ -136,9 +151,8 @@ def policy_needs(policy_dir: Path, *, allow_rerendered: bool = False, layout: Ro
         streams.append(stream)
     if OBS_STATE not in inputs:
         raise RikError(f"{file}: the policy takes no 'observation.state'; rik's policies read the robot's state")
-    return PolicyNeeds(config["type"], tuple(dict.fromkeys(cameras)), tuple(dict.fromkeys(streams)),
-                       size or (96, 128), ("gripper" if from_gripper else trained_action_frame(Path(policy_dir)))
-                       if layout.is_pose else "world", handle_shape)
+    return PolicyInputs(config["type"], tuple(dict.fromkeys(cameras)), tuple(dict.fromkeys(streams)),
+                        size or DEFAULT_IMAGE_SIZE, env_layout)
 
 
 def trained_action_frame(policy_dir: Path) -> str:
@@ -146,10 +160,8 @@ def trained_action_frame(policy_dir: Path) -> str:
     unnormaliser's state file holds the dataset's): ``handle`` where the actions' mean position lies nearer the
     origin than to the handle's mean grasp point (a handle-frame action is a few centimetres from the handle; a
     world-frame one is where the handle is), else ``world`` (also where the statistics, or the postprocessor that
-    names their file, are not there)."""
+    names their file, are not there). Only the fallback for policies trained before rik wrote its contract."""
     import numpy as np
-
-    from rik.sim.robots.layout import POSE_ACTION_NAMES
 
     post_file = Path(policy_dir) / PROCESSORS[1]
     if not post_file.exists() and not post_file.is_symlink():
@@ -185,7 +197,9 @@ def trained_action_frame(policy_dir: Path) -> str:
     return "handle" if np.linalg.norm(position) < np.linalg.norm(position - grasp) else "world"
 
 
-def _image_feature(key: str) -> tuple[str | None, str]:
+def image_feature(key: str) -> tuple[str | None, str]:
+    """(camera, stream) of an image feature ``observation.images.<camera>[_rerendered]``; (None, "") for any other
+    key."""
     prefix = OBS_IMAGES + "."
     if not key.startswith(prefix):
         return None, ""
