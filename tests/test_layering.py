@@ -37,6 +37,8 @@ FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
                      "(exclusive names, only what rik made is replaced, checked before the work).")),
     (("rik.registry", "The catalog: YAML files loaded, validated and indexed; ids, splits, the fit test, "
                       "CATALOG.md."),),
+    (("rik.workers", "The process pool every batch command runs on: workers that load the catalog once and die "
+                     "with their parent."),),
     (("rik.assets", "Meshes of handles and base units, CoACD collision (cached), the collision-fidelity metric."),
      ("rik.sysid", "Model discovery from measured trajectories: trials, fits, effects, reports, presets; "
                    "synthetic measurements.")),

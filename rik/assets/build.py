@@ -19,8 +19,8 @@ from rik.assets.cache import AssetCache, CorruptEntry, content_key, library_vers
 from rik.assets.decompose import Hulls, coacd_params, convex_hull_baseline, decompose
 from rik.assets.handles import generate_handle
 from rik.assets.importer import read_user_mesh
-from rik.assets.workers import map_ids
 from rik.errors import RikError, UnknownIdError
+from rik.workers import map_ids
 
 if TYPE_CHECKING:
     import numpy as np
@@ -269,7 +269,7 @@ def build_assets(catalog: Catalog, ids: Sequence[str], *, overlays: Sequence[Pat
                  workers: int = 1, cache: AssetCache | None = None,
                  on_result: Callable[[BuildResult], None] | None = None) -> list[BuildResult]:
     """Build every id; cache hits are answered in this process, misses go to ``workers`` processes
-    (:func:`rik.assets.workers.map_ids`).
+    (:func:`rik.workers.map_ids`).
 
     ``on_result`` is called once per id as it finishes (for progress bars). Results come back in ``ids`` order.
     """

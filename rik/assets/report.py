@@ -19,9 +19,9 @@ from rik.assets.build import DEFAULT_SEED, build_asset
 from rik.assets.cache import AssetCache, source_digest
 from rik.assets.fidelity import DEFAULT_POINTS, Deviation, Fidelity, check_points, measure
 from rik.assets.stats import MeshStats
-from rik.assets.workers import map_ids
 from rik.errors import RikError
 from rik.outputs import Replaces, write_text
+from rik.workers import map_ids
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog

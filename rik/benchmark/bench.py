@@ -136,8 +136,8 @@ def run_bench(catalog: Catalog, tasks: Sequence[BenchTask], *, workers: int = 1,
     """Build the variants the tasks need, then run the episodes (in ``workers`` processes); rows in task order."""
     import functools
 
-    from rik.assets.workers import map_ids
     from rik.combinator.build import require_variants
+    from rik.workers import map_ids
 
     require_variants(catalog, (t.variant for t in tasks), variants, workers=workers, overlays=overlays)
     order = {t.encode(): i for i, t in enumerate(tasks)}

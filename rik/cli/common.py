@@ -48,7 +48,7 @@ DEFAULT_WORKERS = max(1, min(8, os.cpu_count() or 1))
 def _check_workers(workers: int) -> int:
     """``--workers``, refused (one line) below 1 or above what the machine can hold, before the command does any
     work. (Not typer's ``min=1``: that prints a usage box of many lines.)"""
-    from rik.assets.workers import check_workers
+    from rik.workers import check_workers
 
     return check_workers(workers)
 

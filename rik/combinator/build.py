@@ -534,7 +534,7 @@ def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEF
     ``joint_friction``: the folder's modes by default (:data:`COLLISION`, :data:`JOINT_FRICTION`)."""
     from rik.assets.build import build_assets
     from rik.assets.cache import AssetCache
-    from rik.assets.workers import map_ids
+    from rik.workers import map_ids
 
     collision = resolve_collision(out, collision)
     joint_friction = JOINT_FRICTION.resolve(out, joint_friction)

@@ -129,7 +129,7 @@ class InlineEngine:
 
 
 def _worker_job(fn: Callable[[Catalog, Any], Any], arg: Any) -> tuple[Any, str | None]:
-    from rik.assets import workers
+    from rik import workers
 
     assert workers._CATALOG is not None
     return run_job(workers._CATALOG, fn, arg)
@@ -137,7 +137,7 @@ def _worker_job(fn: Callable[[Catalog, Any], Any], arg: Any) -> tuple[Any, str |
 
 class ProcessEngine:
     """Runs jobs in ``workers`` spawned processes that load the catalog once and exit with this one
-    (:func:`rik.assets.workers.exit_with_parent`, so a ``kill -9`` of the build leaves no worker behind). A worker
+    (:func:`rik.workers.exit_with_parent`, so a ``kill -9`` of the build leaves no worker behind). A worker
     that dies (a crash in C code, the OOM killer) fails the jobs it may have held; the pool is started anew."""
 
     name = "local processes"
@@ -149,7 +149,7 @@ class ProcessEngine:
         self.pool = self._pool()
 
     def _pool(self) -> Any:
-        from rik.assets.workers import worker_pool
+        from rik.workers import worker_pool
 
         return worker_pool(self.workers, self.overlays)
 

@@ -132,8 +132,8 @@ def record_split(catalog: Catalog, draw: Draw, strategy: str, *, episodes: int =
     variant id, reason); without a ``skipped`` list, or when every seed is skipped, that is an error."""
     import functools
 
-    from rik.assets.workers import check_workers, map_ids
     from rik.combinator.build import rejected_variants
+    from rik.workers import check_workers, map_ids
 
     check_seeds(seed, episodes)
     check_workers(workers)

@@ -469,9 +469,9 @@ def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
     into ``out``; rows in seed order."""
     from functools import partial
 
-    from rik.assets.workers import map_ids
     from rik.combinator.build import require_variants
     from rik.episodes.draw import Draw
+    from rik.workers import map_ids
 
     check_eval_out(out)
     draw = Draw(spec.split, spec.handle_types, spec.presets, spec.kinds)

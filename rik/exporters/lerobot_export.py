@@ -235,8 +235,8 @@ def export_lerobot(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
     image streams missing from ``renders`` are rendered there from that read. ``progress(stage, done, total)`` reports
     stages ``episodes`` (one process) and ``shards``. One export at a time writes ``out`` (a lock beside it,
     :mod:`rik.locks`); a second one is refused at once."""
-    from rik.assets.workers import check_workers
     from rik.locks import exclusive
+    from rik.workers import check_workers
 
     check_spec(spec)
     check_workers(workers)
@@ -344,7 +344,7 @@ def _export_locked(catalog: Catalog, episodes: Sequence[Path], out: Path, spec: 
         progress("shards", skipped, skipped + len(jobs))
     try:
         if workers > 1 and len(jobs) > 1:
-            from rik.assets.workers import map_ids
+            from rik.workers import map_ids
 
             job_of = {str(j[0]): j for j in jobs}
             for n, _ in enumerate(map_ids(partial(_shard_by_name, job_of), catalog, list(job_of), workers=workers,

@@ -188,8 +188,8 @@ def render_episodes(catalog: Catalog, episodes: Sequence[Path], spec: StreamSpec
                     ) -> Iterator[StreamResult]:
     """Render ``spec``'s stream of every episode (in ``workers`` processes when more than one), yielding each
     result as it finishes. With one worker, ``progress`` advances frame by frame; with more, episode by episode."""
-    from rik.assets.workers import map_ids
     from rik.episodes.episode import read_meta
+    from rik.workers import map_ids
 
     metas = {str(d): read_meta(d) for d in episodes}  # every episode readable before any work starts
     check_renders_outside(renders, {Path(d): m.id for d, m in metas.items()})
