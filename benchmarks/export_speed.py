@@ -96,12 +96,13 @@ def record_episode(catalog: Any, out: Path, frames: int, seed: int, repeat: bool
     """A recorded episode of exactly ``frames`` frames (rows) under ``out``, reused when already there."""
     import numpy as np
 
+    from rik.combinator.build import ensure_variant
     from rik.episodes.episode import EpisodeRecorder, episode_id, read_meta, run_operator, write_episode
     from rik.episodes.operators import make_operator
-    from rik.episodes.record import randomise_start, variant_dir
+    from rik.episodes.record import randomise_start
     from rik.sim.build import build_scene
 
-    scene = build_scene(variant_dir(catalog, VARIANT, VARIANTS))
+    scene = build_scene(ensure_variant(catalog, VARIANT, VARIANTS))
     directory = out / episode_id(scene.info["id"], scene.front.id, STRATEGY, seed)
     if (directory / "meta.json").is_file() and read_meta(directory).steps + 1 == frames:
         return directory

@@ -516,7 +516,7 @@ def main() -> None:
     if unknown := [k for k in kinds if k not in KINDS]:
         parser.error(f"unknown kinds {unknown}: choose from {', '.join(KINDS)}")
 
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.registry import load_catalog
     from rik.registry.ids import variant_id
 
@@ -528,7 +528,7 @@ def main() -> None:
         variants.mkdir(parents=True, exist_ok=True)
         for kind_name in kinds:
             for preset in presets:
-                directory = variant_dir(catalog, variant_id(KINDS[kind_name].base, KINDS[kind_name].handle, preset),
+                directory = ensure_variant(catalog, variant_id(KINDS[kind_name].base, KINDS[kind_name].handle, preset),
                                         variants)
                 measure_variant(report, kind_name, preset, directory, args, Path(tmp))
                 print(f"measured {directory.name}", flush=True)

@@ -164,7 +164,7 @@ def robot_episode(directory: Path, front: str, seconds: float, robot: object | N
 
 def robots_table(variants: list[str], robots: list[str], repeats: int, seconds: float) -> None:
     """Real-time factor and the IK's share of a control step per robot (see the module docstring)."""
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.registry.load import load_catalog
 
     catalog = load_catalog()
@@ -175,7 +175,7 @@ def robots_table(variants: list[str], robots: list[str], repeats: int, seconds: 
     worst: dict[str, float] = {}
     for item in variants:
         variant, front = item.split(":")
-        src = variant_dir(catalog, variant, Path("variants"))
+        src = ensure_variant(catalog, variant, Path("variants"))
         best: dict[str, dict[str, float]] = {}
         for _ in range(repeats):
             for rid in robots:
@@ -207,7 +207,7 @@ def main() -> None:
         robots_table(args.variant or list(VARIANTS), robots, args.repeats, args.seconds)
         return
 
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.registry.load import load_catalog
 
     catalog = load_catalog()
@@ -219,7 +219,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for item in args.variant or VARIANTS:
             variant, front = item.split(":")
-            src = variant_dir(catalog, variant, Path("variants"))
+            src = ensure_variant(catalog, variant, Path("variants"))
             dirs = {"coacd": (src, 0)}
             for setup in SETUPS[1:]:
                 dirs[setup] = modified_copy(src, Path(tmp) / setup.replace(" ", "_") / variant, setup)

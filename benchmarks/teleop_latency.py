@@ -175,13 +175,13 @@ def demo_scene_object(robot: str = "hand-e"):
 def demo_scene(robot: str = "hand-e"):
     """The demo variant's scene with ``robot`` (built into ``$RIK_BENCH_VARIANTS`` or ``variants`` if needed), as
     the station builds it."""
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.registry import load_catalog
     from rik.sim.build import build_scene
 
     catalog = load_catalog()
     entry = catalog.robot(robot)
-    scene = build_scene(variant_dir(catalog, VARIANT, Path(os.environ.get("RIK_BENCH_VARIANTS", "variants"))),
+    scene = build_scene(ensure_variant(catalog, VARIANT, Path(os.environ.get("RIK_BENCH_VARIANTS", "variants"))),
                         robot=entry.as_arm)
     return scene.model, scene.data
 

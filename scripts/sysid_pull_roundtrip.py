@@ -39,7 +39,7 @@ MUJOCO_SOLREF = [0.02, 1.0]
 
 def build(out: Path) -> dict[str, Path]:
     """The two variants, built under ``out``: joint -> folder."""
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.registry import load_catalog
     from rik.schemas.joints import JointType
     from rik.sysid.preset import preset_file, write_preset
@@ -50,7 +50,7 @@ def build(out: Path) -> dict[str, Path]:
             write_preset(resistance, JointType(joint), name, out / "catalog", base_preset=base,
                          description=f"round-trip {joint}")
     catalog = load_catalog([out / "catalog"])
-    return {joint: variant_dir(catalog, case[2], out / "variants") for joint, case in CASES.items()}
+    return {joint: ensure_variant(catalog, case[2], out / "variants") for joint, case in CASES.items()}
 
 
 def source(folder: Path, before: bool):

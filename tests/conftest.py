@@ -98,10 +98,10 @@ def bow_variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
     read-only; a test that changes variants builds its own)."""
     from shared import BOW, builtin_catalog
 
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
 
     out = tmp_path_factory.mktemp("bow-variants")
-    variant_dir(builtin_catalog(), BOW, out)
+    ensure_variant(builtin_catalog(), BOW, out)
     return out
 
 

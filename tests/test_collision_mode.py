@@ -10,8 +10,7 @@ from pathlib import Path
 import pytest
 from shared import builtin_catalog
 
-from rik.combinator.build import build_variants, spec_hash
-from rik.episodes.record import variant_dir
+from rik.combinator.build import build_variants, ensure_variant, spec_hash
 from rik.errors import RikError
 from rik.registry.ids import parse_variant_id
 
@@ -64,14 +63,14 @@ def test_hull_build_collides_each_handle_as_one_convex_hull(folders: dict[str, P
 def test_a_folder_rebuilds_its_variants_with_its_own_mode(folders: dict[str, Path], tmp_path: Path) -> None:
     folder = tmp_path / "variants-hull"
     shutil.copytree(folders["hull"], folder)
-    shutil.rmtree(folder / BOW)  # missing: variant_dir builds it again, with the folder's mode
-    directory = variant_dir(CAT, BOW, folder)
+    shutil.rmtree(folder / BOW)  # missing: ensure_variant builds it again, with the folder's mode
+    directory = ensure_variant(CAT, BOW, folder)
     assert json.loads((directory / "report.json").read_text(encoding="utf-8"))["collision"] == "hull"
     assert _handle_collision_geoms(directory) == {"drawer/handle": 1}
     (folder / "collision.json").write_text('{"collision": "convex"}', encoding="utf-8")
     with pytest.raises(RikError, match=r"collision.json: field collision 'convex': not a collision mode; valid "
                                        r"modes are coacd, hull$"):
-        variant_dir(CAT, BOW, folder)
+        ensure_variant(CAT, BOW, folder)
 
 
 def test_record_and_replay_in_a_hull_folder(rik, folders: dict[str, Path], tmp_path: Path) -> None:

@@ -29,11 +29,11 @@ OPEN_BOUND = {DRAWER: 5e-3, DOOR: 5.0 * 3.141592653589793 / 180}
 def high_variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from shared import builtin_catalog
 
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
 
     out = tmp_path_factory.mktemp("high-variants")
     for variant in (DRAWER, DOOR):
-        variant_dir(builtin_catalog(), variant, out)
+        ensure_variant(builtin_catalog(), variant, out)
     return out
 
 

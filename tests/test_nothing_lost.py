@@ -216,14 +216,15 @@ def test_manifest_of_the_user_in_variants_out_is_not_overwritten(rik, tmp_path: 
 
 
 def test_episode_folder_of_the_user_is_not_replaced(tmp_path: Path) -> None:
+    from rik.combinator.build import ensure_variant
     from rik.episodes.episode import episode_id
-    from rik.episodes.record import record, variant_dir
+    from rik.episodes.record import record
 
     cat = load_catalog()
     variants = tmp_path / "variants"
     variants.mkdir()
     (variants / "collision.json").write_text('{"collision": "hull"}\n')  # quick to build
-    variant_dir(cat, KNOB, variants)
+    ensure_variant(cat, KNOB, variants)
     out = tmp_path / "episodes"
     mine = out / episode_id(KNOB, "drawer", "grasp_vertical", 0)
     mine.mkdir(parents=True)

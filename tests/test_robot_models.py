@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rik.episodes.record import variant_dir
+from rik.combinator.build import ensure_variant
 from rik.registry import load_catalog
 from rik.sim.build import build_scene
 
@@ -22,7 +22,7 @@ STEPS = 20
 
 @pytest.fixture(scope="module")
 def variant(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return variant_dir(CAT, VARIANT, tmp_path_factory.mktemp("variants"))
+    return ensure_variant(CAT, VARIANT, tmp_path_factory.mktemp("variants"))
 
 
 @pytest.fixture

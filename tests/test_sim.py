@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 from shared import builtin_catalog
 
+from rik.combinator.build import ensure_variant
 from rik.episodes.episode import EpisodeError, EpisodeRecorder, read_episode, replay, run_operator, write_episode
 from rik.episodes.operators import make_operator
-from rik.episodes.record import randomise_start, record, variant_dir
+from rik.episodes.record import randomise_start, record
 from rik.errors import RikError
 from rik.sim.build import build_scene
 from rik.sim.outcome import classify
@@ -28,7 +29,7 @@ KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("variants")
     for v in (BOW_HIGH, KNOB):
-        variant_dir(CAT, v, out)
+        ensure_variant(CAT, v, out)
     return out
 
 

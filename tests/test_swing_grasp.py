@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from shared import BOW, builtin_catalog, grasp_until_pull
 
+from rik.combinator.build import ensure_variant
 from rik.episodes.operators import ScriptedGrasp
-from rik.episodes.record import variant_dir
 from rik.sim import grasp
 from rik.sim.build import build_scene
 from rik.sim.grasp import FIXED_GAP, GraspPlan, pinch_plan, swing_frame, swing_plans
@@ -46,7 +46,7 @@ def test_swing_frame_puts_the_fixed_jaw_against_the_pull(side: str, across: np.n
 @pytest.fixture(scope="module")
 def smooth_variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("smooth-bow")
-    variant_dir(CAT, SMOOTH_BOW, out)
+    ensure_variant(CAT, SMOOTH_BOW, out)
     return out
 
 

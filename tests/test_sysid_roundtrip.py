@@ -47,7 +47,7 @@ REL = 0.05
 @pytest.fixture(scope="module")
 def variants(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """The drawer and the door, built from the presets of :data:`PRESETS` in a user catalog: joint -> folder."""
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.registry import load_catalog
     from rik.sysid.preset import write_preset
 
@@ -57,7 +57,7 @@ def variants(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
         write_preset(resistance, JointType(joint), name, root / "catalog", base_preset=base,
                      description=f"round-trip {joint}")
     catalog = load_catalog([root / "catalog"])
-    return {joint: variant_dir(catalog, variant, root / "variants") for joint, variant in VARIANTS.items()}
+    return {joint: ensure_variant(catalog, variant, root / "variants") for joint, variant in VARIANTS.items()}
 
 
 def _pulls(folder: Path, joint: str, fractions: tuple[float, ...]) -> list[PullProfile]:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from shared import BOW, builtin_catalog
 
-from rik.episodes.record import variant_dir
+from rik.combinator.build import ensure_variant
 from rik.sim.build import build_scene
 from rik.sim.grasp import pinch_fits, pinch_plan
 from rik.sim.pose import base_for_tcp
@@ -29,7 +29,7 @@ HOLD_S = np.array([0.0, 1.0, 0.0, 0.0, 0.0, 0.0])
 def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("variants")
     for vid in (DOOR, BOW):
-        variant_dir(CAT, vid, out)
+        ensure_variant(CAT, vid, out)
     return out
 
 

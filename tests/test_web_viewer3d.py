@@ -129,10 +129,10 @@ def test_3d_view_of_a_handle_and_a_built_variant_in_chromium(catalog, tmp_path: 
     """A handle's panel draws its model (at least 2 % of the canvas unlike the background) and a drag turns it
     (at least 1 % of the pixels change); the same for a variant built in tmp_path, picked in the pairing picker.
     An unbuilt variant's view shows the server's one line."""
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
 
     variants = tmp_path / "variants"
-    variant_dir(catalog, BOW, variants)
+    ensure_variant(catalog, BOW, variants)
     with served(AppConfig(catalog, variants=variants, episodes=tmp_path / "ep")) as url, browser() as chromium:
         page = chromium.new_page(viewport={"width": 1400, "height": 900})
         errors: list[str] = []

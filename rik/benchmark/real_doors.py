@@ -80,10 +80,10 @@ def simulated_force(catalog: Catalog, preset: str, variants: Path, stroke: float
                     speed: float = PULL_SPEED) -> tuple[np.ndarray, np.ndarray]:
     """Build the door variant of ``base`` and ``handle`` with ``preset`` into ``variants`` (reused when valid) and
     pull it open to ``stroke`` rad at ``speed`` rad/s: (angles in rad, force at the catalog's lever arm in N)."""
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.sim.pull import pull_profile
 
-    folder = variant_dir(catalog, variant_id(base, handle, preset), variants)
+    folder = ensure_variant(catalog, variant_id(base, handle, preset), variants)
     pull = pull_profile(folder, speed=speed, stroke=stroke, spacing=SAMPLE_SPACING)
     if pull.joint != "hinge":
         raise RikError(f"{variant_id(base, handle, preset)}: the real doors are hinges; its front is a {pull.joint}")

@@ -254,14 +254,14 @@ def robot_check(variant: VariantArg, robot: RobotOpt = DEFAULT_ROBOT, front: Fro
                 variants: VariantsOpt = Path("variants"), catalog: CatalogOption = None) -> None:
     """Check a robot on a variant: it starts clear, reaches the handle over the front's travel, has the joint
     torque to hold the preset's resistance, and grips hard enough. Exit 1 when a check fails."""
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.registry.load import load_catalog
     from rik.sim.build import build_scene
     from rik.sim.robots.checks import run_checks
 
     cat = load_catalog(overlays(catalog))
     arm: Any = robot_entry(cat, robot)
-    scene = build_scene(variant_dir(cat, variant, variants), front, robot=arm)
+    scene = build_scene(ensure_variant(cat, variant, variants), front, robot=arm)
     con = console()
     failed = 0
     for result in run_checks(scene):

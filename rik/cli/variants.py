@@ -283,14 +283,14 @@ def probe(variant: Annotated[str, typer.Argument(metavar="ID", help="A variant i
     import numpy as np
     from rich.table import Table
 
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.outputs import RECORDED, check_destination
     from rik.registry.load import load_catalog
     from rik.sim.pull import front_joint, pull_profile, write_profiles
 
     if csv is not None:  # before the pull: a folder, a link or a file of the user's there is refused
         check_destination(csv, RECORDED, "--csv")
-    folder = variant_dir(load_catalog(overlays(catalog)), variant, directory)
+    folder = ensure_variant(load_catalog(overlays(catalog)), variant, directory)
     slide = front_joint(folder, front) == "slide"
     to_si = 1e-3 if slide else math.pi / 180  # mm -> m, deg -> rad
     unit = "mm" if slide else "deg"

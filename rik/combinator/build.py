@@ -46,7 +46,7 @@ from rik.outputs import (
     write_bytes,
     write_text,
 )
-from rik.paths import inside, json_object
+from rik.paths import check_folder, inside, json_object
 from rik.registry.ids import VariantKey
 
 if TYPE_CHECKING:
@@ -564,3 +564,18 @@ def build_variants(catalog: Catalog, keys: Sequence[VariantKey], out: Path = DEF
         if pending:
             write_manifest(out, pending)
     return [done[k.id] for k in keys]
+
+
+def ensure_variant(catalog: Catalog, variant: str, variants: Path) -> Path:
+    """The folder of the built variant ``variant`` (an id) in ``variants``, building it (with its checks, in the
+    folder's collision mode: :func:`resolve_collision`) first when it is missing or stale; a rejected variant is a
+    :class:`RikError` naming its check."""
+    from rik.registry.ids import parse_variant_id
+
+    key = parse_variant_id(catalog, variant)
+    check_folder(variants, "--variants")
+    directory = inside(variants, key.id, what="variant id")
+    result = build_variant(catalog, key, variants)
+    if result.status == "rejected":
+        raise RikError(f"variant {key.id} cannot be simulated: check {result.failed_check} failed: {result.reason}")
+    return directory

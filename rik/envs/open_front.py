@@ -175,14 +175,14 @@ class OpenFrontEnv(gym.Env):
 
     # ---- scenes and images ----------------------------------------------------------------------------------
     def _scene(self, variant: str, front: str | None) -> SimScene:
-        from rik.episodes.record import variant_dir
+        from rik.combinator.build import ensure_variant
         from rik.sim.build import build_scene
 
         key = (variant, front)
         if key in self._scenes:
             self._scenes.move_to_end(key)
         else:
-            self._scenes[key] = build_scene(variant_dir(self._catalog, variant, self._variants), front,
+            self._scenes[key] = build_scene(ensure_variant(self._catalog, variant, self._variants), front,
                                             robot=self._robot)
             while len(self._scenes) > SCENE_CACHE:
                 self._scenes.popitem(last=False)

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rik.combinator.build import ensure_variant
 from rik.episodes.episode import DEFAULT_EPISODES, EpisodeRecorder, episode_id, run_operator, write_episode
 from rik.episodes.operators import make_operator
 from rik.errors import RikError
@@ -25,21 +26,6 @@ MAX_SECONDS = 30.0
 """Longest episode, simulated s."""
 START_JITTER = (0.03, 0.03, 0.03, 0.08, 0.08, 0.08)
 """Half-widths of the uniform random offset of the gripper's start pose: m for x, y, z; rad for the angles."""
-
-
-def variant_dir(catalog: Catalog, variant: str, variants: Path) -> Path:
-    """The directory of a built variant, building it (with its checks, in the folder's collision mode:
-    :func:`rik.combinator.build.resolve_collision`) first when it is missing or stale."""
-    from rik.combinator.build import build_variant
-    from rik.registry.ids import parse_variant_id
-
-    key = parse_variant_id(catalog, variant)
-    check_folder(variants, "--variants")
-    directory = inside(variants, key.id, what="variant id")
-    result = build_variant(catalog, key, variants)
-    if result.status == "rejected":
-        raise RikError(f"variant {key.id} cannot be simulated: check {result.failed_check} failed: {result.reason}")
-    return directory
 
 
 MAX_EPISODES = 1_000_000
@@ -75,7 +61,7 @@ def record(catalog: Catalog, variant: str, strategy: str, *, episodes: int = 1, 
     check_seeds(seed, episodes)
     check_folder(out, "--out")
     make_operator(strategy, params)  # unknown strategy or parameter: fail before building anything
-    directory = variant_dir(catalog, variant, variants)
+    directory = ensure_variant(catalog, variant, variants)
     if robot is not None:
         from rik.sim.robots.checks import require_reach
 

@@ -9,8 +9,8 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
+from rik.combinator.build import ensure_variant
 from rik.episodes.episode import EXECUTED, EpisodeError, columns_of, read_episode, read_meta, states
-from rik.episodes.record import variant_dir
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -50,7 +50,7 @@ def episode_scene(catalog: Catalog, directory: Path, variants: Path, meta: Episo
     gripper = HAND_E.with_(name=g.name, stroke=g.stroke, grip_force=g.grip_force, pad_friction=g.pad_friction,
                            arm_force=g.arm_force)
     robot = episode_robot(catalog, directory, meta).as_arm if meta.robot != "hand-e" else None
-    scene = build_scene(variant_dir(catalog, meta.variant, variants), meta.front, gripper, meta.fps, robot=robot)
+    scene = build_scene(ensure_variant(catalog, meta.variant, variants), meta.front, gripper, meta.fps, robot=robot)
     collision = scene.info.get("collision", "coacd")
     if collision != meta.collision:
         raise EpisodeError(f"{Path(directory) / 'meta.json'}: field 'collision': {meta.collision}, but {variants} "

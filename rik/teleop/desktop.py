@@ -254,13 +254,13 @@ def teleoperate(catalog: Catalog, variant: str, device_name: str, *, out: Path, 
                           "VARIANT --web for the browser station, or rik record VARIANT --strategy NAME")
     if "mujoco" not in sys.modules:
         os.environ["MUJOCO_GL"] = "glfw"  # the window's own OpenGL context, not an offscreen one
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.sim.build import build_scene
     from rik.sim.robots.checks import require_reach
 
     open_display()  # before the (slow) scene: a display that cannot take a window fails at once
     try:
-        scene = build_scene(variant_dir(catalog, variant, variants), front, robot=robot)
+        scene = build_scene(ensure_variant(catalog, variant, variants), front, robot=robot)
         require_reach(scene)  # an arm that cannot reach the handle: refused before the window opens
     except BaseException:
         import glfw

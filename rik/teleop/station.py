@@ -229,14 +229,14 @@ def failure(command: str, exc: Exception) -> str:
 def build_station_scene(config: StationConfig, variant: str, robot: str) -> SimScene:
     """The scene of a station: ``variant`` (built into ``config.variants`` when needed) operated by the catalog
     robot ``robot``; an arm that cannot reach the operated handle is refused (one line naming the handle)."""
-    from rik.episodes.record import variant_dir
+    from rik.combinator.build import ensure_variant
     from rik.sim.build import build_scene
     from rik.sim.robots.checks import require_reach
 
     c = config
     entry = c.catalog.robot(robot)
     arm = entry.as_arm
-    scene = build_scene(variant_dir(c.catalog, variant, c.variants), c.front, robot=arm)
+    scene = build_scene(ensure_variant(c.catalog, variant, c.variants), c.front, robot=arm)
     require_reach(scene)
     return scene
 
