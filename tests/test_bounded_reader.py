@@ -239,9 +239,9 @@ def test_an_ordinary_episode_reads_the_same_arrays(knob_recording: Path, tmp_pat
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    from rik.episodes.recorded import RecordedEpisode
     from rik.episodes.replay import verify_episode
     from rik.exporters.lerobot_frames import load_episode
-    from rik.render.episodes import RecordedEpisode
 
     episode = copy_episode(knob_recording, tmp_path)
     file = pq.read_table(episode / "states.parquet")

@@ -22,9 +22,9 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
+from rik.episodes.recorded import RecordedEpisode
 from rik.errors import RikError
 from rik.lerobot.features import ACTION, EE_POSE, OBS_ENV_STATE, OBS_STATE, image_key
-from rik.render.episodes import RecordedEpisode
 
 if TYPE_CHECKING:
     import pyarrow as pa

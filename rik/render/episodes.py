@@ -6,17 +6,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from functools import cached_property, partial
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rik.episodes.recorded import RecordedEpisode
 from rik.errors import RikError
+from rik.render.renderers import reused_renderer
 from rik.render.streams import StreamSpec, StreamWriter, is_done, read_manifest, stream_dir
 
 if TYPE_CHECKING:
     import mujoco
-    import numpy as np
-    import pyarrow as pa
 
     from rik.registry.catalog import Catalog
     from rik.schemas.episodes import EpisodeMeta
@@ -58,47 +58,6 @@ def scene_cameras(model: mujoco.MjModel, wanted: Sequence[str] | None, where: st
         if cam not in names:
             raise RikError(f"{where}: no camera '{cam}' in the scene (cameras: {', '.join(names)})")
     return list(wanted)
-
-
-class RecordedEpisode:
-    """An episode read once, for everything made from it: its ``meta.json`` (given, or read at once) and, on first
-    use, the columns of ``states.parquet`` it needs (:func:`rik.episodes.states.read_states`), the recorded states as
-    an array and the scene it was recorded in (built once per catalog and variants folder). Every stream rendered
-    from it (:func:`render_episode`) and the export's frames of it share them; the states are read only if asked
-    for."""
-
-    def __init__(self, directory: Path, meta: EpisodeMeta | None = None, columns: Sequence[str] = ("state",)) -> None:
-        from rik.episodes.episode import columns_of, read_meta
-
-        self.directory = Path(directory)
-        self.meta = meta if meta is not None else read_meta(self.directory)
-        self.columns = tuple(c for c in columns if c in columns_of(self.meta))
-        """Those of ``columns`` the episode has: what :attr:`table` decodes (a render needs ``state`` only)."""
-        self._scene: tuple[Catalog, Path, SimScene] | None = None
-
-    @cached_property
-    def table(self) -> pa.Table:
-        """:attr:`columns` of ``states.parquet``, bounded before decoding and checked against the meta's sha256 and
-        layout (:func:`rik.episodes.states.read_states`; read on first use)."""
-        from rik.episodes.episode import read_episode
-
-        return read_episode(self.directory, self.columns, self.meta)[1]
-
-    @cached_property
-    def states(self) -> np.ndarray:
-        """The recorded integration states, one row per recorded step."""
-        from rik.episodes.episode import states
-
-        return states(self.table)
-
-    def scene(self, catalog: Catalog, variants: Path) -> SimScene:
-        """The scene the episode was recorded in (:func:`rik.episodes.replay.episode_scene`), built on the first call
-        and on a call with another catalog or variants folder."""
-        from rik.episodes.replay import episode_scene
-
-        if self._scene is None or self._scene[0] is not catalog or self._scene[1] != Path(variants):
-            self._scene = (catalog, Path(variants), episode_scene(catalog, self.directory, variants, self.meta))
-        return self._scene[2]
 
 
 def _episode_scene(catalog: Catalog, episode: RecordedEpisode, variants: Path) -> SimScene:
@@ -160,8 +119,6 @@ def _render_stream(catalog: Catalog, episode: Path | RecordedEpisode, spec: Stre
     info: dict[str, Any] = {"renderer": "resumed", "render_seconds": 0.0}
     if todo:
         scene.restore(recorded[todo[0]])
-        from rik.render.renderers import reused_renderer
-
         renderer = reused_renderer(scene.model, scene.data, cams, spec, catalog.finishes)
         for k in todo:
             scene.restore(recorded[k])
