@@ -23,9 +23,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from rik.benchmark.bench import wilson
 from rik.outputs import REGENERATED, save_figure, write_text
 from rik.paths import pyplot
+from rik.tables import wilson
 
 
 def _steps(steps: int) -> str:

@@ -48,6 +48,7 @@ FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
                  "layout)."),),
     (("rik.episodes", "Episodes: scripted strategies, the recorder, the format on disk, exact replay, the seeded "
                       "draw."),),
+    (("rik.tables", "The outcome tables `rik bench` and `rik eval` both write (Table 3, Wilson intervals, CSV)."),),
     (("rik.render", "Images of episodes: MuJoCo and Mitsuba streams, alignment, visual-gap metrics."),
      ("rik.teleop", "Teleoperation: sessions, the keymap, the desktop viewer, the browser station."),
      ("rik.benchmark", "The paper's resistance benchmark (`rik bench`): F/P/S per handle type, strategy, "

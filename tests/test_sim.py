@@ -204,7 +204,8 @@ def test_policy_operator_plugs_into_the_recorder(variants: Path) -> None:
 
 
 def test_bench_small_table(variants: Path, tmp_path: Path) -> None:
-    from rik.benchmark.bench import plan_tasks, run_bench, summarise, table_markdown
+    from rik.benchmark.bench import plan_tasks, run_bench
+    from rik.tables import summarise, table_markdown
 
     tasks = plan_tasks(CAT, types=["knob"], presets=["high"], strategies=["grasp_vertical", "contact_rich"],
                        per_cell=1, seed=2)

@@ -217,6 +217,7 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
     from rik.outputs import write_text
     from rik.paths import check_folder
     from rik.registry.load import load_catalog
+    from rik.tables import rows_csv, table_markdown
 
     check_folder(out, "--out")  # before the episodes, not after them
     b.check_bench_out(out)
@@ -236,8 +237,8 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
         rows = b.run_bench(cat, tasks, workers=workers, variants=variants, overlays=overlays(catalog),
                            progress=lambda r: progress.update(task, advance=1, last=f"{r['variant']} {r['outcome']}"))
     out.mkdir(parents=True, exist_ok=True)
-    write_text(out / "results.csv", b.rows_csv(rows), b.bench_file())
-    table = b.table_markdown(rows)
+    write_text(out / "results.csv", rows_csv(rows), b.bench_file())
+    table = table_markdown(rows)
     write_text(out / "table.md", table, b.bench_file())
     con = console()
     if sweep is not None:

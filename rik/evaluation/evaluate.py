@@ -511,8 +511,8 @@ def slug(label: str) -> str:
 def write_tables(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[str, Any]]) -> None:
     """``table.md`` and ``episodes.csv`` of one operator's rows, or of several operators' on the same episodes side
     by side (with ``success.png``)."""
-    from rik.benchmark.bench import rows_csv, table_markdown
     from rik.outputs import write_text
+    from rik.tables import rows_csv, table_markdown
 
     first, n = specs[0], len(specs[0].seeds())
     seeds = f"seeds {first.seed}..{first.seed + n - 1}, {first.episodes_per_cell} per cell"
@@ -532,9 +532,9 @@ def success_plot(rows: Sequence[dict[str, Any]], png: Path, title: str = "") -> 
     per operator."""
     import numpy as np
 
-    from rik.benchmark.bench import wilson
     from rik.outputs import save_figure
     from rik.paths import pyplot
+    from rik.tables import wilson
 
     operators = list(dict.fromkeys(r["strategy"] for r in rows))
     groups = ["all", *dict.fromkeys(r["handle_type"] for r in rows)]
