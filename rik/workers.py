@@ -7,6 +7,8 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from rik.errors import RikError
+
 if TYPE_CHECKING:
     from concurrent.futures import ProcessPoolExecutor
 
@@ -27,7 +29,6 @@ libraries (hundreds of MB), so ``--workers 10000`` would exhaust memory long bef
 def check_workers(workers: int) -> int:
     """``workers`` when it lies in 1 .. :data:`WORKERS_PER_CORE` x this machine's cores, else a one-line
     :class:`rik.errors.RikError`: checked before any process starts or any work is done."""
-    from rik.errors import RikError
 
     most = WORKERS_PER_CORE * (os.cpu_count() or 1)
     if not 1 <= workers <= most:

@@ -20,6 +20,7 @@ from rik.assets.decompose import Hulls, coacd_params, convex_hull_baseline, deco
 from rik.assets.handles import generate_handle
 from rik.assets.importer import read_user_mesh
 from rik.errors import RikError, UnknownIdError
+from rik.outputs import remove_cache_entry
 from rik.workers import map_ids
 
 if TYPE_CHECKING:
@@ -204,7 +205,6 @@ def load_asset(cache: AssetCache, key: str) -> Asset | None:
                 baseline = [(data[f"p{i}_base_v"], data[f"p{i}_base_f"])]
                 parts.append(RigidPart(p["name"], p["role"], p["finish"], p["method"], visual, hulls, baseline))
     except (KeyError, ValueError, OSError) as exc:
-        from rik.outputs import remove_cache_entry
 
         remove_cache_entry(entry.path)
         raise CorruptEntry(f"cache entry {entry.path} is unreadable ({exc}); it was removed") from None

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from rik.assets.decompose import Hulls
+from rik.errors import RikError
 
 if TYPE_CHECKING:
     import numpy as np
@@ -36,7 +37,6 @@ MAX_POINTS = 1_000_000
 
 def check_points(points: int) -> int:
     """``points`` when it lies in 1,000 .. :data:`MAX_POINTS`, else a one-line :class:`rik.errors.RikError`."""
-    from rik.errors import RikError
 
     if not 1000 <= points <= MAX_POINTS:
         raise RikError(f"--points {points}: give 1,000 to {MAX_POINTS:,} surface samples per shell")

@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rik.outputs import Replaces, save_figure
+from rik.outputs import Replaces, holds_only, save_figure
 from rik.paths import pyplot as _pyplot
 
 if TYPE_CHECKING:
@@ -27,7 +27,6 @@ HEAT_POINTS = 6000
 
 def _is_pictures(folder: Path) -> bool:
     """Whether ``folder`` holds a handle's pictures rik drew: its ``asset.key`` stamp and nothing but the pictures."""
-    from rik.outputs import holds_only
 
     try:
         with open(folder / "asset.key", "rb") as handle:

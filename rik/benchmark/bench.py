@@ -15,6 +15,8 @@ import numpy as np
 
 from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, choose_variant
 from rik.errors import RikError
+from rik.outputs import Replaces, check_own_files, save_figure
+from rik.paths import pyplot
 
 if TYPE_CHECKING:
     from rik.outputs import Replaces
@@ -149,8 +151,6 @@ def run_bench(catalog: Catalog, tasks: Sequence[BenchTask], *, workers: int = 1,
 def sweep_plot(rows: Sequence[dict[str, Any]], png: Path) -> Path:
     """Success rate against the friction-capacity ratio (2 x pad friction x grip force / joint resistance), one
     line per strategy."""
-    from rik.outputs import save_figure
-    from rik.paths import pyplot
 
     fig, ax = pyplot().subplots(figsize=(6.4, 4.0), dpi=120)
     for s in dict.fromkeys(r["strategy"] for r in rows):
@@ -203,13 +203,11 @@ def is_bench_out(folder: Path) -> bool:
 
 def bench_file() -> Replaces:
     """What a file ``rik bench`` writes into ``--out`` may replace: the same file of an earlier rik bench there."""
-    from rik.outputs import Replaces
 
     return Replaces.when("a file of an earlier rik bench (its results.csv beside it)", lambda p: is_bench_out(p.parent))
 
 
 def check_bench_out(out: Path) -> None:
     """Refuse an ``--out`` where a file ``rik bench`` writes is there and the folder is not one rik bench wrote."""
-    from rik.outputs import check_own_files
 
     check_own_files(out, BENCH_FILES, is_bench_out, "rik bench", "results.csv")

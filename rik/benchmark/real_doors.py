@@ -26,6 +26,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rik.errors import RikError
+from rik.outputs import RECORDED, save_figure
+from rik.paths import pyplot
 from rik.registry.ids import variant_id
 from rik.schemas.joints import CATALOG_LEVER_ARM
 
@@ -154,8 +156,6 @@ def plot_grid(results: Sequence[SimulatedDoor], path: Path, columns: int = 4, re
     """A grid of plots, one per door: the held-out openings (grey), the simulated pull with the nearest paper preset
     (dashed) and with the fitted preset (solid), force at the handle against the angle in degrees. A file at
     ``path`` is replaced as ``replaces`` says (default: rik's own earlier plot there, :data:`rik.outputs.RECORDED`)."""
-    from rik.outputs import RECORDED, save_figure
-    from rik.paths import pyplot
 
     plt = pyplot()
     rows = max(1, math.ceil(len(results) / columns))

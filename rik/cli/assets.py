@@ -22,6 +22,9 @@ from rik.cli.common import (
     print_json,
     progress_bar,
 )
+from rik.errors import RikError
+from rik.outputs import check_destination
+from rik.paths import check_folder
 
 if TYPE_CHECKING:
     from rik.assets.build import BuildResult
@@ -129,8 +132,6 @@ def fidelity(ids: IdsArg = None, everything: AllOpt = False,
         run_rows,
         summarise_fidelity,
     )
-    from rik.outputs import check_destination
-    from rik.paths import check_folder
     from rik.registry.load import load_catalog
 
     check_points(points)
@@ -177,8 +178,6 @@ def stats(ids: IdsArg = None, everything: AllOpt = False, workers: WorkersOpt = 
           catalog: CatalogOption = None) -> None:
     """Mesh statistics per handle (paper Figure 3): vertices, faces, mean edge length, mean face area."""
     from rik.assets.report import STATS_COLUMNS, csv_table, handle_ids, run_rows, stats_row, write_csv
-    from rik.errors import RikError
-    from rik.outputs import check_destination
     from rik.registry.load import load_catalog
 
     if out is not None and out.is_dir():
@@ -260,7 +259,6 @@ def import_(
     catalog. Nothing is registered unless every step succeeds."""
     from rik.assets.importer import import_handle
     from rik.assets.report import fidelity_row, picture_dir
-    from rik.errors import RikError
     from rik.registry.load import load_catalog
 
     del handle
@@ -314,7 +312,6 @@ def _import_base_unit(file: Path, parts: Path | None, unit_id: str, catalog_dir:
                       seed: int, max_faces: int) -> None:
     from rik.assets.build import build_asset
     from rik.assets.importer import import_base_unit
-    from rik.errors import RikError
     from rik.registry.load import load_catalog
 
     if parts is None:

@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 from typer._click import types as click_types
 
+from rik.errors import RikError
+
 if TYPE_CHECKING:
     from collections.abc import Callable
 
@@ -55,7 +57,6 @@ def _check_workers(workers: int) -> int:
 
 def check_at_least_one_worker(workers: int) -> int:
     """``--workers`` of a command whose workers may run elsewhere (a Ray cluster): refused (one line) below 1 only."""
-    from rik.errors import RikError
 
     if workers < 1:
         raise RikError(f"--workers {workers}: give 1 or more worker processes")

@@ -19,6 +19,7 @@ from rik.cli.common import (
 )
 from rik.cli.rerender import DEMO_RES, CamerasOpt, EpisodesArg, ResOpt
 from rik.cli.sim import VariantsOpt
+from rik.outputs import MadeFolder, remove_directory
 
 if TYPE_CHECKING:
     from rik.outputs import MadeFolder
@@ -110,7 +111,6 @@ def demo_folders(out: Path) -> list[tuple[Path, MadeFolder]]:
     from dataclasses import replace
 
     from rik.exporters.lerobot_export import PARTIAL_FOLDER, is_exported_dataset
-    from rik.outputs import MadeFolder
 
     hint = "run the demo in another folder"
     return [(out, MadeFolder("a dataset rik export-lerobot made", is_exported_dataset, hint)),
@@ -126,7 +126,6 @@ def print_demo_export(overlay_paths: list[Path], episodes: list[Path], out: Path
     removed first, and only if rik made it (:func:`demo_folders`)."""
     from rik.exporters.lerobot_export import export_lerobot as run
     from rik.exporters.spec import ExportSpec
-    from rik.outputs import remove_directory
     from rik.registry.load import load_catalog
 
     quiet_writers()

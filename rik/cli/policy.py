@@ -19,6 +19,7 @@ from rik.cli.common import (
     overlays,
     progress_bar,
 )
+from rik.errors import RikError
 
 
 def _advance(progress: Any, label: str, total: int) -> Callable[[dict[str, Any]], None]:
@@ -71,7 +72,6 @@ def eval_policy(
     paper's Table 3) with Wilson intervals, per-episode rows, videos and lerobot-eval's eval_info.json. A policy
     trained on an arm's export runs with --robot and that arm (its joint actions); scripted strategies run with any
     robot."""
-    from rik.errors import RikError
     from rik.evaluation.evaluate import (
         LABELS,
         EvalSpec,

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rik.cli.common import console, progress_bar
+from rik.outputs import RECORDED, check_destination, write_text
 
 if TYPE_CHECKING:
     from rich.progress import TaskID
@@ -42,7 +43,6 @@ def visual_gap(
     """The visual gap between real and simulated (and/or re-rendered) images: FID, KID and EMD in an image
     encoder's features, every comparison at the same size (split halves of N images), with the real-vs-real
     split-half floor and bootstrap intervals. docs/visual-gap.md explains the protocol and where to get weights."""
-    from rik.outputs import RECORDED, check_destination, write_text
     from rik.render.visual_gap import results_json, results_markdown
     from rik.render.visual_gap import visual_gap as run
 

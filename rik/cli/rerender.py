@@ -11,6 +11,7 @@ import typer
 
 from rik.cli.common import CatalogOption, WorkersOpt, console, overlays, progress_bar
 from rik.cli.sim import VariantsOpt
+from rik.paths import check_folder
 
 if TYPE_CHECKING:
     from rik.render.streams import StreamKind
@@ -35,7 +36,6 @@ class _Quality(TypedDict, total=False):
 def _run(episodes: list[Path], kind: StreamKind, res: str, cameras: str | None, out: Path, variants: Path, workers: int,
          catalog: list[Path] | None, sheet: bool = False, **quality: Unpack[_Quality]) -> None:
     from rik.episodes.episode import find_episodes, read_meta
-    from rik.paths import check_folder
     from rik.registry.load import load_catalog
     from rik.render.episodes import check_renders_outside, render_episodes
     from rik.render.streams import StreamSpec, parse_resolution

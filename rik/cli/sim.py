@@ -22,6 +22,8 @@ from rik.cli.common import (
     robot_entry,
 )
 from rik.errors import RikError
+from rik.outputs import write_text
+from rik.paths import check_folder
 
 VariantArg = Annotated[str, typer.Argument(help="Variant id, e.g. drawer-chest-80__two_point-bow-128__normal "
                                            "(built into --variants first if needed).", show_default=False)]
@@ -214,8 +216,6 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
     """The resistance benchmark: randomised drawer-opening episodes, F/P/S per handle type, strategy and preset
     (the paper's Table 3), with the Hand-E or an arm (--robot)."""
     from rik.benchmark import bench as b
-    from rik.outputs import write_text
-    from rik.paths import check_folder
     from rik.registry.load import load_catalog
     from rik.tables import rows_csv, table_markdown
 

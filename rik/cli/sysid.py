@@ -10,7 +10,8 @@ from typing import Annotated, Any
 import typer
 
 from rik.cli.common import CatalogOption, console, overlays
-from rik.outputs import MadeFolder, holds_only
+from rik.errors import RikError
+from rik.outputs import MadeFolder, check_replaceable, holds_only, staged_directory
 
 app = typer.Typer(help="Model discovery: what the simulation gets wrong about a measured joint, the cause, the "
                        "extended joint model and the gain on held-out data.", no_args_is_help=True)
@@ -75,7 +76,6 @@ def fit(data: Annotated[list[Path], typer.Argument(help="Trial files (.csv, .par
                                                "cell (counted) instead of stopping.")] = False) -> None:
     """Fit the baseline joint model, find the unmodelled effect, extend the model and measure the gain; write a
     report (report.md with plots, summary.json) that names the cause."""
-    from rik.outputs import check_replaceable
     from rik.sysid.discover import discover
     from rik.sysid.profile import has_time_column
     from rik.sysid.report import REPORT_FOLDER, write_report
@@ -159,14 +159,12 @@ def simulate(effect: Annotated[str, typer.Option("--effect", help="Hidden effect
     simulated hand through strokes, holds and releases, measured with noise and delay (MuJoCo at 0.5 ms)."""
     import numpy as np
 
-    from rik.outputs import check_replaceable
     from rik.sysid.synthetic.generate import random_truth, simulate_trials, write_trials
     from rik.sysid.trials import simulated_folder
 
     check_replaceable(out, simulated_folder())  # before any work: a folder of the user's is never replaced
     kind = None if effect == "none" else effect
     if generator is GeneratorOpt.foreign:
-        from rik.errors import RikError
         from rik.sysid.synthetic.foreign import FOREIGN_KINDS, foreign_truth, simulate_foreign, write_foreign
 
         if effect not in FOREIGN_KINDS:
@@ -239,7 +237,6 @@ def print_demo_sysid(overlay_paths: list[Path]) -> None:
 
     import numpy as np
 
-    from rik.outputs import check_replaceable, staged_directory
     from rik.sysid.discover import discover
     from rik.sysid.preset import apply_report
     from rik.sysid.report import REPORT_FOLDER, write_report

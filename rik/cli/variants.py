@@ -22,6 +22,8 @@ from rik.cli.common import (
     progress_bar,
 )
 from rik.errors import RikError
+from rik.outputs import RECORDED, check_destination
+from rik.paths import check_folder
 
 if TYPE_CHECKING:
     from rik.combinator.build import VariantResult
@@ -167,7 +169,6 @@ def build(ids: Annotated[list[str] | None, typer.Argument(help="Variant ids, e.g
           catalog: CatalogOption = None) -> None:
     """Build variants into --out/<id>/ (model.xml, scene.xml, meshes/, report.json); valid ones are skipped."""
     from rik.combinator.build import JOINT_FRICTION, MANIFEST, build_variants, resolve_collision
-    from rik.paths import check_folder
     from rik.registry.ids import parse_variant_id
     from rik.registry.load import load_catalog
 
@@ -284,7 +285,6 @@ def probe(variant: Annotated[str, typer.Argument(metavar="ID", help="A variant i
     from rich.table import Table
 
     from rik.combinator.build import ensure_variant
-    from rik.outputs import RECORDED, check_destination
     from rik.registry.load import load_catalog
     from rik.sim.pull import front_joint, pull_profile, write_profiles
 

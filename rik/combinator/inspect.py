@@ -23,6 +23,7 @@ from rik.combinator.build import (
 )
 from rik.combinator.checks import CheckResult, ModelContext, run_model_checks
 from rik.errors import RikError
+from rik.outputs import RECORDED, check_destination, write_png
 from rik.registry.ids import VariantKey, parse_variant_id
 
 if TYPE_CHECKING:
@@ -113,7 +114,6 @@ def render_variant(catalog: Catalog, key: VariantKey, png: Path, *, out: Path = 
     os.environ.setdefault("MUJOCO_GL", "egl")
     import mujoco
 
-    from rik.outputs import RECORDED, check_destination, write_png
 
     check_destination(png, RECORDED, "--png")
     directory = out / key.id

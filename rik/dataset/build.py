@@ -27,6 +27,7 @@ from rik.dataset.registry import register_dataset
 from rik.dataset.spec import library_versions, policy_io
 from rik.errors import RikError
 from rik.outputs import Replaces, remove_directory, remove_file, write_text
+from rik.paths import inside, read_json
 
 if TYPE_CHECKING:
 
@@ -121,7 +122,6 @@ def _mark(folders: Folders, stage: str, key: str, record: dict[str, Any]) -> dic
 
 def read_marker(folders: Folders, stage: str, key: str) -> dict[str, Any] | None:
     """The record of a finished unit whose output is still in place, else None."""
-    from rik.paths import read_json
 
     try:
         data = read_json(folders.marker(stage, key))
@@ -154,7 +154,6 @@ def _states_intact(episode: Path, sha256: object) -> bool:
 def run_record(catalog: Catalog, arg: tuple[Folders, EpisodeUnit, float]) -> dict[str, Any]:
     """Record one episode (a job); returns its marker record."""
     from rik.episodes.record import record_one
-    from rik.paths import inside
 
     folders, unit, max_seconds = arg
     t0 = time.perf_counter()

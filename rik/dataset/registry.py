@@ -9,8 +9,9 @@ from pathlib import Path
 from typing import Any
 
 from rik.dataset.meta import BUILD_META, read_dataset_meta, read_meta_file
+from rik.errors import RikError
 from rik.outputs import PRIVATE, write_text
-from rik.paths import cache_dir
+from rik.paths import cache_dir, read_json
 
 REGISTRY = "datasets.json"
 
@@ -22,8 +23,6 @@ def registry_file() -> Path:
 def _read() -> list[dict[str, Any]]:
     """The registry's entries ([] when there is none yet); a damaged registry raises one line naming it (and the
     entry), never read as empty: a build would then write over the pointers it still holds."""
-    from rik.errors import RikError
-    from rik.paths import read_json
 
     path = registry_file()
     fix = "it only points at datasets: move it away, and rebuild (or list) the datasets it named"
@@ -78,7 +77,6 @@ def register_dataset(root: Path) -> None:
 
     root = Path(root).absolute()
     path = registry_file()
-    from rik.errors import RikError
 
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -94,7 +92,6 @@ def register_dataset(root: Path) -> None:
 def list_datasets() -> list[dict[str, Any]]:
     """Every registered dataset, described as it is now on disk (in registration order); one whose metadata is
     damaged is listed with ``damaged``, the line that names the file and field, so the others still show."""
-    from rik.errors import RikError
 
     rows = []
     for e in _read():

@@ -6,7 +6,9 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
+from rik.errors import RikError
 from rik.lerobot.policy_io import FIELD_TYPES, PolicyIO
+from rik.paths import json_sha256
 from rik.schemas.dataset import DatasetSpec
 
 DEFAULT_ROBOT = "hand-e"
@@ -37,7 +39,6 @@ def check_spec_shape(path: Path) -> None:
     than :data:`MAX_SPEC_DEPTH` or whose aliases expand past :data:`MAX_SPEC_NODES` values
     (:func:`rik.registry.sources.check_yaml_shape`). What cannot be read or decoded is left to the reader, which
     names it."""
-    from rik.errors import RikError
     from rik.registry.sources import check_yaml_shape, display_path
 
     shown = display_path(path)
@@ -91,7 +92,6 @@ def policy_io(spec: DatasetSpec) -> PolicyIO:
 
 def spec_hash(spec: DatasetSpec) -> str:
     """sha256 of the spec with its defaults filled in: two files that say the same thing hash the same."""
-    from rik.paths import json_sha256
 
     return json_sha256(spec_data(spec))
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from rik.combinator.build import ensure_variant
 from rik.episodes.episode import EXECUTED, EpisodeError, columns_of, read_episode, read_meta, states
+from rik.errors import UnknownIdError
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -32,7 +33,6 @@ class ReplayCheck:
 def episode_robot(catalog: Catalog, directory: Path, meta: EpisodeMeta) -> Robot:
     """The catalog entry of the robot an episode was recorded with (``meta.robot``); an id the catalog lacks is one
     line naming the episode's meta.json."""
-    from rik.errors import UnknownIdError
 
     try:
         return catalog.robot(meta.robot)

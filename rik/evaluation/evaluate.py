@@ -29,6 +29,8 @@ from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 from rik.errors import RikError
 from rik.lerobot.policy_files import check_policy_folder
 from rik.lerobot.policy_io import AUTO, PolicyIO, read_policy
+from rik.outputs import Replaces, check_own_files, recorded, save_figure, write_text, writing
+from rik.paths import json_object, pyplot
 from rik.scheduling import normal_scheduling
 
 if TYPE_CHECKING:
@@ -300,7 +302,6 @@ def run_episode(spec: EvalSpec, seed: int, video_dir: Path | None = None) -> dic
     if video_dir is not None and frames:
         from lerobot.utils.io_utils import write_video
 
-        from rik.outputs import Replaces, recorded, writing
         from rik.sim.scene import CONTROL_FPS
 
         video_dir.mkdir(parents=True, exist_ok=True)
@@ -390,7 +391,6 @@ EVAL_FILES = ("table.md", "episodes.csv", "eval_info.json", "success.png", "vide
 
 def _is_eval(folder: Path) -> bool:
     """Whether ``folder`` holds an earlier rik eval's output: its ``eval_info.json`` with rik's rows and settings."""
-    from rik.paths import json_object
 
     info = json_object(folder / "eval_info.json")
     return info is not None and isinstance(info.get("rik"), dict) and "spec" in info["rik"]
@@ -399,7 +399,6 @@ def _is_eval(folder: Path) -> bool:
 def eval_file() -> Replaces:
     """What a file rik eval writes may replace: the same file of an earlier rik eval in that folder (the folder, or
     a policy's folder in it, holds its ``eval_info.json``), or one rik recorded writing there."""
-    from rik.outputs import Replaces, recorded
 
     def ours(path: Path) -> bool:
         folder = Path(path).parent
@@ -413,7 +412,6 @@ def check_eval_out(out: Path, policy_folders: Sequence[str] = ()) -> None:
     """Refuse (one line), before any episode, an ``--out`` (or a policy's folder in it, ``policy_folders``) where a
     file rik eval writes (:data:`EVAL_FILES`) is there and the folder is not an earlier rik eval's output: a rerun
     may write over its own results, never a user's file."""
-    from rik.outputs import check_own_files
 
     out = Path(out)
     ours_below = any(_is_eval(out / f) for f in policy_folders)
@@ -511,7 +509,6 @@ def slug(label: str) -> str:
 def write_tables(out: Path, specs: Sequence[EvalSpec], rows: Sequence[dict[str, Any]]) -> None:
     """``table.md`` and ``episodes.csv`` of one operator's rows, or of several operators' on the same episodes side
     by side (with ``success.png``)."""
-    from rik.outputs import write_text
     from rik.tables import rows_csv, table_markdown
 
     first, n = specs[0], len(specs[0].seeds())
@@ -532,8 +529,6 @@ def success_plot(rows: Sequence[dict[str, Any]], png: Path, title: str = "") -> 
     per operator."""
     import numpy as np
 
-    from rik.outputs import save_figure
-    from rik.paths import pyplot
     from rik.tables import wilson
 
     operators = list(dict.fromkeys(r["strategy"] for r in rows))
@@ -580,7 +575,6 @@ def eval_info(spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) ->
 
 def write_outputs(out: Path, spec: EvalSpec, rows: Sequence[dict[str, Any]], seconds: float) -> None:
     """``table.md``, ``episodes.csv`` and ``eval_info.json`` of one operator (atomically)."""
-    from rik.outputs import write_text
 
     write_tables(out, [spec], rows)
     write_text(out / "eval_info.json", json.dumps(eval_info(spec, rows, seconds), indent=2, default=list) + "\n",

@@ -38,6 +38,7 @@ from rik.lerobot.features import (
 )
 from rik.lerobot.policy_files import member, read_json
 from rik.lerobot.policy_folder import image_feature, policy_config, policy_inputs, trained_action_frame
+from rik.paths import json_object
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -315,7 +316,6 @@ def io_of_info(root: Path, robot: str | None = None, catalog: Catalog | None = N
     frame its action's names are in, the handle's shape its front's state's names end with, the cameras, streams and
     size of its video features. What the export writes (from the dataset it wrote, so that the two cannot differ),
     and what a dataset exported before the contract existed is read as."""
-    from rik.paths import json_object
     from rik.registry.load import load_catalog
     from rik.sim.robots.layout import robot_layout
 

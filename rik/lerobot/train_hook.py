@@ -19,7 +19,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from rik.errors import RikError
 from rik.lerobot.policy_io import POLICY_IO_FILE, PolicyIO
+from rik.outputs import Replaces, write_text
 
 TRAIN_MODULE = "lerobot.scripts.lerobot_train"
 PRETRAINED = "pretrained_model"
@@ -69,8 +71,6 @@ def dataset_root(cfg: Any) -> Path | None:
 def copy_contract(folder: Path, cfg: Any) -> Path | None:
     """Write the contract of ``cfg``'s dataset into the policy ``folder`` (None where the dataset has none); a
     problem is one warning, never the end of training."""
-    from rik.errors import RikError
-    from rik.outputs import Replaces, write_text
 
     root = dataset_root(cfg)
     source = None if root is None else root / "meta" / POLICY_IO_FILE
@@ -86,7 +86,6 @@ def copy_contract(folder: Path, cfg: Any) -> Path | None:
 
 def _is_contract(path: Path) -> bool:
     """Whether ``path`` holds a contract (what an earlier save of the same checkpoint wrote)."""
-    from rik.errors import RikError
 
     try:
         PolicyIO.read(path)

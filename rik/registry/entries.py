@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel, ValidationError
 
+from rik.errors import CatalogError, RikError
 from rik.registry.sources import MAX_CATALOG_BYTES, RawEntry, _safe_loader, check_yaml_shape, display_path, line_of
 from rik.schemas import BaseUnit, Finish, Handle, HandleDesign, ResistancePreset
 from rik.schemas.robots import Robot
@@ -97,7 +98,6 @@ def read_yaml_model[M: BaseModel](path: Path, model: type[M], what: str) -> M:
     (``what`` names the file's role: "mapping file", "dataset spec")."""
     import yaml
 
-    from rik.errors import CatalogError, RikError
 
     shown = display_path(path)
     try:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik import CATALOG_SCHEMA
-from rik.errors import CatalogError
+from rik.errors import CatalogError, RikError
 
 if TYPE_CHECKING:
     import yaml
@@ -151,7 +151,6 @@ def check_yaml_shape(text: str, shown: str, what: str, max_depth: int = MAX_YAML
     left to the reader, which names its line."""
     import yaml
 
-    from rik.errors import RikError
 
     sizes: dict[str, int] = {}
     """Expanded node count of each anchor, once its node is closed."""

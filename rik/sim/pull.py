@@ -49,6 +49,7 @@ import numpy as np
 
 from rik.errors import RikError
 from rik.joints.runtime import front_effects
+from rik.outputs import RECORDED, write_text
 from rik.sim.build import add_environment, front_of, load_variant_spec, variant_info
 
 if TYPE_CHECKING:
@@ -282,7 +283,6 @@ def write_profiles(path: str | Path, pulls: Sequence[PullProfile], *, at_handle:
     joint torque, force × lever arm, so that fitted parameters compare with a preset's). One trial per pull,
     numbered from 0. Returns ``path``. A file already at ``path`` is replaced only when it is rik's own earlier
     profile there (:data:`rik.outputs.RECORDED`): the same format as a measured profile, so nothing else tells."""
-    from rik.outputs import RECORDED, write_text
 
     if not pulls:
         raise RikError("write_profiles: no pulls to write")

@@ -12,6 +12,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.outputs import NEW, make_stage, remove_stage, write_text
+from rik.paths import read_json
 
 if TYPE_CHECKING:
     from rik.schemas.joints import JointResistance, JointType, ResistancePreset
@@ -49,7 +51,6 @@ def write_preset(resistance: JointResistance, joint_type: JointType, name: str, 
     import yaml
 
     from rik import CATALOG_SCHEMA
-    from rik.outputs import NEW, make_stage, remove_stage, write_text
     from rik.registry import load_catalog
     from rik.registry.sources import BUILTIN_DIR, catalog_files, display_path
 
@@ -92,7 +93,6 @@ def read_summary(path: Path) -> dict[str, Any]:
     to hold what a preset needs: one line naming the file and field when it does not."""
     from pydantic import ValidationError
 
-    from rik.paths import read_json
     from rik.schemas.joints import JointResistance, JointType
 
     path = Path(path)

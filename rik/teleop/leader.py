@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.errors import RikError
+from rik.paths import read_json
 
 if TYPE_CHECKING:
     from rik.schemas.robots import Robot
@@ -92,7 +93,6 @@ def read_calibration(file: Path, motors: list[str]) -> dict[str, dict[str, int]]
     """LeRobot's calibration of a leader arm, ``{motor: {"id", "drive_mode", "homing_offset", "range_min",
     "range_max"}}`` for each of ``motors``, checked before LeRobot reads it (it would end in a traceback): one
     line naming the file (and the motor and field) when it is unreadable, not JSON (cut short), or of another shape."""
-    from rik.paths import read_json
 
     try:
         data = read_json(file, MAX_CALIBRATION_BYTES)

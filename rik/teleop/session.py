@@ -28,6 +28,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rik.errors import RikError
+from rik.outputs import NameTaken, remove_directory
+from rik.paths import cache_dir
 from rik.sim.pose import nearest_angles
 from rik.teleop.feedback import BLOCKED_LEAD, GraspWatch, front_path_step, grasp_hint, grasp_text, handle_contact
 from rik.teleop.keys import ANGULAR_SPEED, LEAD, LINEAR_SPEED
@@ -56,7 +59,6 @@ drawer's slide), frame-fixed otherwise; or always frame-fixed (towards / away fr
 def check_time_limit(max_seconds: float | None) -> None:
     """A time limit is positive, finite simulated seconds, or None for none."""
     if max_seconds is not None and not (max_seconds > 0 and math.isfinite(max_seconds)):
-        from rik.errors import RikError
 
         raise RikError(f"--max-seconds {max_seconds}: a time limit must be a positive, finite number of seconds (or "
                        "none at all)")
@@ -67,7 +69,6 @@ def _claim_path(episode: Path) -> Path:
     a session writes nothing into the episodes folder before a Save or a draft."""
     import hashlib
 
-    from rik.paths import cache_dir
 
     key = hashlib.sha256(str(episode.absolute()).encode("utf-8", "surrogateescape")).hexdigest()
     return cache_dir() / "claims" / key[:32]
@@ -130,7 +131,6 @@ class TeleopSession:
         """The first seed from ``start`` whose id is free (:meth:`_taken`) and that no other session holds; its lock
         is held (released by the next call, :meth:`close` or the process's end, however it ends)."""
         from rik.episodes.episode import episode_id
-        from rik.errors import RikError
         from rik.locks import LockedError, exclusive
 
         self._claim.close()
@@ -188,7 +188,6 @@ class TeleopSession:
         """Write the episode to ``out/<id>`` (up to :data:`IDLE_KEPT_S` after its last input, with ``trim_idle``)
         and start the next one; None (and nothing written) when nothing was recorded yet."""
         from rik.episodes.episode import write_episode
-        from rik.outputs import NameTaken
 
         if not self.recording:
             self.message = "nothing recorded yet: move first"
@@ -223,8 +222,6 @@ class TeleopSession:
     def _remove_draft(self, episode: str) -> None:
         """Remove the draft of ``episode`` if one was kept (only an episode folder rik wrote: anything else stays)."""
         from rik.episodes.episode import EPISODE_FOLDER
-        from rik.errors import RikError
-        from rik.outputs import remove_directory
 
         with contextlib.suppress(RikError, OSError):
             remove_directory(self.out / DRAFTS / episode, EPISODE_FOLDER)
@@ -255,7 +252,6 @@ class TeleopSession:
         1 closed); from now on :meth:`tick` drives the arm joint by joint."""
         t = np.asarray(targets, np.float64).reshape(-1)
         if t.shape != (len(self.scene.robot_drive.joint_names) - 1,) or not np.all(np.isfinite(t)):
-            from rik.errors import RikError
 
             raise RikError(f"joint targets {t.tolist()}: robot {self.scene.robot_id} takes "
                            f"{len(self.scene.robot_drive.joint_names) - 1} finite numbers (rad)")

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rik.errors import RikError, os_error_text
+from rik.paths import inside
 from rik.teleop.frames import StationFrames
 from rik.teleop.keys import FINE_FACTOR
 from rik.teleop.pacing import due_steps
@@ -545,7 +546,6 @@ class Station:
         import mujoco
 
         from rik.episodes.episode import STATES, read_meta
-        from rik.paths import inside
 
         assert self.session is not None
         path = inside(self.config.episodes, episode, what="episode id")
@@ -668,7 +668,6 @@ class Stations:
         the idle release never takes a station between its lookup and its tab). At the bound, the station with no
         tab that was left longest ago is released first; when every station has a tab, a RikError says so.
         Blocks while a station is released (its thread stops within seconds): call it off the event loop."""
-        from rik.errors import RikError
 
         key = (variant, robot or self.config.robot)
         with self.lock:

@@ -22,6 +22,7 @@ from fastapi import APIRouter, Request
 from fastapi.responses import FileResponse
 
 from rik.errors import RikError
+from rik.paths import read_meta_file
 from rik.web.pages import STATIC
 
 router = APIRouter()
@@ -82,7 +83,6 @@ def episode_row(directory: Path) -> dict[str, Any]:
 def dataset_row(directory: Path) -> dict[str, Any] | None:
     """One dataset for the page (name, episodes, frames, robot, outcomes), ``{"name", "error"}`` with one line when
     its ``meta/rik_dataset.json`` is damaged, or None when the folder holds no built dataset."""
-    from rik.paths import read_meta_file
     from rik.schemas.dataset import DatasetRecord
 
     path = directory / DATASET_META

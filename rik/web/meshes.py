@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rik.errors import RikError
+from rik.paths import inside
 
 if TYPE_CHECKING:
     import trimesh
@@ -106,7 +107,6 @@ def built_variant(catalog: Catalog, variants: Path, variant: str) -> tuple[str, 
     """The canonical id, folder and spec hash of ``variant`` when it is built in ``variants`` and current, else a
     one-line RikError naming what builds it. Reads (and hashes) the variant's files; writes nothing."""
     from rik.combinator.build import folder_spec_hash, is_current
-    from rik.paths import inside
     from rik.registry.ids import parse_variant_id
 
     key = parse_variant_id(catalog, variant)

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rik.errors import RikError
 from rik.sim.pose import angles_of, base_for_tcp, gripper_rotation
 from rik.sim.robots.arm import ROBOT_PREFIX, Placement
 from rik.sim.robots.gripper import jaw_target
@@ -125,8 +126,6 @@ class FloatingDrive:
         return None
 
     def set_targets(self, scene: SimScene, q: np.ndarray) -> None:
-        from rik.errors import RikError
-
         raise RikError(f"robot {self.robot_id} takes a target pose, not joint targets")
 
     def joint_positions(self, scene: SimScene) -> np.ndarray:

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 
+from rik.paths import read_json
 from rik.schemas.joints import JointType
 from rik.sysid.trials.errors import TrialError
 from rik.sysid.trials.load import MIN_SAMPLES, ColumnMap, Source, Trial, build_trial, rows_where, thresholds
@@ -82,7 +83,6 @@ def _read_info(root: Path) -> tuple[str, dict[str, Any]]:
     info_file = root / "meta" / "info.json"
     if not info_file.is_file():
         raise TrialError(root, None, None, "not a LeRobot dataset (no meta/info.json)")
-    from rik.paths import read_json
 
     try:
         info = read_json(info_file)

@@ -9,6 +9,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
+from rik.outputs import NEW, MadeFolder, holds_only, recorded, staged_directory, write_text
+from rik.paths import json_object
 from rik.schemas.joints import JointType
 from rik.schemas.trajectory import TrialColumns, TrialUnits
 from rik.sysid.trials.load import Trial
@@ -50,7 +52,6 @@ def write_csv_trials(trials: Sequence[Trial], directory: str | Path, joint: Join
     """Write each trial of ``joint`` to ``directory/<name>.csv`` (:func:`si_columns`' headers, values printed to
     round-trip exactly), each atomically; returns the paths (what :func:`load_trials` reads back). Refuses an empty
     list, repeated names, a name that is no file name and a trial of another joint type, each in one line."""
-    from rik.outputs import NEW, write_text
 
     _check_writable(trials, joint)
     directory = Path(directory)
@@ -74,8 +75,6 @@ def is_simulated(folder: Path) -> bool:
     the joint, and nothing else but CSV files that start with rik's header line and that rik recorded writing there
     (:func:`rik.outputs.recorded`): rik's header is also the documented format of measured trials, so a measured
     CSV copied beside simulated ones has it too."""
-    from rik.outputs import holds_only, recorded
-    from rik.paths import json_object
 
     truth = json_object(folder / TRUTH_FILE)
     if truth is None or truth.get("joint") not in {j.value for j in JointType}:
@@ -96,7 +95,6 @@ def is_simulated(folder: Path) -> bool:
 
 def simulated_folder() -> MadeFolder:
     """The folder ``rik sysid simulate --out`` writes: replaced whole, and only if :func:`is_simulated`."""
-    from rik.outputs import MadeFolder
 
     return MadeFolder("a folder of trials rik sysid simulate wrote", is_simulated, "choose another --out")
 
@@ -107,7 +105,6 @@ def write_simulated(trials: Sequence[Trial], directory: str | Path, joint: Joint
     into a hidden sibling first, then renamed into place, replacing an earlier folder of simulated trials only (any
     other folder that is not empty is refused, before anything is written). Returns the CSV paths."""
 
-    from rik.outputs import NEW, staged_directory, write_text
 
     _check_writable(trials, joint)
     directory = Path(directory)
