@@ -61,7 +61,8 @@ FLOORS: tuple[tuple[tuple[str, str], ...], ...] = (
      ("rik.web", "The web app (`rik serve`): the catalog pages (with a 3D view), the teleop station and the page "
                  "of episodes and datasets, behind a launch-token gate.")),
     (("rik.evaluation", "Policies on the benchmark (`rik eval`): a saved LeRobot policy checked, loaded and run."),),
-    (("rik.dataset", "`rik dataset build`: a spec planned into units, run locally or on Ray, merged, verified."),),
+    (("rik.dataset", "`rik dataset build`: a spec planned into units, run locally or on Ray, merged, verified."),
+     ("rik.demo", "`rik demo`'s stages, each doing its work and returning what it made (the CLI prints it).")),
     (("rik.cli", "The `rik` command (typer + rich): parses and prints, the library does the work."),),
     (("rik.__main__", "`python -m rik`."),),
     (("lerobot_env_rik", "The LeRobot plugin: a shim that LeRobot imports at start-up; it registers rik's env "

@@ -47,37 +47,26 @@ def _print_csv(rows: list[dict[str, Any]], columns: list[str]) -> None:
     writer.writerows(rows)
 
 
-DEMO_ASSETS = ("knob/mushroom-30", "two_point/bow-128", "finger_pull/edge-lip-100", "drawer/chest-80")
-
-
 def print_demo_assets(overlay_paths: list[Path]) -> None:
-    """Build :data:`DEMO_ASSETS`, print their collision fidelity and the finger test of the two-point handle."""
-    from rik.assets.build import build_asset
-    from rik.assets.cache import AssetCache
-    from rik.assets.finger import FINGER_RADIUS, finger_test
-    from rik.assets.report import fidelity_row
-    from rik.registry.load import load_catalog
+    """Build the demo's assets (:func:`rik.demo.build_assets`) and print their collision fidelity and the finger
+    test of the two-point handle."""
+    from rik.assets.finger import FINGER_RADIUS
+    from rik.demo import FINGER_HANDLE, build_assets
 
-    cat = load_catalog(overlay_paths)
-    cache = AssetCache()
     con = console()
     with con.status("building sample assets (CoACD) ..."):
-        parts = {i: build_asset(cat, i, cache=cache)[0] for i in DEMO_ASSETS}
-        rows = [fidelity_row(cat, i, cache=cache) for i in DEMO_ASSETS if i in cat.handles]
-    for asset_id, asset in parts.items():
+        made = build_assets(overlay_paths)
+    for asset_id, asset in made.parts.items():
         con.print(f"asset {asset_id}: {len(asset.parts)} rigid part(s), "
                   f"{sum(len(p.hulls) for p in asset.parts)} convex parts, "
                   f"{sum(len(p.visual.faces) for p in asset.parts)} visual triangles")
-    for r in rows:
+    for r in made.fidelity:
         con.print(f"fidelity {r['id']}: E_Q->P {r['eqp_mean_mm']:.2f} mm with CoACD, {r['hull_eqp_mean_mm']:.2f} mm "
                   f"with one convex hull ({r['hull_over_coacd']:.1f}x)")
-    bow = parts["two_point/bow-128"].part("handle")
-    geometry = cat.handles["two_point/bow-128"].geometry
-    free, blocked = finger_test(bow.hulls, geometry), finger_test(bow.baseline, geometry)
-    con.print(f"finger test two_point/bow-128 ({2 * FINGER_RADIUS * 1e3:.0f} mm finger through the loop): "
-              f"{'passes' if free.passes else 'BLOCKED'} with CoACD, "
-              f"{'blocked' if not blocked.passes else 'passes'} by the convex hull")
-    con.print(f"assets are cached in {cache.root}; next: rik assets build --all, rik assets fidelity --all")
+    con.print(f"finger test {FINGER_HANDLE} ({2 * FINGER_RADIUS * 1e3:.0f} mm finger through the loop): "
+              f"{'passes' if made.finger_coacd.passes else 'BLOCKED'} with CoACD, "
+              f"{'blocked' if not made.finger_hull.passes else 'passes'} by the convex hull")
+    con.print(f"assets are cached in {made.cache}; next: rik assets build --all, rik assets fidelity --all")
 
 
 @app.command()

@@ -17,12 +17,12 @@ from rik.cli.common import (
     quiet_writers,
     stage_progress,
 )
-from rik.cli.rerender import DEMO_RES, CamerasOpt, EpisodesArg, ResOpt
+from rik.cli.rerender import CamerasOpt, EpisodesArg, ResOpt
 from rik.cli.sim import VariantsOpt
-from rik.outputs import MadeFolder, remove_directory
+from rik.demo import DEMO_DATASET, DEMO_RES
 
 if TYPE_CHECKING:
-    from rik.outputs import MadeFolder
+    pass
 
 
 def export_lerobot(
@@ -101,50 +101,22 @@ def export_lerobot(
         con.print(f"pushed: {push(result.root, result.repo_id)}")
 
 
-DEMO_DATASET = Path("datasets/rik-demo")
-
-
-def demo_folders(out: Path) -> list[tuple[Path, MadeFolder]]:
-    """The folders the demo's export replaces: its dataset ``out`` (a finished rik export, nothing in it but a
-    dataset's files: :func:`~rik.exporters.lerobot_export.is_exported_dataset`) and ``<out>.partial`` (an
-    interrupted one: its plan, shards and merged dataset)."""
-    from dataclasses import replace
-
-    from rik.exporters.lerobot_export import PARTIAL_FOLDER, is_exported_dataset
-
-    hint = "run the demo in another folder"
-    return [(out, MadeFolder("a dataset rik export-lerobot made", is_exported_dataset, hint)),
-            (out.with_name(f"{out.name}.partial"), replace(PARTIAL_FOLDER, advice=hint))]
-DEMO_REPO_ID = "local/rik-demo"
-
-
 def print_demo_export(overlay_paths: list[Path], episodes: list[Path], out: Path = DEMO_DATASET,
                       renders: Path = Path("renders"), variants: Path = Path("variants"),
                       res: int = DEMO_RES) -> None:
-    """Export the demo episodes (both streams, ``res`` x ``res`` px as rendered) to a LeRobot dataset, load it back
-    with ``LeRobotDataset`` and print what it holds. The demo's earlier dataset (and an interrupted export of it) is
-    removed first, and only if rik made it (:func:`demo_folders`)."""
-    from rik.exporters.lerobot_export import export_lerobot as run
-    from rik.exporters.spec import ExportSpec
-    from rik.registry.load import load_catalog
+    """Export the demo episodes to a LeRobot dataset, load it back (:func:`rik.demo.export_dataset`) and print what
+    it holds."""
+    from rik.demo import DEMO_REPO_ID, export_dataset
 
     quiet_writers()
     con = console()
-    for old, kind in demo_folders(out):
-        remove_directory(old, kind)  # the demo's own earlier output, never a folder of the user's
     with con.status("exporting to a LeRobot v3.0 dataset (lerobot's writer, AV1 video) ..."):
-        result = run(load_catalog(overlay_paths), episodes, out, ExportSpec(DEMO_REPO_ID, width=res, height=res),
-                     renders=renders, variants=variants)
+        made = export_dataset(overlay_paths, episodes, out, renders, variants, res)
+    result, ep = made.export, made.episode
     con.print(f"dataset {result.root}: {result.episodes} episodes, {result.frames} frames at {result.fps} Hz, "
               f"{len(result.features)} features; every episode's video frames checked against its rows")
-    from lerobot.datasets.lerobot_dataset import LeRobotDataset
-
-    ds = LeRobotDataset(DEMO_REPO_ID, root=out, video_backend="pyav")
-    item = ds[len(ds) // 2]
-    shapes = ", ".join(f"{k} {tuple(v.shape)}" for k, v in item.items() if hasattr(v, "shape") and v.ndim > 0)
-    ep = ds.meta.episodes[0]
-    con.print(f'loaded with LeRobotDataset("{DEMO_REPO_ID}", root="{out}"): {len(ds)} frames; one frame: {shapes}; '
-              f'task "{item["task"]}"')
+    con.print(f'loaded with LeRobotDataset("{DEMO_REPO_ID}", root="{out}"): {made.frames} frames; one frame: '
+              f'{made.shapes}; task "{made.task}"')
     con.print(f"episode 0 metadata: variant {ep['rik/variant']}, preset {ep['rik/preset']}, operator "
               f"{ep['rik/operator']}, outcome {ep['rik/outcome']}, seed {ep['rik/seed']}; card: {out / 'README.md'}")
     con.print("next: rik export-lerobot episodes/ --out DIR --repo-id OWNER/NAME (docs/lerobot.md)")

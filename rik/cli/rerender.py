@@ -11,6 +11,7 @@ import typer
 
 from rik.cli.common import CatalogOption, WorkersOpt, console, overlays, progress_bar
 from rik.cli.sim import VariantsOpt
+from rik.demo import DEMO_RES
 from rik.paths import check_folder
 
 if TYPE_CHECKING:
@@ -104,45 +105,29 @@ def rerender(episodes: EpisodesArg, res: ResOpt = "256",
          denoise=denoise, variant=variant)
 
 
-DEMO_RES = 128
-"""Image size of the demo's streams, px (small, so the re-render takes about a minute on two cores)."""
-
-
 def print_demo_renders(overlay_paths: list[Path], episodes: list[Path], out: Path = Path("renders"),
                        variants: Path = Path("variants"), res: int = DEMO_RES) -> None:
-    """Render the demo episodes' sim streams and their Mitsuba re-renders (``res`` x ``res`` px), check that the
-    two agree in silhouette on the first episode's first state, and write the first episode's two streams side by
-    side."""
-    from rik.episodes.episode import read_episode, read_meta, states
-    from rik.episodes.replay import episode_scene
+    """Render the demo episodes' sim streams and their Mitsuba re-renders (``res`` x ``res`` px), print how the two
+    agree in silhouette on the first episode's first state and where the two streams are side by side
+    (:mod:`rik.demo`)."""
+    from rik.demo import DEMO_STREAMS, align_and_compare, frames_of, render_kind, stream_spec
     from rik.registry.load import load_catalog
-    from rik.render.align import silhouette_iou
-    from rik.render.episodes import render_episode
-    from rik.render.sheet import contact_sheet
-    from rik.render.streams import StreamSpec
 
     cat = load_catalog(overlay_paths)
     con = console()
     first = []
-    for spec in (StreamSpec("sim", res, res), StreamSpec("rerendered", res, res)):
+    for kind in DEMO_STREAMS:
         with progress_bar() as progress:
-            task = progress.add_task(f"{spec.key} frames", total=sum(read_meta(e).steps + 1 for e in episodes),
-                                     last="")
+            task = progress.add_task(f"{stream_spec(kind, res).key} frames", total=frames_of(episodes), last="")
             # the ignore: mypy cannot infer the type of a lambda with a default argument
-            results = [render_episode(cat, e, spec, renders=out, variants=variants,
-                                      progress=lambda n, t=task: progress.update(t, advance=n))  # type: ignore[misc]
-                       for e in episodes]
+            results = render_kind(cat, episodes, kind, out, variants, res,
+                                  progress=lambda n, t=task: progress.update(t, advance=n))  # type: ignore[misc]
         first.append(results[0])
         for r in results:
             con.print(f"stream {r.directory}: {r.frames} frames x {', '.join(r.cameras)}"
                       + (f", {r.seconds_per_frame:.2f} s per frame" if r.rendered else " (already rendered)"))
-    meta, table = read_episode(episodes[0], ("state",))
-    scene = episode_scene(cat, episodes[0], variants, meta)
-    scene.restore(states(table)[0])
-    ious = {cam: silhouette_iou(scene.model, scene.data, cam, res, res, cat.finishes)
-            for cam in first[0].cameras}
+    ious, png = align_and_compare(cat, episodes[0], first, variants, res)
     con.print("alignment of the two streams, silhouette IoU at the first state: "
               + ", ".join(f"{cam} {v:.3f}" for cam, v in ious.items()))
-    png = contact_sheet([s.directory for s in first], first[1].directory.parent / "compare.png")
     con.print(f"side by side: {png}")
     con.print("next: rik rerender episodes/ --res 256, rik visual-gap --real DIR --sim DIR --rerendered DIR")

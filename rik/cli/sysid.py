@@ -10,8 +10,9 @@ from typing import Annotated, Any
 import typer
 
 from rik.cli.common import CatalogOption, console, overlays
+from rik.demo import DEMO_CATALOG, DEMO_DATA, DEMO_PRESET, DEMO_REPORT
 from rik.errors import RikError
-from rik.outputs import MadeFolder, check_replaceable, holds_only, staged_directory
+from rik.outputs import check_replaceable
 
 app = typer.Typer(help="Model discovery: what the simulation gets wrong about a measured joint, the cause, the "
                        "extended joint model and the gain on held-out data.", no_args_is_help=True)
@@ -208,54 +209,15 @@ def apply(report: Annotated[Path, typer.Argument(help="A report directory of rik
     con.print(f"build variants with it: rik variants build --catalog {catalog_dir} --preset {as_preset} ...")
 
 
-DEMO_DATA, DEMO_REPORT, DEMO_CATALOG = Path("sysid-data"), Path("sysid-report"), Path("sysid-catalog")
-DEMO_PRESET = "demo-measured"
-
-
-def _is_demo_catalog(folder: Path) -> bool:
-    """Whether ``folder`` is the demo's catalog: the one preset file ``rik sysid apply`` wrote, nothing else."""
-    from rik.sysid.preset import preset_file
-
-    file = preset_file(folder, DEMO_PRESET)
-    try:
-        with file.open(encoding="utf-8") as handle:
-            first = handle.readline()
-    except (OSError, UnicodeDecodeError):
-        return False
-    return first.startswith(f"# Resistance preset '{DEMO_PRESET}' fitted") and holds_only(folder, {file.name})
-
-
-DEMO_ADVICE = "run the demo in another folder"
-DEMO_CATALOG_FOLDER = MadeFolder("the demo's catalog (its one preset file)", _is_demo_catalog, DEMO_ADVICE)
-
-
 def print_demo_sysid(overlay_paths: list[Path]) -> None:
-    """The demo's model discovery: simulated measurements of a drawer with a hidden soft-close damper into
-    sysid-data/, the fit and its report into sysid-report/, the fitted joint as a preset in sysid-catalog/. Each
-    folder replaces the demo's earlier one, and only a folder rik made (a user's folder there is refused)."""
-    from dataclasses import replace
-
-    import numpy as np
-
-    from rik.sysid.discover import discover
-    from rik.sysid.preset import apply_report
-    from rik.sysid.report import REPORT_FOLDER, write_report
-    from rik.sysid.synthetic.generate import random_truth, simulate_trials, write_trials
-    from rik.sysid.trials import simulated_folder
+    """The demo's model discovery (:func:`rik.demo.discover_sysid`), printed: what the fit found in simulated
+    measurements of a drawer, where the report and the fitted preset are."""
+    from rik.demo import discover_sysid
 
     con = console()
-    for folder, kind in ((DEMO_DATA, simulated_folder()), (DEMO_REPORT, REPORT_FOLDER),
-                         (DEMO_CATALOG, DEMO_CATALOG_FOLDER)):
-        check_replaceable(folder, replace(kind, advice=DEMO_ADVICE))  # all three before any work
     with con.status("model discovery on simulated measurements of a drawer ..."):
-        truth = random_truth("soft_close", "slide", np.random.default_rng(0))
-        trials = simulate_trials(truth, n_trials=4, seed=0)
-        write_trials(trials, DEMO_DATA, truth)
-        found = discover(trials)
-        write_report(found, DEMO_REPORT)
-        with staged_directory(DEMO_CATALOG, DEMO_CATALOG_FOLDER) as stage:
-            preset = DEMO_CATALOG / apply_report(DEMO_REPORT, DEMO_PRESET, stage, overlays=overlay_paths).name
-    con.print(f"{len(trials)} measured trials of a drawer with a hidden effect ({DEMO_DATA}/; the truth in "
-              f"{DEMO_DATA / 'truth.json'}): {found.sentence()}")
-    con.print(f"report {DEMO_REPORT / 'report.md'}; preset '{DEMO_PRESET}' in {preset} (use it with --catalog "
+        found = discover_sysid(overlay_paths)
+    con.print(f"{found.trials} measured trials of a drawer with a hidden effect ({DEMO_DATA}/; the truth in "
+              f"{DEMO_DATA / 'truth.json'}): {found.sentence}")
+    con.print(f"report {DEMO_REPORT / 'report.md'}; preset '{DEMO_PRESET}' in {found.preset} (use it with --catalog "
               f"{DEMO_CATALOG} --preset {DEMO_PRESET})")

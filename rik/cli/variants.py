@@ -43,27 +43,17 @@ OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Directory of built va
 DirOpt = Annotated[Path, typer.Option("--dir", "-d", help="Directory of built variants.")]
 
 
-DEMO_VARIANTS = ("drawer-chest-80__two_point-bow-128__normal", "door-base-60-left__knob-mushroom-30__high",
-                 "flap-lift-up-60__finger_pull-edge-lip-100__smooth")
-
-
 def print_demo_variants(overlay_paths: list[Path], out: Path = Path("variants")) -> None:
-    """Build :data:`DEMO_VARIANTS` into ``out`` (valid ones are skipped) and print what each check found."""
-    import json
+    """Build the demo's variants into ``out`` (:func:`rik.demo.build_variants`) and print what each check found."""
+    from rik.demo import build_variants
 
-    from rik.combinator.build import build_variant
-    from rik.registry.ids import parse_variant_id
-    from rik.registry.load import load_catalog
-
-    cat = load_catalog(overlay_paths)
     con = console()
     with con.status("building sample variants (MuJoCo) ..."):
-        results = [build_variant(cat, parse_variant_id(cat, v), out) for v in DEMO_VARIANTS]
-    for r in results:
-        if r.status == "rejected":
+        results = build_variants(overlay_paths, out)
+    for r, report in results:
+        if report is None:
             con.print(f"variant {r.id}: [red]rejected[/] by {r.failed_check}: {r.reason}")
             continue
-        report = json.loads((out / r.id / "report.json").read_text(encoding="utf-8"))
         pulls = ", ".join(f"{f['id']} {f['force_to_open_n']:.0f} N" for f in report["fronts"])
         con.print(f"variant {r.id}: valid ({len(report['checks'])} checks), {report['hulls']} convex handle parts; "
                   f"force to open at the handle: {pulls}")
@@ -73,25 +63,19 @@ def print_demo_variants(overlay_paths: list[Path], out: Path = Path("variants"))
 
 def print_demo_episode(overlay_paths: list[Path], out: Path = Path("episodes"), variants: Path = Path("variants"),
                        episodes: int = 2) -> list[Path]:
-    """Record ``episodes`` contact-rich episodes (seeds 0, 1, ...) of the first demo variant into ``out``, check
-    that each replays exactly and return their directories."""
-    from rik.episodes.record import record
-    from rik.episodes.replay import verify_episode
-    from rik.registry.load import load_catalog
+    """Record the demo's episodes (:func:`rik.demo.record_episodes`), print how each went and replayed, and return
+    their directories."""
+    from rik.demo import record_episodes
 
-    cat = load_catalog(overlay_paths)
     con = console()
-    dirs = []
     with con.status("recording scripted episodes (MuJoCo) ..."):
-        metas = record(cat, DEMO_VARIANTS[0], "contact_rich", episodes=episodes, out=out, variants=variants)
-    for meta in metas:
-        check = verify_episode(cat, out / meta.id, variants)
+        recorded = record_episodes(overlay_paths, out, variants, episodes)
+    for meta, check in recorded:
         con.print(f"episode {out / meta.id}: {meta.outcome} (opened {meta.final_opening:.0%} in "
                   f"{meta.steps / meta.fps:.1f} s; {'; '.join(meta.log)}); replay "
                   f"{'exact' if check.exact else 'NOT exact'} over {check.rows} states")
-        dirs.append(out / meta.id)
     con.print("next: rik bench (the resistance benchmark), rik teleop VARIANT --device keyboard")
-    return dirs
+    return [out / meta.id for meta, _ in recorded]
 
 
 def _select(cat: Catalog, base: list[str] | None, handle_type: list[HandleTypeOpt] | None, handle: list[str] | None,
