@@ -201,14 +201,13 @@ def test_an_export_reads_each_episode_once_and_renders_from_that_read(work: Path
                                                                         monkeypatch: pytest.MonkeyPatch) -> None:
     """states.parquet is read (sha256, parse) and the scene built once per episode, also where the export renders
     the episode's missing stream; the progress counts episodes."""
-    import rik.episodes.episode as episode_module
-    import rik.episodes.replay as replay_module
+    import rik.episodes.recorded as recorded_module  # where RecordedEpisode, every export's reader, looks them up
 
     reads: list[Path] = []
     scenes: list[Path] = []
-    read, build = episode_module.read_episode, replay_module.episode_scene
-    monkeypatch.setattr(episode_module, "read_episode", lambda d, *a, **k: reads.append(Path(d)) or read(d, *a, **k))
-    monkeypatch.setattr(replay_module, "episode_scene",
+    read, build = recorded_module.read_episode, recorded_module.episode_scene
+    monkeypatch.setattr(recorded_module, "read_episode", lambda d, *a, **k: reads.append(Path(d)) or read(d, *a, **k))
+    monkeypatch.setattr(recorded_module, "episode_scene",
                         lambda c, d, *a, **k: scenes.append(Path(d)) or build(c, d, *a, **k))
     stages: list[tuple[str, int, int]] = []
     spec = ExportSpec(REPO, streams=("sim",), cameras=("front",), **SPEC)
