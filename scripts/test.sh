@@ -9,4 +9,8 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 source "$root/scripts/setup.sh"
+# Bytecode: the workers and the commands the tests start import the same modules; where PYTHONDONTWRITEBYTECODE is
+# set each of them compiled rik's modules again and pytest rewrote every test file's asserts again (about 3.5 CPU-s
+# per worker). Python then writes __pycache__/ beside the sources (git ignores it, .ci/run does not count it).
+unset PYTHONDONTWRITEBYTECODE
 cd "$root" && uv run --locked pytest -n "${RIK_TEST_WORKERS:-$(( $(nproc) + 1 ))}" --maxprocesses 8 --dist loadfile --no-loadscope-reorder --durations 15 "$@"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import faulthandler
 import os
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -49,18 +50,48 @@ test fails with every thread's stack (pytest-timeout), also where a call of Play
 own (``keyboard.up`` waits for the page, which a starved machine may never schedule)."""
 
 
+FILE_SECONDS: dict[str, tuple[int, int]] = {
+    "test_web_teleop.py": (139, 0), "test_sysid_discover.py": (107, 0), "test_policy_loop.py": (101, 0),
+    "test_dataset_ray.py": (94, 0), "test_dataset_build.py": (86, 0), "test_cli_catalog.py": (83, 4),
+    "test_env_robots.py": (81, 0), "test_export.py": (77, 3), "test_finger.py": (75, 0), "test_render.py": (65, 0),
+    "test_policy_experiment.py": (52, 0), "test_teleop_viewer.py": (44, 0), "test_assets_import.py": (39, 0),
+    "test_export_robots.py": (39, 0), "test_web_viewer3d.py": (34, 1), "test_sysid_foreign_discover.py": (33, 0),
+    "test_combinator.py": (9, 21), "test_web_catalog.py": (24, 0), "test_sysid_cli.py": (4, 18),
+    "test_dataset_draw.py": (19, 0), "test_sim.py": (0, 19), "test_hostile_input.py": (0, 18),
+    "test_record_split.py": (18, 0), "test_swing_grasp.py": (10, 7), "test_collision_mode.py": (16, 0),
+    "test_assets_core.py": (7, 9), "test_robots_sim.py": (5, 11), "test_output_contract.py": (3, 12),
+    "test_web_security.py": (10, 5), "test_nothing_lost.py": (7, 7), "test_dataset_scale.py": (5, 9),
+    "test_visual_gap.py": (8, 5), "test_layering.py": (0, 13), "test_workers.py": (12, 0),
+    "test_assets_import_base.py": (11, 0), "test_bounded_reader.py": (3, 8), "test_gen_knobs.py": (4, 7),
+    "test_gen_two_point.py": (5, 5), "test_untrusted_folders.py": (0, 10), "test_sysid_generate.py": (3, 6),
+    "test_export_outcomes.py": (0, 8), "test_teleop_view_model.py": (7, 1), "test_sysid_roundtrip.py": (0, 8),
+    "test_handle_shape.py": (3, 4), "test_eval_labels.py": (0, 6), "test_leader_teleop.py": (0, 4),
+}
+"""Seconds a worker spent in each of the longest test files (its ``slow`` tests, its others) in a run of the whole
+suite and one of the everyday tier with three workers on an idle 2-core machine (2026-11-28): the order in which
+:func:`pytest_collection_modifyitems` hands the files out. Only the order depends on them; a file not listed
+(a few seconds) runs after these, slow files first."""
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """A test that drives a browser or opens a window is also ``slow`` (out of the everyday tier) and bounded by
-    :data:`BROWSER_TEST_S`. Files with slow tests run first: pytest-xdist hands out files in this order
-    (``--no-loadscope-reorder`` in scripts/test.sh; by default it orders them by their number of tests), so the long
-    ones start at once and the many short ones fill the workers' last minutes (longest first packs best)."""
+    :data:`BROWSER_TEST_S`. The longest files run first (:data:`FILE_SECONDS`, counting only the part of a file that
+    this run selects), then the other files with slow tests, then the rest: pytest-xdist hands out files in this
+    order (``--no-loadscope-reorder`` in scripts/test.sh; by default it orders them by their number of tests), so
+    the long ones start at once and the many short ones fill the workers' last minutes (longest first packs best;
+    the files that wait on a browser or a window at a person's pace run beside ones that keep the cores busy)."""
     for item in items:
         if item.get_closest_marker("browser") or item.get_closest_marker("display"):
             item.add_marker(pytest.mark.slow)
             if item.get_closest_marker("timeout") is None:
                 item.add_marker(pytest.mark.timeout(BROWSER_TEST_S))
     slow_files = {item.path for item in items if item.get_closest_marker("slow")}
-    items.sort(key=lambda item: item.path not in slow_files)  # stable: each file's own order is kept
+    fast_files = {item.path for item in items if not item.get_closest_marker("slow")}
+    seconds = {path: (FILE_SECONDS.get(path.name, (0, 0))[0] if path in slow_files else 0)
+               + (FILE_SECONDS.get(path.name, (0, 0))[1] if path in fast_files else 0)
+               for path in slow_files | fast_files}
+    # stable: each file's own order is kept, and files of equal weight stay in collection order
+    items.sort(key=lambda item: (-seconds[item.path], item.path not in slow_files))
 
 
 @pytest.fixture(autouse=True)
@@ -92,31 +123,59 @@ def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
 SHORT_KNOB = "drawer-bedside-45__knob-mushroom-30__normal"
 
 
+def shared_folder(tmp_path_factory: pytest.TempPathFactory, name: str, build: Callable[[Path], None]) -> Path:
+    """The folder ``name`` that ``build(folder)`` fills, made once per run: under pytest-xdist the first worker that
+    asks builds it in a temporary folder beside the shared cache (:func:`_isolated_cache`) and renames it into place,
+    holding a file lock, while the others wait for it and then use the same folder; without workers, in this
+    session's own temporary directory. Users treat it as read-only (a test that changes it works on a copy)."""
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        folder = tmp_path_factory.mktemp(name)
+        build(folder)
+        return folder
+    import fcntl
+    import shutil
+    import tempfile
+
+    root = tmp_path_factory.getbasetemp().parent / "shared"
+    root.mkdir(exist_ok=True)
+    folder = root / name
+    with open(root / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes (also when this process dies)
+        if not folder.is_dir():
+            staging = Path(tempfile.mkdtemp(prefix=f".{name}-", dir=root))
+            try:
+                build(staging)
+                staging.rename(folder)  # complete, or not there at all
+            finally:
+                shutil.rmtree(staging, ignore_errors=True)
+    return folder
+
+
 @pytest.fixture(scope="session")
 def bow_variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A variants folder holding the demo's variant :data:`shared.BOW`, built once per test process (shared: use it
-    read-only; a test that changes variants builds its own)."""
+    """A variants folder holding the demo's variant :data:`shared.BOW`, built once per run and shared by the test
+    processes (:func:`shared_folder`: use it read-only; a test that changes variants builds its own)."""
     from shared import BOW, builtin_catalog
 
     from rik.combinator.build import ensure_variant
 
-    out = tmp_path_factory.mktemp("bow-variants")
-    ensure_variant(builtin_catalog(), BOW, out)
-    return out
+    return shared_folder(tmp_path_factory, "bow-variants", lambda out: ensure_variant(builtin_catalog(), BOW, out))
 
 
 @pytest.fixture(scope="session")
 def knob_recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A folder with ``episodes/`` holding one short episode of :data:`SHORT_KNOB` (grasp_vertical, seed 3, 0.3 s) and
-    the ``variants/`` it was recorded in, made once per session (per worker): the input that tests of damaged or
-    hostile input copy, or hand to a command that must refuse something else. Tests never write into it."""
+    the ``variants/`` it was recorded in, made once per run and shared by the test processes (:func:`shared_folder`):
+    the input that tests of damaged or hostile input copy, or hand to a command that must refuse something else.
+    Tests never write into it."""
     from rik.episodes.record import record
     from rik.registry import load_catalog
 
-    root = tmp_path_factory.mktemp("knob-recording")
-    record(load_catalog(), SHORT_KNOB, "grasp_vertical", seed=3, out=root / "episodes", variants=root / "variants",
-           max_seconds=0.3)
-    return root
+    def build(root: Path) -> None:
+        record(load_catalog(), SHORT_KNOB, "grasp_vertical", seed=3, out=root / "episodes",
+               variants=root / "variants", max_seconds=0.3)
+
+    return shared_folder(tmp_path_factory, "knob-recording", build)
 
 
 def read_line(stream, timeout: float = 120.0) -> str:

@@ -207,8 +207,10 @@ def test_bench_small_table(variants: Path, tmp_path: Path) -> None:
     from rik.benchmark.bench import plan_tasks, run_bench
     from rik.tables import summarise, table_markdown
 
+    # seed 35 draws drawer-bedside-45__knob-mushroom-30__high: the knob whose collision the suite builds anyway
+    # (knob_recording), where seed 2's fluted knob cost its CoACD decomposition (7 CPU-s) to this test alone
     tasks = plan_tasks(CAT, types=["knob"], presets=["high"], strategies=["grasp_vertical", "contact_rich"],
-                       per_cell=1, seed=2)
+                       per_cell=1, seed=35)
     assert [t.variant for t in tasks][0] == tasks[1].variant  # strategies compared on the same draw
     rows = run_bench(CAT, tasks, variants=variants)
     assert {r["strategy"] for r in rows} == {"grasp_vertical", "contact_rich"}
