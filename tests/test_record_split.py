@@ -54,8 +54,8 @@ def test_record_split_bad_combinations(rik, tmp_path: Path) -> None:
                                           "all)")
     assert err() == ("rik: error: give a VARIANT to record, or --split SPLIT (train, val, test or all) to draw each "
                      "episode's variant from its seed")
-    assert err(bow, *DRAW_ARGS) == ("rik: error: --types, --presets and --kinds choose the variants of --split; give "
-                                    "--split too, or drop them")
+    assert err(bow, *DRAW_ARGS) == ("rik: error: --types, --presets, --kinds and --joints choose the variants of "
+                                    "--split; give --split too, or drop them")
     assert err("--split", "all", "--front", "drawer") == ("rik: error: --front drawer: with --split each episode's "
                                                           "front is drawn from its seed; drop --front")
     assert err("--split", "all", "--types", "lever") == ("rik: error: unknown handle type 'lever' (types: "

@@ -144,7 +144,7 @@ def test_overlay_designs_default_to_train_or_their_own_split(rik, tmp_path, monk
      "mine.yaml:18, field 'splits.test': design 'knob/bell' is built in and has its split in rik's own "
      "splits.yaml; an overlay may place only its own designs"),
     ("splits:\n  holdout: [knob/mine]\n",
-     "mine.yaml:18, field 'splits.holdout': unknown split; valid fields: version, train, val, test"),
+     "mine.yaml:18, field 'splits.holdout': unknown split; valid fields: version, train, val, test, presets"),
     ("splits:\n  version: 2\n",
      "mine.yaml:18, field 'splits.version': must be 1, the splits version this rik reads (got 2)"),
     ("splits: [knob/mine]\n",

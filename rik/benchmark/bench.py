@@ -1,6 +1,9 @@
-"""The resistance benchmark (the paper's section 4 and Table 3): randomised drawer-opening episodes per handle
-type x resistance preset x strategy, counted as F/P/S; and a sweep of the gripper's grip force that shows how
-success depends on the ratio of the grasp's friction capacity to the joint's resistance."""
+"""The resistance benchmark (the paper's section 4 and Table 3): randomised opening episodes per handle type x
+resistance preset x strategy, counted as F/P/S, on the fronts of the kinds asked for (drawers, doors, flaps; a
+hinge's outcome on the same fractions of its range as a slide's), with the paper's presets or, on hinged fronts,
+the real doors' (``joints="measured"``), and why each episode that did not succeed missed (:func:`miss_reason`);
+and a sweep of the gripper's grip force that shows how success depends on the ratio of the grasp's friction
+capacity to the joint's resistance."""
 
 from __future__ import annotations
 
@@ -17,10 +20,14 @@ from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, cho
 from rik.errors import RikError
 from rik.outputs import Replaces, check_own_files, save_figure
 from rik.paths import pyplot
+from rik.registry.ids import parse_variant_id
+from rik.schemas.joints import CATALOG_LEVER_ARM
+from rik.sim.outcome import SUCCESS_OPENING
 
 if TYPE_CHECKING:
     from rik.outputs import Replaces
     from rik.registry.catalog import Catalog
+    from rik.schemas.joints import JointResistance
 
 DEFAULT_STRATEGIES = ("grasp_horizontal", "grasp_vertical", "contact_rich")
 SWEEP_GRIP_FORCES = (5.0, 10.0, 20.0, 40.0, 80.0, 130.0)
@@ -56,9 +63,12 @@ more is a typo, refused before any episode is planned."""
 def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, presets: Sequence[str] = DEFAULT_PRESETS,
                strategies: Sequence[str] = DEFAULT_STRATEGIES, per_cell: int = 10, seed: int = 0,
                kinds: Sequence[str] = DEFAULT_KINDS, grip_forces: Sequence[float | None] = (None,),
-               robot: str = "hand-e") -> list[BenchTask]:
+               robot: str = "hand-e", joints: str = "paper") -> list[BenchTask]:
     """Every episode of the benchmark. The same episode index of every strategy (and grip force, and robot) gets
-    the same variant, front and start pose, so strategies and robots are compared on the same draws."""
+    the same variant, front and start pose, so strategies and robots are compared on the same draws; with
+    ``joints="measured"`` a hinged front takes one of the real doors' presets (every one of the catalog, drawn
+    from the episode's seed) and a drawer its cell's, on the same draws as with ``paper`` joints."""
+    from rik.episodes.draw import Draw
     from rik.episodes.operators import make_operator
     from rik.registry.ids import select_variants
 
@@ -76,9 +86,8 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
                        f"{MAX_BENCH_EPISODES:,} episodes in all")
     for s in strategies:
         make_operator(s)
-    for p in presets:
-        if p not in catalog.presets:
-            raise RikError(f"unknown preset '{p}' (presets: {', '.join(catalog.presets)})")
+    Draw(None, tuple(types), tuple(presets), tuple(kinds), joints).check(catalog)  # unknown names: one line
+    hinge_presets = Draw(None, joints=joints).hinge_presets(catalog)
     if catalog.robot(robot).as_arm is not None and any(g is not None for g in grip_forces):
         raise RikError(f"--sweep grip-force varies the Hand-E's grip; robot {robot}'s gripper is its model's")
     compatible = {k.id for k in select_variants(catalog, handle_types=types, presets=presets)}
@@ -87,7 +96,8 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
         for pi, p in enumerate(presets):
             for i in range(per_cell):
                 task_seed = seed * 1_000_003 + ti * 10_007 + pi * 101 + i
-                vid, front = choose_variant(catalog, t, p, np.random.default_rng(task_seed), kinds, compatible)
+                vid, front = choose_variant(catalog, t, p, np.random.default_rng(task_seed), kinds, compatible,
+                                            hinge_presets=hinge_presets)
                 for strategy in strategies:
                     for g in grip_forces:
                         tasks.append(BenchTask(t, p, strategy, i, task_seed, vid, front, g, robot))
@@ -97,7 +107,7 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
 def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) -> dict[str, object]:
     """Run one benchmark episode (not written to disk); returns its row for the results table."""
     from rik.episodes.episode import run_operator
-    from rik.episodes.operators import PULL_SPEED, make_operator
+    from rik.episodes.operators import make_operator
     from rik.episodes.record import randomise_start
     from rik.sim.build import build_scene
     from rik.sim.outcome import classify
@@ -118,14 +128,58 @@ def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) 
     randomise_start(scene, rng)
     operator = make_operator(task.strategy)
     recorder = run_operator(scene, operator, rng, MAX_SECONDS)
-    res = catalog.presets[task.preset].slide
-    resistance = res.frictionloss + res.damping * PULL_SPEED
-    return {**asdict(task), "grip_force": gripper.grip_force, "pad_friction": gripper.pad_friction,
-            "friction_capacity": gripper.friction_capacity(), "resistance": resistance,
-            "capacity_ratio": gripper.friction_capacity() / resistance, "outcome": classify(scene.opening()),
-            "final_opening": round(scene.opening(), 4), "max_opening": round(recorder.max_opening, 4),
-            "seconds": round(recorder.steps / scene.control_fps, 2), "reachable_opening": reach,
-            "log": " | ".join(operator.log)}
+    front = next(f for f in catalog.base_units[parse_variant_id(catalog, task.variant).base].fronts
+                 if f.id == task.front)
+    preset = parse_variant_id(catalog, task.variant).preset
+    resistance = handle_resistance(catalog.presets[preset].for_joint(front.joint.type), front.joint.type.value)
+    row = {**asdict(task), "preset": preset, "cell_preset": task.preset, "front_layout": front.layout,
+           "joints": "paper" if catalog.presets[preset].in_default_set else "measured",
+           "grip_force": gripper.grip_force, "pad_friction": gripper.pad_friction,
+           "friction_capacity": gripper.friction_capacity(),
+           "resistance": round(resistance, 4), "capacity_ratio": gripper.friction_capacity() / max(resistance, 1e-9),
+           "outcome": classify(scene.opening()), "final_opening": round(scene.opening(), 4),
+           "max_opening": round(recorder.max_opening, 4), "seconds": round(recorder.steps / scene.control_fps, 2),
+           "reachable_opening": reach, "log": " | ".join(operator.log)}
+    return {**row, "miss": miss_reason(row)}
+
+
+def handle_resistance(joint: JointResistance, joint_type: str) -> float:
+    """What the front resists a pull at its handle with, N: the force to start it from rest at closed
+    (:meth:`~rik.schemas.joints.JointResistance.hold_at_closed`: friction, catch, spring, minus a tilt) plus its
+    damping at the strategies' pull speed; a hinge's torques at the catalog's lever arm (0.40 m)."""
+    from rik.episodes.operators import PULL_SPEED
+
+    if joint_type == "slide":
+        return joint.hold_at_closed() + joint.damping * PULL_SPEED
+    lever = CATALOG_LEVER_ARM
+    return (joint.hold_at_closed() + joint.damping * PULL_SPEED / lever) / lever
+
+
+MISS_REASONS = ("no grasp found", "slipped", "stalled", "out of reach", "time out", "stopped early")
+"""Why an episode that did not succeed missed (:func:`miss_reason`), in the order tables list them."""
+
+
+def miss_reason(row: dict[str, Any]) -> str:
+    """Why the episode of a benchmark row did not succeed (``""`` where it did), from its outcome, the strategy's
+    log and the arm's reach: ``no grasp found`` (no plan left to try), ``slipped`` or ``stalled`` (the last attempt's
+    closed-loop check: the handle left the pads, or the front stopped moving), ``out of reach`` (the arm cannot
+    reach a success's opening), ``time out`` (still pulling at the episode's end), or ``stopped early`` (the
+    strategy ended its pull below a success for another reason)."""
+    if row["outcome"] == "S":
+        return ""
+    events = [e.strip() for e in str(row.get("log", "")).split("|") if e.strip()]
+    last = events[-1] if events else ""
+    if float(row.get("reachable_opening", 1.0)) < SUCCESS_OPENING:
+        return "out of reach"
+    if last == "no grasp found":
+        return "no grasp found"
+    if last.startswith("slip"):
+        return "slipped"
+    if last.startswith("stall"):
+        return "stalled"
+    if float(row.get("seconds", 0.0)) >= MAX_SECONDS - 0.05:
+        return "time out"
+    return "stopped early"
 
 
 def run_bench(catalog: Catalog, tasks: Sequence[BenchTask], *, workers: int = 1, variants: Path = Path("variants"),
@@ -146,6 +200,48 @@ def run_bench(catalog: Catalog, tasks: Sequence[BenchTask], *, workers: int = 1,
         if progress is not None:
             progress(row)
     return [r for r in rows if r is not None]
+
+
+LAYOUTS = ("drawer", "door-left", "door-right", "flap-lift-up", "flap-drop-down")
+"""Front layouts (:attr:`rik.schemas.base_units.Front.layout`) in the order the tables list them."""
+MEASURED_COLUMN = "measured"
+"""The column of the episodes whose hinge was a real door's preset."""
+
+
+def table_columns(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """``rows`` with each ``preset`` replaced by its table column: the paper preset, or :data:`MEASURED_COLUMN`
+    for a real door's (whichever door it was; ``results.csv`` keeps the door)."""
+    return [{**r, "preset": MEASURED_COLUMN if r.get("joints") == "measured" else r["preset"]} for r in rows]
+
+
+def layout_tables(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFAULT_PRESETS) -> str:
+    """Table 3 per front layout (drawers, left and right doors, lift-up and drop-down flaps; those present), the
+    paper presets' columns then the measured doors', each followed by the misses' reasons."""
+    from rik.tables import table_markdown
+
+    columns = table_columns(rows)
+    out = []
+    for layout in [*LAYOUTS, *sorted({r["front_layout"] for r in rows} - set(LAYOUTS))]:
+        mine = [r for r in columns if r["front_layout"] == layout]
+        if not mine:
+            continue
+        out += [f"### {layout} ({len(mine)} episodes)", "", table_markdown(mine, [*presets, MEASURED_COLUMN]),
+                miss_markdown(mine, [*presets, MEASURED_COLUMN]), ""]
+    return "\n".join(out)
+
+
+def miss_markdown(rows: Sequence[dict[str, Any]], presets: Sequence[str]) -> str:
+    """How many episodes of each strategy and column missed, and why (:data:`MISS_REASONS`); one line per
+    strategy that missed."""
+    lines = ["| misses: strategy | column | " + " | ".join(MISS_REASONS) + " |",
+             "|---|---|" + "---:|" * len(MISS_REASONS)]
+    for s in dict.fromkeys(r["strategy"] for r in rows):
+        for p in presets:
+            missed = [r["miss"] for r in rows if r["strategy"] == s and r["preset"] == p and r["miss"]]
+            if missed:
+                lines.append(f"| {s} | {p} | " + " | ".join(str(missed.count(m) or "") for m in MISS_REASONS)
+                             + " |")
+    return "\n".join(lines) + "\n" if len(lines) > 2 else "No misses.\n"
 
 
 def sweep_plot(rows: Sequence[dict[str, Any]], png: Path) -> Path:

@@ -152,12 +152,19 @@ def stats(catalog: CatalogOption = None,
 @app.command()
 def splits(catalog: CatalogOption = None,
            format: Annotated[OutputFormat, typer.Option("--format", "-f")] = OutputFormat.table) -> None:
-    """The named splits (train, val, test): designs and handles per handle type, and the split version."""
+    """The named splits (train, val, test): designs and handles per handle type, the measured presets (real doors)
+    of each, and the split version."""
     from rik.registry.index import catalog_index
+    from rik.registry.load import load_catalog
+    from rik.registry.splits import SPLITS, split_presets
     from rik.registry.stats import HANDLE_TYPES, split_stats
     from rik.registry.views import format_columns
+    from rik.schemas.joints import MECHANISMS
 
     numbers = split_stats(catalog_index(overlays(catalog)))
+    cat = load_catalog(overlays(catalog))
+    numbers["presets"] = {name: {p: cat.presets[p].hinge.mechanism() for p in split_presets(cat, name)}
+                          for name in SPLITS}
     if format is OutputFormat.json:
         print_json(numbers)
         return
@@ -168,8 +175,12 @@ def splits(catalog: CatalogOption = None,
     rows = [[name, *(f"{row['by_type'][t]['designs']} / {row['by_type'][t]['handles']}" for t in HANDLE_TYPES),
              str(row["designs"]), str(row["handles"])] for name, row in numbers["splits"].items()]
     print(format_columns(headers, rows))
-    print(f"splits v{numbers['version']}: whole designs held out; every split spans all base units and presets "
-          "(list one with `rik catalog list --split test`)")
+    print(format_columns(["split", *(f"real doors: {m}" for m in MECHANISMS)],
+                         [[name, *(str(list(doors.values()).count(m)) for m in MECHANISMS)]
+                          for name, doors in numbers["presets"].items()]))
+    print(f"splits v{numbers['version']}: whole designs and whole real doors held out; every split spans all base "
+          "units and the paper's presets (list one with `rik catalog list --split test`; draw a split's real doors "
+          "with --joints measured)")
 
 
 def print_summary(numbers: dict[str, Any]) -> None:

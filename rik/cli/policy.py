@@ -13,6 +13,7 @@ from rik.cli.common import (
     DEFAULT_ROBOT,
     DEFAULT_WORKERS,
     CatalogOption,
+    JointsOpt,
     RobotOpt,
     WorkersOpt,
     console,
@@ -41,6 +42,7 @@ def eval_policy(
         "knob,finger_pull,two_point",
         kinds: Annotated[str, typer.Option("--kinds", help="Comma-separated front kinds of the base units.")] =
         "drawer",
+        joints: JointsOpt = "paper",
         per_cell: Annotated[int, typer.Option("--episodes-per-cell", "-n", min=1,
                                               help="Episodes per handle type x preset.")] = 10,
         seed: Annotated[int, typer.Option("--seed", help="First episode's seed (lerobot-eval's --seed); then +1 "
@@ -104,10 +106,10 @@ def eval_policy(
     from rik.episodes.draw import Draw
 
     cat = load_catalog(overlays(catalog))
-    draw = Draw.parse(split, types, presets, kinds)
+    draw = Draw.parse(split, types, presets, kinds, joints)
     specs = [prepare(cat, EvalSpec(p, draw.split, draw.handle_types, draw.presets, draw.kinds, per_cell, seed,
                                    episode_length, rerendered, videos, str(variants),
-                                   labels[i] if labels else "", request))
+                                   labels[i] if labels else "", request, joints=draw.joints))
              for i, p in enumerate(policies)]
     wheres = eval_folders(outs, specs)
     con = console()

@@ -13,6 +13,7 @@ from rik.cli.common import (
     DEFAULT_WORKERS,
     CatalogOption,
     HandleTypeOpt,
+    JointsOpt,
     RobotOpt,
     WorkersOpt,
     _check_workers,
@@ -61,6 +62,9 @@ def record(variant: Annotated[str | None, typer.Argument(
                                                        "(default smooth,normal,high).", show_default=False)] = None,
            kinds: Annotated[str | None, typer.Option("--kinds", help="With --split: comma-separated front kinds "
                                                      "(default drawer).", show_default=False)] = None,
+           joints: Annotated[str | None, typer.Option("--joints", help="With --split: the hinges of doors and "
+                                                      "flaps, paper (default) or measured (the split's real "
+                                                      "doors).", show_default=False)] = None,
            workers: Annotated[int, typer.Option("--workers", "-j", callback=_check_workers,
                                                 help="With --split: episodes in this many processes.")] = 1,
            action_noise: Annotated[float, typer.Option("--action-noise", min=0.0, max=0.05,
@@ -80,9 +84,9 @@ def record(variant: Annotated[str | None, typer.Argument(
     if variant is None and split is None:
         raise RikError(f"give a VARIANT to record, or --split SPLIT (train, val, test or {ALL_SPLIT}) to draw "
                        "each episode's variant from its seed")
-    if split is None and (types, presets, kinds) != (None, None, None):
-        raise RikError("--types, --presets and --kinds choose the variants of --split; give --split too, or drop "
-                       "them")
+    if split is None and (types, presets, kinds, joints) != (None, None, None, None):
+        raise RikError("--types, --presets, --kinds and --joints choose the variants of --split; give --split "
+                       "too, or drop them")
     if split is not None and front is not None:
         raise RikError(f"--front {front}: with --split each episode's front is drawn from its seed; drop --front")
     cat = load_catalog(overlays(catalog))
@@ -99,8 +103,8 @@ def record(variant: Annotated[str | None, typer.Argument(
         if split is not None:
             from rik.episodes.draw import Draw
 
-            metas = record_split(cat, Draw.parse(split, types, presets, kinds), strategy, episodes=episodes, seed=seed,
-                                 out=out, variants=variants, workers=workers, overlays=overlays(catalog),
+            metas = record_split(cat, Draw.parse(split, types, presets, kinds, joints), strategy, episodes=episodes,
+                                 seed=seed, out=out, variants=variants, workers=workers, overlays=overlays(catalog),
                                  progress=report, skipped=skipped, robot=arm, params=params)
         else:
             assert variant is not None
@@ -209,15 +213,19 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
                                                     "several grip forces and plot success against the friction "
                                                     "capacity ratio.")] = None,
           seed: Annotated[int, typer.Option("--seed")] = 0,
+          kinds: Annotated[str, typer.Option("--kinds", help="Comma-separated front kinds: drawer, door, flap; "
+                                             "all for every kind.")] = "drawer",
+          joints: JointsOpt = "paper",
           out: Annotated[Path, typer.Option("--out", "-o", help="Where results.csv, table.md (and sweep.png) go.")]
           = Path("bench"),
           workers: WorkersOpt = DEFAULT_WORKERS, variants: VariantsOpt = Path("variants"),
           robot: RobotOpt = DEFAULT_ROBOT, catalog: CatalogOption = None) -> None:
-    """The resistance benchmark: randomised drawer-opening episodes, F/P/S per handle type, strategy and preset
-    (the paper's Table 3), with the Hand-E or an arm (--robot)."""
+    """The resistance benchmark: randomised opening episodes of drawers, doors or flaps (--kinds), F/P/S per front,
+    handle type, strategy and preset (the paper's Table 3) with the misses' reasons, with the paper's presets or
+    real doors' hinges (--joints measured), with the Hand-E or an arm (--robot)."""
     from rik.benchmark import bench as b
     from rik.registry.load import load_catalog
-    from rik.tables import rows_csv, table_markdown
+    from rik.tables import rows_csv
 
     check_folder(out, "--out")  # before the episodes, not after them
     b.check_bench_out(out)
@@ -229,16 +237,20 @@ def bench(types: Annotated[list[HandleTypeOpt] | None, typer.Option("--types", "
             raise RikError(f"unknown sweep '{sweep}' (sweeps: grip-force)")
         grip_forces = b.SWEEP_GRIP_FORCES
     type_names = [t.value for t in types] if types else list(b.DEFAULT_TYPES)
-    tasks = b.plan_tasks(cat, types=type_names, presets=[p.strip() for p in presets.split(",") if p.strip()],
+    preset_names = [p.strip() for p in presets.split(",") if p.strip()]
+    kind_names = (list(dict.fromkeys(f.kind for u in cat.base_units.values() for f in u.fronts))
+                  if kinds.strip() == "all"
+                  else [k.strip() for k in kinds.split(",") if k.strip()])
+    tasks = b.plan_tasks(cat, types=type_names, presets=preset_names,
                          strategies=[s.strip() for s in strategies.split(",") if s.strip()], per_cell=per_cell,
-                         seed=seed, grip_forces=grip_forces, robot=robot)
+                         seed=seed, grip_forces=grip_forces, robot=robot, kinds=kind_names, joints=joints.strip())
     with progress_bar() as progress:
         task = progress.add_task("episodes", total=len(tasks), last="")
         rows = b.run_bench(cat, tasks, workers=workers, variants=variants, overlays=overlays(catalog),
                            progress=lambda r: progress.update(task, advance=1, last=f"{r['variant']} {r['outcome']}"))
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "results.csv", rows_csv(rows), b.bench_file())
-    table = table_markdown(rows)
+    table = b.layout_tables(rows, preset_names)
     write_text(out / "table.md", table, b.bench_file())
     con = console()
     if sweep is not None:

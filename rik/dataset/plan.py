@@ -273,7 +273,7 @@ def draw_episodes(catalog: Catalog, spec: DatasetSpec, source: str) -> list[tupl
     from rik.episodes.draw import DEFAULT_PRESETS, DEFAULT_TYPES, Draw
 
     draw = Draw(sel.split, tuple(sel.handle_types) or DEFAULT_TYPES, tuple(sel.presets) or DEFAULT_PRESETS,
-                tuple(sel.kinds))
+                tuple(sel.kinds), sel.joints)
     try:
         draw.check(catalog)
     except RikError as exc:

@@ -82,7 +82,7 @@ class OpenFrontEnv(gym.Env):
     def __init__(self, variant: str | None = DEFAULT_VARIANT, front: str | None = None, *,
                  split: str | None = None, handle_types: tuple[str, ...] | None = None,
                  presets: tuple[str, ...] | None = None, kinds: tuple[str, ...] | None = None,
-                 io: PolicyIO | None = None, action_mode: str = "delta", images: bool = False,
+                 joints: str = "paper", io: PolicyIO | None = None, action_mode: str = "delta", images: bool = False,
                  robot: str | None = None, streams: tuple[str, ...] | None = None,
                  cameras: tuple[str, ...] | None = None, image_size: tuple[int, int] | None = None,
                  handle_shape: str | None = None, spp: int = 16, episode_length: int = EPISODE_LENGTH,
@@ -116,7 +116,7 @@ class OpenFrontEnv(gym.Env):
         self._draw = None
         if split is not None or variant is None:
             self._draw = Draw(split, tuple(handle_types or DEFAULT_TYPES), tuple(presets or DEFAULT_PRESETS),
-                              tuple(kinds or DEFAULT_KINDS))
+                              tuple(kinds or DEFAULT_KINDS), joints)
             self._draw.check(self._catalog)
         self._variant, self._front = variant, front
         self.action_mode = action_mode

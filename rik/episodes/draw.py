@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rik.errors import RikError
+from rik.registry.ids import SEPARATOR
 
 if TYPE_CHECKING:
     from rik.registry.catalog import Catalog
@@ -26,6 +27,10 @@ DEFAULT_TYPES = ("knob", "finger_pull", "two_point")
 DEFAULT_PRESETS = ("smooth", "normal", "high")
 DEFAULT_KINDS = ("drawer",)
 """The paper's case study opens drawers."""
+JOINTS = ("paper", "measured")
+"""What the hinges of a draw's doors and flaps are: the cell's preset (``paper``, as the paper's Table 3), or a
+real door's fitted preset of the draw's split (``measured``: :func:`rik.registry.splits.split_presets`). Drawers
+keep the cell's preset either way: no real drawer was measured."""
 ALL_SPLIT = "all"
 """The split name that means every handle of the catalog (``split=None``)."""
 DRAW_STREAM = 0x5EED_D4A1
@@ -39,14 +44,30 @@ class EpisodeDraw:
     seed: int
     handle_type: str
     preset: str
+    """The preset of the variant: the cell's, or with ``measured`` joints a hinged front's real door."""
     variant: str
     front: str
 
 
 def choose_variant(catalog: Catalog, handle_type: str, preset: str, rng: np.random.Generator, kinds: Sequence[str],
-                   compatible: set[str], handles: Sequence[str] | None = None) -> tuple[str, str]:
+                   compatible: set[str], handles: Sequence[str] | None = None,
+                   hinge_presets: Sequence[str] = ()) -> tuple[str, str]:
     """A (variant id, front id) of ``handle_type`` on a base unit of ``kinds`` with ``preset``, among the
-    ``compatible`` variant ids (and the ``handles`` given, default every handle of the type)."""
+    ``compatible`` variant ids (and the ``handles`` given, default every handle of the type). With
+    ``hinge_presets`` a hinged front's variant takes one of them instead of ``preset`` (drawn last from ``rng``,
+    so the base unit, handle and front are those of the same draw without them)."""
+    from rik.registry.ids import variant_id
+
+    base, handle, front = _choose(catalog, handle_type, preset, rng, kinds, compatible, handles)
+    joint = next(f for f in catalog.base_units[base].fronts if f.id == front).joint.type.value
+    if hinge_presets and joint == "hinge":
+        preset = hinge_presets[int(rng.integers(len(hinge_presets)))]
+    return variant_id(base, handle, preset), front
+
+
+def _choose(catalog: Catalog, handle_type: str, preset: str, rng: np.random.Generator, kinds: Sequence[str],
+            compatible: set[str], handles: Sequence[str] | None) -> tuple[str, str, str]:
+    """(base unit id, handle id, front id) of :func:`choose_variant`'s draw with ``preset``."""
     from rik.registry.ids import variant_id
 
     bases = sorted(b for b, u in catalog.base_units.items() if u.fronts[0].kind in kinds)
@@ -57,10 +78,9 @@ def choose_variant(catalog: Catalog, handle_type: str, preset: str, rng: np.rand
             break
         base = bases[int(rng.integers(len(bases)))]
         handle = pool[int(rng.integers(len(pool)))]
-        vid = variant_id(base, handle, preset)
-        if vid in compatible:
+        if variant_id(base, handle, preset) in compatible:
             fronts = catalog.base_units[base].fronts
-            return vid, fronts[int(rng.integers(len(fronts)))].id
+            return base, handle, fronts[int(rng.integers(len(fronts)))].id
     raise RikError(f"no valid {handle_type} variant on a {'/'.join(kinds)} base unit with preset {preset}")
 
 
@@ -73,17 +93,31 @@ class Draw:
     handle_types: tuple[str, ...] = DEFAULT_TYPES
     presets: tuple[str, ...] = DEFAULT_PRESETS
     kinds: tuple[str, ...] = DEFAULT_KINDS
+    joints: str = "paper"
+    """:data:`JOINTS`: ``measured`` gives doors and flaps the split's real doors' presets."""
 
     @classmethod
     def parse(cls, split: str, types: str | None = None, presets: str | None = None,
-              kinds: str | None = None) -> Draw:
+              kinds: str | None = None, joints: str | None = None) -> Draw:
         """A draw from command-line text: a split name (:data:`ALL_SPLIT` for every handle) and comma-separated
-        handle types, presets and front kinds (None: the defaults; a list with no name fails :meth:`check`)."""
+        handle types, presets and front kinds (None: the defaults; a list with no name fails :meth:`check`), and
+        the joints (:data:`JOINTS`)."""
         def names(text: str | None, default: tuple[str, ...]) -> tuple[str, ...]:
             return default if text is None else tuple(t.strip() for t in text.split(",") if t.strip())
 
         return cls(None if split == ALL_SPLIT else split, names(types, DEFAULT_TYPES),
-                   names(presets, DEFAULT_PRESETS), names(kinds, DEFAULT_KINDS))
+                   names(presets, DEFAULT_PRESETS), names(kinds, DEFAULT_KINDS), (joints or "paper").strip())
+
+    def hinge_presets(self, catalog: Catalog) -> tuple[str, ...]:
+        """The presets a hinged front of this draw takes in place of its cell's: none for ``paper`` joints, the
+        split's measured presets (every measured preset for :data:`ALL_SPLIT`) for ``measured``."""
+        if self.joints != "measured":
+            return ()
+        if self.split is None:
+            return tuple(catalog.preset_splits)
+        from rik.registry.splits import split_presets
+
+        return split_presets(catalog, self.split)
 
     @property
     def cells(self) -> list[tuple[str, str]]:
@@ -111,6 +145,18 @@ class Draw:
                 raise RikError(f"unknown front kind '{k}' (kinds: {', '.join(kinds)})")
         if not (self.handle_types and self.presets and self.kinds):
             raise RikError("a draw needs at least one handle type, preset and front kind")
+        if self.joints not in JOINTS:
+            raise RikError(f"unknown joints '{self.joints}' (joints: {', '.join(JOINTS)})")
+        if self.joints == "measured":
+            hinged = sorted({f.kind for u in catalog.base_units.values() for f in u.fronts
+                             if f.joint.type.value == "hinge"})
+            if not set(self.kinds) & set(hinged):
+                raise RikError(f"joints 'measured': real doors' presets go on hinged fronts ({', '.join(hinged)}); "
+                               f"the kinds {', '.join(self.kinds)} have none (a drawer keeps the paper's slides: no "
+                               "real drawer was measured)")
+            if not self.hinge_presets(catalog):
+                raise RikError(f"joints 'measured': split '{self.split}' holds no measured preset (rik catalog "
+                               "splits lists them)")
 
     def episode(self, catalog: Catalog, seed: int) -> EpisodeDraw:
         """The episode of ``seed`` (an integer >= 0)."""
@@ -118,8 +164,9 @@ class Draw:
         handle_type, preset = cells[seed % len(cells)]
         rng = np.random.default_rng([seed, DRAW_STREAM])
         compatible, handles = _pool(catalog, self)
-        variant, front = choose_variant(catalog, handle_type, preset, rng, self.kinds, compatible, handles)
-        return EpisodeDraw(seed, handle_type, preset, variant, front)
+        variant, front = choose_variant(catalog, handle_type, preset, rng, self.kinds, compatible, handles,
+                                        self.hinge_presets(catalog))
+        return EpisodeDraw(seed, handle_type, variant.rsplit(SEPARATOR, 1)[1], variant, front)
 
 
 _POOLS: dict[tuple[int, Draw], tuple[Catalog, set[str], tuple[str, ...] | None]] = {}

@@ -73,6 +73,15 @@ class EvalSpec:
     """Filled by :func:`prepare` for a policy: its LeRobot type (``act``)."""
     note: str = ""
     """Filled by :func:`prepare`: one line where the policy's contract was guessed (an older policy)."""
+    joints: str = "paper"
+    """The hinges of doors and flaps (:data:`rik.episodes.draw.JOINTS`): the cell's preset, or the split's real
+    doors."""
+
+    def draw(self) -> Any:
+        """The :class:`rik.episodes.draw.Draw` of these episodes."""
+        from rik.episodes.draw import Draw
+
+        return Draw(self.split, self.handle_types, self.presets, self.kinds, self.joints)
 
     @property
     def strategy(self) -> str | None:
@@ -101,6 +110,8 @@ class EvalSpec:
                     data["needs"][f.name] = list(value) if isinstance(value, tuple) else value
         if data["action_frame"] in (AUTO, "world"):
             del data["action_frame"]
+        if data["joints"] == "paper":  # runs from before measured joints stay finished
+            del data["joints"]
         return data
 
     @classmethod
@@ -118,14 +129,13 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     """The spec checked (split, presets, types, the policy folder and its inputs, the strategy), with its label
     and the contract the episodes run with filled in: a policy's (its contract file, or the guess for an older
     policy, noted in :attr:`EvalSpec.note`), an explicit ``--action-frame`` over it only where it was guessed."""
-    from rik.episodes.draw import Draw
     from rik.episodes.operators import make_operator
 
     if spec.episodes_per_cell < 1:
         raise RikError(f"--episodes-per-cell {spec.episodes_per_cell}: must be at least 1")
     if spec.seed < 0:
         raise RikError(f"--seed {spec.seed}: must be 0 or more")
-    Draw(spec.split, spec.handle_types, spec.presets, spec.kinds).check(catalog)
+    spec.draw().check(catalog)
     catalog.robot(spec.io.robot)  # an unknown robot: one line with suggestions
     asked = spec.io.action_frame
     if spec.strategy is not None:
@@ -166,7 +176,8 @@ def env_config(spec: EvalSpec) -> Any:
     try:
         return RikEnvConfig.for_contract(spec.io, episode_length=spec.episode_length, split=spec.split or "all",
                                          handle_types=",".join(spec.handle_types), presets=",".join(spec.presets),
-                                         kinds=",".join(spec.kinds), variants_dir=spec.variants)
+                                         kinds=",".join(spec.kinds), joints=spec.joints,
+                                         variants_dir=spec.variants)
     except ValueError as exc:  # the config's refusals, in LeRobot's words (draccus shows them to lerobot-eval)
         where = "" if spec.strategy is not None else f"{spec.operator}: "
         raise RikError(f"{where}{exc}") from None
@@ -468,11 +479,10 @@ def run_eval(catalog: Any, spec: EvalSpec, out: Path, *, workers: int = 1,
     from functools import partial
 
     from rik.combinator.build import require_variants
-    from rik.episodes.draw import Draw
     from rik.workers import map_ids
 
     check_eval_out(out)
-    draw = Draw(spec.split, spec.handle_types, spec.presets, spec.kinds)
+    draw = spec.draw()
     seeds = spec.seeds()
     require_variants(catalog, (draw.episode(catalog, s).variant for s in seeds), Path(spec.variants),
                      workers=workers)

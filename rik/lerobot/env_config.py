@@ -80,6 +80,9 @@ class RikEnvConfig(EnvConfig):
     presets: str = "smooth,normal,high"
     kinds: str = "drawer"
     """Front kinds of the base units drawn (drawer, door, flap, ...)."""
+    joints: str = "paper"
+    """The hinges of doors and flaps: ``paper`` (the cell's preset) or ``measured`` (the split's real doors,
+    ``rik catalog splits``); drawers keep the paper's slides."""
     cameras: str = AUTO
     """Cameras rendered for the policy, e.g. ``front,wrist``; empty for a state-only policy; ``auto``: those the
     policy of ``--policy.path`` reads (none without one)."""
@@ -241,7 +244,7 @@ def env_kwargs(cfg: RikEnvConfig) -> dict[str, Any]:
     (``io``), the action mode and the environment's own settings."""
     from rik.episodes.draw import Draw
 
-    draw = Draw.parse(cfg.split, cfg.handle_types, cfg.presets, cfg.kinds)
+    draw = Draw.parse(cfg.split, cfg.handle_types, cfg.presets, cfg.kinds, cfg.joints)
     return {"variant": None, "split": draw.split, "handle_types": draw.handle_types, "presets": draw.presets,
-            "kinds": draw.kinds, "io": cfg.io, "action_mode": action_mode(cfg), "spp": cfg.spp,
+            "kinds": draw.kinds, "joints": draw.joints, "io": cfg.io, "action_mode": action_mode(cfg), "spp": cfg.spp,
             "episode_length": cfg.episode_length, "variants_dir": cfg.variants_dir, "render_mode": cfg.render_mode}

@@ -38,6 +38,8 @@ class Catalog:
     """Version of the split assignment (:data:`rik.registry.splits.SPLITS_VERSION`)."""
     robots: Mapping[str, Robot] = field(default_factory=dict)
     """Robots that open the fronts (``hand-e``, the default, and arms)."""
+    preset_splits: Mapping[str, str] = field(default_factory=dict)
+    """Measured preset id -> its split (real doors held out whole; the paper's presets are in every split)."""
 
     # ---- lookups with suggestions -------------------------------------------------------------------------
     def handle(self, handle_id: str) -> Handle:

@@ -93,10 +93,12 @@ def build_catalog(entries: Sequence[RawEntry]) -> Catalog:
     for entry, preset in _entries(parsed, "presets", ResistancePreset):
         checks.check_preset_breakable(entry, preset, robots)
     origins = {(s, m.id): Origin(str(e.file), e.builtin) for s, items in parsed.items() for e, m in items}
-    splits, version = assign_splits(split_entries, {m.id: e.builtin for e, m in _entries(parsed, "designs",
-                                                                                           HandleDesign)})
+    splits, version, preset_splits = assign_splits(
+        split_entries, {m.id: e.builtin for e, m in _entries(parsed, "designs", HandleDesign)},
+        {m.id: e.builtin for e, m in _entries(parsed, "presets", ResistancePreset) if not m.in_default_set})
     return Catalog(designs=designs, handles=handles, base_units=base_units, presets=presets, finishes=finishes,
-                   origins=origins, splits=splits, splits_version=version, robots=robots)
+                   origins=origins, splits=splits, splits_version=version, robots=robots,
+                   preset_splits=preset_splits)
 
 
 def _entries[M: CatalogModel](parsed: dict[str, list[tuple[RawEntry, CatalogModel]]], section: str,

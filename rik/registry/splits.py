@@ -1,11 +1,15 @@
 """Named, versioned splits of the catalog: every handle design is in exactly one of train, val and test.
 
 Whole designs are held out (all handles of a design share its split) and every split holds all three handle
-types. Base units and presets are not split: every split spans all of them. The assignment is committed data,
-``rik/registry/data/splits.yaml`` (a catalog file whose top-level ``splits`` key holds ``version`` and a list of
-design ids per split). A user overlay may add a ``splits`` mapping of its own that places its own designs;
-overlay designs it does not place are in :data:`OVERLAY_DEFAULT` (train), so the held-out sets only grow when a
-user says so. Changing which built-in design is in which split means a new :data:`SPLITS_VERSION`.
+types. Base units and the paper's presets are not split: every split spans all of them. The **measured presets**
+(real doors' hinges, :attr:`rik.schemas.joints.ResistancePreset.in_default_set` false) are split too, whole doors
+held out as designs are, each mechanism class (:func:`rik.schemas.joints.JointResistance.mechanism`) in every
+split: the ``presets`` mapping of the same ``splits`` key. The assignment is committed data,
+``rik/registry/data/splits.yaml`` (a catalog file whose top-level ``splits`` key holds ``version``, a list of
+design ids per split and ``presets``, a list of measured preset ids per split). A user overlay may add a
+``splits`` mapping of its own that places its own designs and measured presets; overlay designs and measured
+presets it does not place are in :data:`OVERLAY_DEFAULT` (train), so the held-out sets only grow when a user says
+so. Changing which built-in design or preset is in which split means a new :data:`SPLITS_VERSION`.
 """
 
 from __future__ import annotations
@@ -24,7 +28,9 @@ if TYPE_CHECKING:
 SPLITS = ("train", "val", "test")
 #: Version of the built-in assignment; datasets and evaluations record it ("splits v1").
 SPLITS_VERSION = 1
-#: The split of an overlay design that no ``splits`` mapping places.
+#: The key of a ``splits`` mapping that places measured presets (a mapping of split -> preset ids).
+PRESETS_KEY = "presets"
+#: The split of an overlay design or measured preset that no ``splits`` mapping places.
 OVERLAY_DEFAULT = "train"
 #: Where the built-in assignment lives.
 BUILTIN_SPLITS_FILE = BUILTIN_DIR / "splits.yaml"
@@ -51,6 +57,12 @@ def split_handles(catalog: Catalog, name: str) -> tuple[str, ...]:
     return tuple(h.id for h in catalog.handles.values() if catalog.splits[h.design] == name)
 
 
+def split_presets(catalog: Catalog, name: str) -> tuple[str, ...]:
+    """Ids of the measured presets of split ``name`` (real doors held out whole), in catalog order."""
+    check_split(name)
+    return tuple(p for p in catalog.presets if catalog.preset_splits.get(p) == name)
+
+
 def split_of(catalog: Catalog, handle_id: str) -> str:
     """The split a handle is in (that of its design); an unknown handle raises with close ids."""
     return catalog.splits[catalog.handle(handle_id).design]
@@ -61,14 +73,20 @@ def splits_version(catalog: Catalog) -> int:
     return catalog.splits_version
 
 
-def assign_splits(entries: Sequence[RawEntry], builtin_designs: Mapping[str, bool]) -> tuple[dict[str, str], int]:
-    """Validate the ``splits`` mappings of the catalog files: (design id -> split, version).
+def assign_splits(entries: Sequence[RawEntry], builtin_designs: Mapping[str, bool],
+                  measured_presets: Mapping[str, bool] | None = None
+                  ) -> tuple[dict[str, str], int, dict[str, str]]:
+    """Validate the ``splits`` mappings of the catalog files: (design id -> split, version, measured preset id ->
+    split).
 
-    ``builtin_designs``: every design id of the catalog, in catalog order, -> whether it is rik's own. Every
-    built-in design must be in exactly one split of rik's own files; an overlay may place only its own designs.
-    Raises :class:`CatalogError` naming the file, the split and the design.
+    ``builtin_designs``: every design id of the catalog, in catalog order, -> whether it is rik's own;
+    ``measured_presets`` the same for the measured presets. Every built-in design and measured preset must be in
+    exactly one split of rik's own files; an overlay may place only its own. Raises :class:`CatalogError` naming
+    the file, the split and the design or preset.
     """
+    measured = dict(measured_presets or {})
     placed: dict[str, tuple[str, RawEntry, int]] = {}
+    placed_presets: dict[str, tuple[str, RawEntry, int]] = {}
     version: int | None = None
     builtin_file = next((e.file for e in entries if e.builtin), BUILTIN_SPLITS_FILE)
     for entry in entries:
@@ -86,9 +104,12 @@ def assign_splits(entries: Sequence[RawEntry], builtin_designs: Mapping[str, boo
                                        f"reads (got {value!r})", line)
                 version = value if entry.builtin else version
                 continue
+            if key == PRESETS_KEY:
+                _place_presets(entry, value, measured, placed_presets)
+                continue
             if key not in SPLITS:
-                raise CatalogError(shown, None, field, f"unknown split; valid fields: version, {', '.join(SPLITS)}",
-                                   line)
+                raise CatalogError(shown, None, field, "unknown split; valid fields: version, "
+                                   f"{', '.join(SPLITS)}, {PRESETS_KEY}", line)
             if value is None:
                 continue
             if not isinstance(value, list):
@@ -102,8 +123,54 @@ def assign_splits(entries: Sequence[RawEntry], builtin_designs: Mapping[str, boo
         if builtin and design not in placed:
             raise CatalogError(display_path(builtin_file), None, SPLITS_KEY, f"design '{design}' is in no split; "
                                f"add it to one of {', '.join(SPLITS)}", line_of(builtin_file, (SPLITS_KEY,)))
+    for preset, builtin in measured.items():
+        if builtin and preset not in placed_presets:
+            raise CatalogError(display_path(builtin_file), None, f"{SPLITS_KEY}.{PRESETS_KEY}",
+                               f"measured preset '{preset}' is in no split; add it to one of {', '.join(SPLITS)}",
+                               line_of(builtin_file, (SPLITS_KEY,)))
     splits = {d: placed[d][0] if d in placed else OVERLAY_DEFAULT for d in builtin_designs}
-    return splits, SPLITS_VERSION if version is None else version
+    preset_splits = {p: placed_presets[p][0] if p in placed_presets else OVERLAY_DEFAULT for p in measured}
+    return splits, SPLITS_VERSION if version is None else version, preset_splits
+
+
+def _place_presets(entry: RawEntry, value: object, measured: Mapping[str, bool],
+                   placed: dict[str, tuple[str, RawEntry, int]]) -> None:
+    """Record the measured presets of a ``splits.presets`` mapping in ``placed``, or raise."""
+    shown = display_path(entry.file)
+    field = f"{SPLITS_KEY}.{PRESETS_KEY}"
+    if value is None:
+        return
+    if not isinstance(value, dict):
+        raise CatalogError(shown, None, field, f"must be a mapping of {', '.join(SPLITS)} to measured preset ids",
+                           line_of(entry.file, (SPLITS_KEY, PRESETS_KEY)))
+    for split, ids in value.items():
+        where = f"{field}.{split}"
+        line = line_of(entry.file, (SPLITS_KEY, PRESETS_KEY, split))
+        if split not in SPLITS:
+            raise CatalogError(shown, None, where, f"unknown split; valid fields: {', '.join(SPLITS)}", line)
+        if ids is None:
+            continue
+        if not isinstance(ids, list):
+            raise CatalogError(shown, None, where, "must be a list of measured preset ids", line)
+        for i, preset in enumerate(ids):
+            line = line_of(entry.file, (SPLITS_KEY, PRESETS_KEY, split, i))
+            if not isinstance(preset, str):
+                raise CatalogError(shown, None, where, f"must list preset ids (got {preset!r})", line)
+            if preset not in measured:
+                raise CatalogError(shown, None, where, f"'{preset}' is not a measured preset (only measured presets "
+                                   "are split; the paper's are in every split)"
+                                   + ("" if not measured else f"; measured: {', '.join(list(measured)[:4])}, ..."),
+                                   line)
+            if measured[preset] and not entry.builtin:
+                raise CatalogError(shown, None, where, f"preset '{preset}' is built in and has its split in rik's "
+                                   "own splits.yaml; an overlay may place only its own presets", line)
+            if preset in placed:
+                other, other_entry, other_index = placed[preset]
+                other_line = line_of(other_entry.file, (SPLITS_KEY, PRESETS_KEY, other, other_index))
+                raise CatalogError(shown, None, where, f"preset '{preset}' is already in split '{other}' "
+                                   f"({display_path(other_entry.file)}:{other_line}); a door is in exactly one "
+                                   "split", line)
+            placed[preset] = (split, entry, i)
 
 
 def _place(entry: RawEntry, split: str, index: int, design: object, builtin_designs: Mapping[str, bool],

@@ -90,6 +90,17 @@ class Front(Frozen):
     placements: tuple[Placement, ...] = ()
     """Overrides of the combinator's placement rule, per handle type (see :class:`Placement`)."""
 
+    @property
+    def layout(self) -> str:
+        """What the front is, as tables split it: ``drawer``; ``door-right`` (hinge axis up, as the catalog's
+        ``*-right`` doors) or ``door-left``; ``flap-lift-up`` (hinge above the panel's centre) or
+        ``flap-drop-down``."""
+        if self.kind == "drawer":
+            return "drawer"
+        if self.kind == "door":
+            return "door-right" if self.joint.axis[2] > 0 else "door-left"
+        return "flap-lift-up" if self.joint.anchor[2] > self.center[2] else "flap-drop-down"
+
 
 class BaseUnit(Frozen):
     """A piece of furniture that handles are paired with."""

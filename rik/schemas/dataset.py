@@ -35,7 +35,10 @@ class VariantSelection(Frozen):
     each) as the gym environment, ``rik eval`` and ``rik record --split`` draw them: the seed's handle type x preset
     cell in turn, a variant and front of the split's handles (:mod:`rik.episodes.draw`), so ``draw: 360`` records
     exactly ``rik record --split train --episodes 360``'s episodes. Takes ``split``, ``handle_types``, ``presets``
-    and ``kinds``; each drawn episode runs once per operator."""
+    and ``kinds`` (and ``joints``); each drawn episode runs once per operator."""
+    joints: Literal["paper", "measured"] = "paper"
+    """With ``draw``: the hinges of doors and flaps, the cell's preset (``paper``) or a real door of the split
+    (``measured``, :data:`rik.episodes.draw.JOINTS`); drawers keep the paper's slides."""
 
     @model_validator(mode="after")
     def _ids_alone(self) -> VariantSelection:
@@ -45,6 +48,8 @@ class VariantSelection(Frozen):
         if self.draw is not None and (self.ids or self.base_units or self.handles or self.sample is not None):
             raise ValueError("'draw' takes split, handle_types, presets and kinds; drop ids, base_units, handles "
                              "and sample")
+        if self.joints != "paper" and self.draw is None:
+            raise ValueError("'joints' chooses the hinges of drawn episodes; give 'draw' too, or drop it")
         return self
 
 
