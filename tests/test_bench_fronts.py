@@ -1,4 +1,4 @@
-"""``rik bench`` over every front kind: hinged fronts on the paper's presets and on real doors' on the same draws,
+"""``rik bench`` over every front kind: doors on the paper's presets and on real doors' on the same draws,
 Table 3 per front layout, and why each miss missed."""
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ def test_measured_tasks_are_the_paper_tasks_with_real_hinges() -> None:
         assert (a.seed, a.front, a.strategy) == (b.seed, b.front, b.strategy)
         base_a, preset_b = a.variant.rsplit("__", 1)[0], b.variant.rsplit("__", 1)[1]
         assert b.variant.startswith(base_a + "__")
-        assert preset_b == "normal" if a.variant.startswith("drawer-") else preset_b in catalog.preset_splits
-    with pytest.raises(RikError, match="real doors' presets go on hinged fronts"):
-        plan_tasks(catalog, kinds=["drawer"], joints="measured")
+        assert preset_b in catalog.preset_splits if a.variant.startswith("door-") else preset_b == "normal"
+    with pytest.raises(RikError, match="real doors' presets go on doors"):
+        plan_tasks(catalog, kinds=["drawer", "flap"], joints="measured")
     with pytest.raises(RikError, match=r"unknown front kind 'doors' \(kinds: door, drawer, flap\)"):
         plan_tasks(catalog, kinds=["doors"])
 
@@ -62,7 +62,7 @@ def test_bench_over_a_door_with_a_real_hinge_tables_it_per_layout(rik, tmp_path:
     assert f"### {row['front_layout']} (1 episodes)" in table and "measured F | measured P | measured S" in table
     assert ("No misses." in table) == (row["outcome"] == "S")
     r = rik("bench", "--kinds", "drawer", "--joints", "measured", "--out", str(tmp_path / "no"))
-    assert r.code == 2 and r.err.startswith("rik: error: joints 'measured': real doors' presets go on hinged fronts")
+    assert r.code == 2 and r.err.startswith("rik: error: joints 'measured': real doors' presets go on doors")
     assert not (tmp_path / "no").exists()
 
 

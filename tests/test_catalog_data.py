@@ -76,7 +76,7 @@ def test_slide_presets_are_the_papers(catalog) -> None:
         assert (slide.damping, slide.frictionloss, slide.provenance.value) == (damping, friction, "paper")
 
 
-def test_hinge_presets_follow_their_written_derivation(catalog) -> None:
+def test_door_presets_follow_their_written_derivation(catalog) -> None:
     lever = 0.40  # m, stated in presets.yaml
     paper = [p for p in catalog.presets.values() if p.source is not None and p.source.kind.value == "paper"]
     assert [p.id for p in paper] == ["smooth", "normal", "high"] == catalog.default_presets

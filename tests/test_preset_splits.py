@@ -1,5 +1,5 @@
 """The measured presets (real doors) split into train, val and test by the committed rule; draws with
-``joints="measured"`` give a hinged front a real door of the split and every other choice of the paper draw."""
+``joints="measured"`` give a door a real door of the split and every other choice of the paper draw."""
 
 from __future__ import annotations
 
@@ -53,8 +53,8 @@ def test_mechanism_classes() -> None:
 
 @pytest.mark.parametrize("split", ["train", "val", "test", None])
 def test_a_measured_draw_is_the_paper_draw_with_real_hinges(split: str | None) -> None:
-    """The same seed gives the same base unit, handle and front with both joints; a hinged front's preset is a
-    real door of the split, a drawer's the cell's; the draw is the same every time."""
+    """The same seed gives the same base unit, handle and front with both joints; a door's preset is a real door
+    of the split, a drawer's and a flap's the cell's; the draw is the same every time."""
     catalog = builtin_catalog()
     paper = Draw(split, kinds=KINDS)
     measured = Draw(split, kinds=KINDS, joints="measured")
@@ -68,8 +68,7 @@ def test_a_measured_draw_is_the_paper_draw_with_real_hinges(split: str | None) -
         assert a.variant.rsplit("__", 1)[0] == b.variant.rsplit("__", 1)[0]
         base = next(u for u in catalog.base_units.values() for f in u.fronts
                     if b.variant.startswith(u.id.replace("/", "-") + "__") and f.id == b.front)
-        hinged = next(f for f in base.fronts if f.id == b.front).joint.type.value == "hinge"
-        if hinged:
+        if next(f for f in base.fronts if f.id == b.front).kind == "door":
             assert b.preset in doors and b.variant.endswith("__" + b.preset)
             seen.add(b.preset)
         else:
@@ -77,12 +76,14 @@ def test_a_measured_draw_is_the_paper_draw_with_real_hinges(split: str | None) -
     assert seen and seen <= doors
 
 
-def test_measured_joints_need_a_hinged_kind_and_known_names() -> None:
+def test_measured_joints_need_doors_and_known_names() -> None:
     catalog = builtin_catalog()
-    with pytest.raises(RikError, match=r"^joints 'measured': real doors' presets go on hinged fronts \(door, flap\); "
-                       r"the kinds drawer have none \(a drawer keeps the paper's slides: no real drawer was "
-                       r"measured\)$"):
-        Draw("test", joints="measured").check(catalog)
+    for kinds in (("drawer",), ("drawer", "flap")):
+        with pytest.raises(RikError, match=r"^joints 'measured': real doors' presets go on doors; the kinds "
+                           f"{', '.join(kinds)} "
+                           r"have none \(drawers and flaps keep the paper's presets: no real drawer or flap was "
+                           r"measured\)$"):
+            Draw("test", kinds=kinds, joints="measured").check(catalog)
     with pytest.raises(RikError, match=r"^unknown joints 'real' \(joints: paper, measured\)$"):
         Draw("test", kinds=KINDS, joints="real").check(catalog)
 
@@ -100,7 +101,7 @@ def test_record_split_draws_measured_joints_as_the_draw_says(rik, tmp_path: Path
     meta = json.loads((episode / "meta.json").read_text())
     assert meta["variant"] == want.variant and want.preset in split_presets(builtin_catalog(), "val")
     r = rik("record", "--split", "val", "--joints", "measured", "--strategy", "planned", "--out", str(tmp_path / "no"))
-    assert r.code == 2 and r.err.startswith("rik: error: joints 'measured': real doors' presets go on hinged")
+    assert r.code == 2 and r.err.startswith("rik: error: joints 'measured': real doors' presets go on doors")
     assert not (tmp_path / "no").exists()
 
 

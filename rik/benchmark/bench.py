@@ -1,7 +1,7 @@
 """The resistance benchmark (the paper's section 4 and Table 3): randomised opening episodes per handle type x
 resistance preset x strategy, counted as F/P/S, on the fronts of the kinds asked for (drawers, doors, flaps; a
-hinge's outcome on the same fractions of its range as a slide's), with the paper's presets or, on hinged fronts,
-the real doors' (``joints="measured"``), and why each episode that did not succeed missed (:func:`miss_reason`);
+hinge's outcome on the same fractions of its range as a slide's), with the paper's presets or, on doors, the real
+doors' (``joints="measured"``), and why each episode that did not succeed missed (:func:`miss_reason`);
 and a sweep of the gripper's grip force that shows how success depends on the ratio of the grasp's friction
 capacity to the joint's resistance."""
 
@@ -66,7 +66,7 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
                robot: str = "hand-e", joints: str = "paper") -> list[BenchTask]:
     """Every episode of the benchmark. The same episode index of every strategy (and grip force, and robot) gets
     the same variant, front and start pose, so strategies and robots are compared on the same draws; with
-    ``joints="measured"`` a hinged front takes one of the real doors' presets (every one of the catalog, drawn
+    ``joints="measured"`` a door takes one of the real doors' presets (every one of the catalog, drawn
     from the episode's seed) and a drawer its cell's, on the same draws as with ``paper`` joints."""
     from rik.episodes.draw import Draw
     from rik.episodes.operators import make_operator
@@ -87,7 +87,7 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
     for s in strategies:
         make_operator(s)
     Draw(None, tuple(types), tuple(presets), tuple(kinds), joints).check(catalog)  # unknown names: one line
-    hinge_presets = Draw(None, joints=joints).hinge_presets(catalog)
+    door_presets = Draw(None, joints=joints).door_presets(catalog)
     if catalog.robot(robot).as_arm is not None and any(g is not None for g in grip_forces):
         raise RikError(f"--sweep grip-force varies the Hand-E's grip; robot {robot}'s gripper is its model's")
     compatible = {k.id for k in select_variants(catalog, handle_types=types, presets=presets)}
@@ -97,7 +97,7 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
             for i in range(per_cell):
                 task_seed = seed * 1_000_003 + ti * 10_007 + pi * 101 + i
                 vid, front = choose_variant(catalog, t, p, np.random.default_rng(task_seed), kinds, compatible,
-                                            hinge_presets=hinge_presets)
+                                            door_presets=door_presets)
                 for strategy in strategies:
                     for g in grip_forces:
                         tasks.append(BenchTask(t, p, strategy, i, task_seed, vid, front, g, robot))

@@ -33,9 +33,9 @@ RobotOpt = Annotated[str, typer.Option("--robot", help="Robot that opens the fro
                                       "Hand-E), panda-2f85, so100 or so101 (rik catalog list --kind robots).")]
 DEFAULT_ROBOT = "hand-e"
 
-JointsOpt = Annotated[str, typer.Option("--joints", help="The hinges of doors and flaps: paper (the preset of the "
+JointsOpt = Annotated[str, typer.Option("--joints", help="The hinges of doors: paper (the preset of the "
                                        "episode's cell, as the paper's Table 3) or measured (a real door of the "
-                                       "split, rik catalog splits); drawers keep the paper's slides.")]
+                                       "split, rik catalog splits); drawers and flaps keep the paper's presets.")]
 
 
 def robot_entry(catalog: object, robot: str) -> object | None:

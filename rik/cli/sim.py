@@ -62,9 +62,9 @@ def record(variant: Annotated[str | None, typer.Argument(
                                                        "(default smooth,normal,high).", show_default=False)] = None,
            kinds: Annotated[str | None, typer.Option("--kinds", help="With --split: comma-separated front kinds "
                                                      "(default drawer).", show_default=False)] = None,
-           joints: Annotated[str | None, typer.Option("--joints", help="With --split: the hinges of doors and "
-                                                      "flaps, paper (default) or measured (the split's real "
-                                                      "doors).", show_default=False)] = None,
+           joints: Annotated[str | None, typer.Option("--joints", help="With --split: the hinges of doors, "
+                                                      "paper (default) or measured (the split's real doors).",
+                                                      show_default=False)] = None,
            workers: Annotated[int, typer.Option("--workers", "-j", callback=_check_workers,
                                                 help="With --split: episodes in this many processes.")] = 1,
            action_noise: Annotated[float, typer.Option("--action-noise", min=0.0, max=0.05,

@@ -28,9 +28,12 @@ DEFAULT_PRESETS = ("smooth", "normal", "high")
 DEFAULT_KINDS = ("drawer",)
 """The paper's case study opens drawers."""
 JOINTS = ("paper", "measured")
-"""What the hinges of a draw's doors and flaps are: the cell's preset (``paper``, as the paper's Table 3), or a
-real door's fitted preset of the draw's split (``measured``: :func:`rik.registry.splits.split_presets`). Drawers
-keep the cell's preset either way: no real drawer was measured."""
+"""What the hinges of a draw's doors are: the cell's preset (``paper``, as the paper's Table 3), or a real door's
+fitted preset of the draw's split (``measured``: :func:`rik.registry.splits.split_presets`). Drawers and flaps keep
+the cell's preset either way: no real drawer or flap was measured, and a vertical door's hinge does not carry a
+flap's weight (a drop-down flap with a fridge door's hinge falls open: the variant's rest check refuses it)."""
+MEASURED_KINDS = ("door",)
+"""The front kinds whose hinges ``measured`` joints replace: those of the real mechanisms."""
 ALL_SPLIT = "all"
 """The split name that means every handle of the catalog (``split=None``)."""
 DRAW_STREAM = 0x5EED_D4A1
@@ -44,24 +47,24 @@ class EpisodeDraw:
     seed: int
     handle_type: str
     preset: str
-    """The preset of the variant: the cell's, or with ``measured`` joints a hinged front's real door."""
+    """The preset of the variant: the cell's, or with ``measured`` joints a door's real door."""
     variant: str
     front: str
 
 
 def choose_variant(catalog: Catalog, handle_type: str, preset: str, rng: np.random.Generator, kinds: Sequence[str],
                    compatible: set[str], handles: Sequence[str] | None = None,
-                   hinge_presets: Sequence[str] = ()) -> tuple[str, str]:
+                   door_presets: Sequence[str] = ()) -> tuple[str, str]:
     """A (variant id, front id) of ``handle_type`` on a base unit of ``kinds`` with ``preset``, among the
     ``compatible`` variant ids (and the ``handles`` given, default every handle of the type). With
-    ``hinge_presets`` a hinged front's variant takes one of them instead of ``preset`` (drawn last from ``rng``,
+    ``door_presets`` a door (:data:`MEASURED_KINDS`) takes one of them instead of ``preset`` (drawn last from ``rng``,
     so the base unit, handle and front are those of the same draw without them)."""
     from rik.registry.ids import variant_id
 
     base, handle, front = _choose(catalog, handle_type, preset, rng, kinds, compatible, handles)
-    joint = next(f for f in catalog.base_units[base].fronts if f.id == front).joint.type.value
-    if hinge_presets and joint == "hinge":
-        preset = hinge_presets[int(rng.integers(len(hinge_presets)))]
+    kind = next(f for f in catalog.base_units[base].fronts if f.id == front).kind
+    if door_presets and kind in MEASURED_KINDS:
+        preset = door_presets[int(rng.integers(len(door_presets)))]
     return variant_id(base, handle, preset), front
 
 
@@ -94,7 +97,7 @@ class Draw:
     presets: tuple[str, ...] = DEFAULT_PRESETS
     kinds: tuple[str, ...] = DEFAULT_KINDS
     joints: str = "paper"
-    """:data:`JOINTS`: ``measured`` gives doors and flaps the split's real doors' presets."""
+    """:data:`JOINTS`: ``measured`` gives doors the split's real doors' presets."""
 
     @classmethod
     def parse(cls, split: str, types: str | None = None, presets: str | None = None,
@@ -108,8 +111,8 @@ class Draw:
         return cls(None if split == ALL_SPLIT else split, names(types, DEFAULT_TYPES),
                    names(presets, DEFAULT_PRESETS), names(kinds, DEFAULT_KINDS), (joints or "paper").strip())
 
-    def hinge_presets(self, catalog: Catalog) -> tuple[str, ...]:
-        """The presets a hinged front of this draw takes in place of its cell's: none for ``paper`` joints, the
+    def door_presets(self, catalog: Catalog) -> tuple[str, ...]:
+        """The presets a door of this draw takes in place of its cell's: none for ``paper`` joints, the
         split's measured presets (every measured preset for :data:`ALL_SPLIT`) for ``measured``."""
         if self.joints != "measured":
             return ()
@@ -148,13 +151,11 @@ class Draw:
         if self.joints not in JOINTS:
             raise RikError(f"unknown joints '{self.joints}' (joints: {', '.join(JOINTS)})")
         if self.joints == "measured":
-            hinged = sorted({f.kind for u in catalog.base_units.values() for f in u.fronts
-                             if f.joint.type.value == "hinge"})
-            if not set(self.kinds) & set(hinged):
-                raise RikError(f"joints 'measured': real doors' presets go on hinged fronts ({', '.join(hinged)}); "
-                               f"the kinds {', '.join(self.kinds)} have none (a drawer keeps the paper's slides: no "
-                               "real drawer was measured)")
-            if not self.hinge_presets(catalog):
+            if not set(self.kinds) & set(MEASURED_KINDS):
+                raise RikError(f"joints 'measured': real doors' presets go on doors; the kinds "
+                               f"{', '.join(self.kinds)} have none (drawers and flaps keep the paper's presets: no "
+                               "real drawer or flap was measured)")
+            if not self.door_presets(catalog):
                 raise RikError(f"joints 'measured': split '{self.split}' holds no measured preset (rik catalog "
                                "splits lists them)")
 
@@ -165,7 +166,7 @@ class Draw:
         rng = np.random.default_rng([seed, DRAW_STREAM])
         compatible, handles = _pool(catalog, self)
         variant, front = choose_variant(catalog, handle_type, preset, rng, self.kinds, compatible, handles,
-                                        self.hinge_presets(catalog))
+                                        self.door_presets(catalog))
         return EpisodeDraw(seed, handle_type, variant.rsplit(SEPARATOR, 1)[1], variant, front)
 
 

@@ -74,7 +74,7 @@ class EvalSpec:
     note: str = ""
     """Filled by :func:`prepare`: one line where the policy's contract was guessed (an older policy)."""
     joints: str = "paper"
-    """The hinges of doors and flaps (:data:`rik.episodes.draw.JOINTS`): the cell's preset, or the split's real
+    """The hinges of doors (:data:`rik.episodes.draw.JOINTS`): the cell's preset, or the split's real
     doors."""
 
     def draw(self) -> Any:

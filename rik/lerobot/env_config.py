@@ -81,8 +81,8 @@ class RikEnvConfig(EnvConfig):
     kinds: str = "drawer"
     """Front kinds of the base units drawn (drawer, door, flap, ...)."""
     joints: str = "paper"
-    """The hinges of doors and flaps: ``paper`` (the cell's preset) or ``measured`` (the split's real doors,
-    ``rik catalog splits``); drawers keep the paper's slides."""
+    """The hinges of doors: ``paper`` (the cell's preset) or ``measured`` (the split's real doors,
+    ``rik catalog splits``); drawers and flaps keep the paper's presets."""
     cameras: str = AUTO
     """Cameras rendered for the policy, e.g. ``front,wrist``; empty for a state-only policy; ``auto``: those the
     policy of ``--policy.path`` reads (none without one)."""

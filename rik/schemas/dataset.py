@@ -37,8 +37,8 @@ class VariantSelection(Frozen):
     exactly ``rik record --split train --episodes 360``'s episodes. Takes ``split``, ``handle_types``, ``presets``
     and ``kinds`` (and ``joints``); each drawn episode runs once per operator."""
     joints: Literal["paper", "measured"] = "paper"
-    """With ``draw``: the hinges of doors and flaps, the cell's preset (``paper``) or a real door of the split
-    (``measured``, :data:`rik.episodes.draw.JOINTS`); drawers keep the paper's slides."""
+    """With ``draw``: the hinges of doors, the cell's preset (``paper``) or a real door of the split
+    (``measured``, :data:`rik.episodes.draw.JOINTS`); drawers and flaps keep the paper's presets."""
 
     @model_validator(mode="after")
     def _ids_alone(self) -> VariantSelection:
