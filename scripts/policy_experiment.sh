@@ -67,11 +67,7 @@ build() {  # build NAME SPEC VARIANTS [DRAW]: a spec of examples/policies at DEM
     "$REPO/examples/policies/$2.yaml" > "$spec"
   [ -d "ds-$1" ] || "${RIK[@]}" dataset build "$spec" --out "ds-$1" --work "work-$1" --variants "$3" -j "$WORKERS"
 }
-ACT=(--policy.type=act --policy.dim_model=128 --policy.dim_feedforward=512 --policy.n_heads=4
-     --policy.n_encoder_layers=4 --policy.n_decoder_layers=1 --policy.chunk_size=20 --policy.n_action_steps=10
-     --policy.optimizer_lr=1e-4 --policy.optimizer_weight_decay=1e-4 --policy.kl_weight=10.0 --policy.dropout=0.1
-     --policy.use_vae=true --policy.latent_dim=32 --policy.n_vae_encoder_layers=4
-     --policy.normalization_mapping='{"VISUAL": "MEAN_STD", "STATE": "MEAN_STD", "ENV": "MEAN_STD", "ACTION": "MEAN_STD"}')
+source "$REPO/scripts/act_recipe.sh"  # ACT=(...): the recipe's pinned flags
 # diffusion with the pre-May-2026 horizon (16/8)
 DIFFUSION_POLICY=(--policy.type=diffusion --policy.n_obs_steps=2 --policy.horizon=16 --policy.n_action_steps=8
      --policy.down_dims='[64, 128, 256]' --policy.kernel_size=5 --policy.n_groups=8
