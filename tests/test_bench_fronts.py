@@ -77,3 +77,6 @@ def test_layout_tables_keep_the_paper_columns_apart_from_the_measured() -> None:
     door = table[table.index("### door-left"):]
     assert "| planned | 0.00 | 0.00 | 1.00 | 1.00 | 0.00 | 0.00 | 1 |" in door  # high S, measured F
     assert "| planned | measured |  | 1 |" in door
+    summary = table[:table.index("### drawer")]
+    assert "| strategy | drawer | door-left | door-left (real doors) |" in summary
+    assert "| planned | 1/1: 100% [21%, 100%] | 1/1: 100% [21%, 100%] | 0/1: 0% [0%, 79%] |" in summary

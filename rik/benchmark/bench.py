@@ -214,13 +214,36 @@ def table_columns(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     return [{**r, "preset": MEASURED_COLUMN if r.get("joints") == "measured" else r["preset"]} for r in rows]
 
 
+def layout_summary(rows: Sequence[dict[str, Any]]) -> str:
+    """S per strategy and front layout (every handle type and preset pooled): successes of episodes, the rate and
+    its 95 % Wilson interval; with measured joints, the paper presets' and the real doors' apart."""
+    from rik.tables import wilson
+
+    columns = table_columns(rows)
+    groups = [(lay, j) for lay in [*LAYOUTS, *sorted({r["front_layout"] for r in rows} - set(LAYOUTS))]
+              for j in ("paper", "measured") if any(r["front_layout"] == lay and r.get("joints", "paper") == j
+                                                     for r in columns)]
+    head = [lay if j == "paper" else f"{lay} (real doors)" for lay, j in groups]
+    lines = ["| strategy | " + " | ".join(head) + " |", "|---|" + "---:|" * len(groups)]
+    for s in dict.fromkeys(r["strategy"] for r in rows):
+        cells = []
+        for lay, j in groups:
+            sel = [r["outcome"] == "S" for r in columns
+                   if r["strategy"] == s and r["front_layout"] == lay and r.get("joints", "paper") == j]
+            lo, hi = wilson(sum(sel), len(sel))
+            cells.append(f"{sum(sel)}/{len(sel)}: {sum(sel) / len(sel):.0%} [{lo:.0%}, {hi:.0%}]" if sel else "-")
+        lines.append(f"| {s} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def layout_tables(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFAULT_PRESETS) -> str:
-    """Table 3 per front layout (drawers, left and right doors, lift-up and drop-down flaps; those present), the
-    paper presets' columns then the measured doors', each followed by the misses' reasons."""
+    """The summary (:func:`layout_summary`), then Table 3 per front layout (drawers, left and right doors, lift-up
+    and drop-down flaps; those present), the paper presets' columns then the measured doors', each followed by the
+    misses' reasons."""
     from rik.tables import table_markdown
 
     columns = table_columns(rows)
-    out = []
+    out = ["### S per front layout (every handle type and preset)", "", layout_summary(rows), ""]
     for layout in [*LAYOUTS, *sorted({r["front_layout"] for r in rows} - set(LAYOUTS))]:
         mine = [r for r in columns if r["front_layout"] == layout]
         if not mine:
