@@ -14,7 +14,8 @@
 #     experiments/joints-small
 # STAGES picks the stages (default "data train val test"). Every choice is made on the validation split; the test
 # stage refuses to run before the choice is written (chosen.txt) and runs each evaluation once (it skips a folder
-# that holds one).
+# that holds one); at full size it runs the committed protocols (protocols/fronts-measured-test-v1.yaml and
+# fronts-paper-test-v1.yaml) with rik eval --protocol.
 set -euo pipefail
 WORK=${1:-experiments/joints}
 DEMOS=${DEMOS:-540}            # drawn demonstrations per arm (60 per handle type x preset cell), seeds 0..DEMOS-1
@@ -137,7 +138,16 @@ if stage test; then
   for run in "${RUNS[@]}"; do folders+=("$(policy "$run" "$chosen")"); done
   mkdir -p eval/test
   for joints in measured paper; do
-    evaluate test 1000 "$PER_CELL" "$joints" "eval/test/$chosen-$joints" "${folders[@]}" "strategy:planned"
+    out="eval/test/$chosen-$joints"
+    if [ "$PER_CELL" = 10 ] && [ "$EPISODE_LENGTH" = 400 ]; then  # the full size: the committed protocol, exactly
+      [ -f "$out/table.md" ] && continue
+      labels=()
+      for p in "${folders[@]}" strategy:planned; do labels+=(--label "$(basename "$p")"); done
+      "${RIK[@]}" eval "${folders[@]}" strategy:planned "${labels[@]}" --out "$out" --videos 0 --workers "$WORKERS" \
+        --protocol "$REPO/protocols/fronts-$joints-test-v1.yaml" > "$out.log" 2>&1
+    else
+      evaluate test 1000 "$PER_CELL" "$joints" "$out" "${folders[@]}" "strategy:planned"
+    fi
   done
   echo "test evaluations: eval/test/$chosen-measured, eval/test/$chosen-paper"
 fi

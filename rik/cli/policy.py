@@ -29,7 +29,21 @@ def _advance(progress: Any, label: str, total: int) -> Callable[[dict[str, Any]]
     return lambda r: progress.update(task, advance=1, last=f"seed {r['seed']} {r['variant']} {r['outcome']}")
 
 
+_DRAW_PARAMETERS = {"split": "--split", "kinds": "--kinds", "joints": "--joints", "types": "--types",
+                    "presets": "--presets", "per_cell": "--episodes-per-cell", "seed": "--seed",
+                    "episode_length": "--episode-length", "catalog": "--catalog"}
+"""``rik eval``'s parameters that choose the episodes, by their option: a ``--protocol`` fixes them."""
+
+
+def _given(ctx: typer.Context) -> list[str]:
+    """The draw options given on the command line (or, for --catalog, through RIK_CATALOG)."""
+    said = ("COMMANDLINE", "ENVIRONMENT")  # by name: typer carries click's ParameterSource in a copy of its own
+    return [flag for name, flag in _DRAW_PARAMETERS.items()
+            if getattr(ctx.get_parameter_source(name), "name", None) in said]
+
+
 def eval_policy(
+        ctx: typer.Context,
         policies: Annotated[list[str], typer.Argument(help="Saved LeRobot policies' folders (e.g. outputs/train/"
                                                       "<run>/checkpoints/last/pretrained_model), or strategy:<name> "
                                                       "for a scripted strategy (strategy:contact_rich); several are "
@@ -69,7 +83,12 @@ def eval_policy(
                                                   "world, handle or gripper (an export made with --action-frame "
                                                   "handle or gripper), or auto: what its inputs and training "
                                                   "statistics say.")] = "auto",
-        catalog: CatalogOption = None) -> None:
+        catalog: CatalogOption = None,
+        protocol: Annotated[Path | None, typer.Option("--protocol", help="A frozen protocol's YAML (protocols/): "
+                                                      "its split, kinds, joints, types, presets, seeds, episodes "
+                                                      "and episode length, exactly; the options that would change "
+                                                      "them are refused beside it.", show_default=False)] = None
+        ) -> None:
     """Evaluate a policy on rik's benchmark: episodes drawn from a split, F/P/S per handle type x preset (the
     paper's Table 3) with Wilson intervals, per-episode rows, videos and lerobot-eval's eval_info.json. A policy
     trained on an arm's export runs with --robot and that arm (its joint actions); scripted strategies run with any
@@ -105,12 +124,26 @@ def eval_policy(
         raise RikError("two policies have the same --out: give each its own folder")
     from rik.episodes.draw import Draw
 
+    frozen = None
+    if protocol is not None:
+        from rik.evaluation import protocol as protocols
+
+        frozen = protocols.read_protocol(protocol)
+        protocols.check_options(protocol, _given(ctx))
+        protocols.check_variants(protocol, variants)
+        split, kinds, joints = frozen.split, ",".join(frozen.kinds), frozen.joints
+        types, presets = ",".join(frozen.handle_types), ",".join(frozen.presets)
+        per_cell, seed, episode_length = frozen.episodes_per_cell, frozen.seed, frozen.episode_length
     cat = load_catalog(overlays(catalog))
     draw = Draw.parse(split, types, presets, kinds, joints)
     specs = [prepare(cat, EvalSpec(p, draw.split, draw.handle_types, draw.presets, draw.kinds, per_cell, seed,
                                    episode_length, rerendered, videos, str(variants),
-                                   labels[i] if labels else "", request, joints=draw.joints))
+                                   labels[i] if labels else "", request, joints=draw.joints,
+                                   protocol=frozen.name if frozen else ""))
              for i, p in enumerate(policies)]
+    if frozen is not None:
+        for spec in specs:
+            protocols.check_policy(protocol, frozen, spec)  # type: ignore[arg-type]
     wheres = eval_folders(outs, specs)
     con = console()
     for spec in specs:

@@ -73,6 +73,8 @@ class EvalSpec:
     """Filled by :func:`prepare` for a policy: its LeRobot type (``act``)."""
     note: str = ""
     """Filled by :func:`prepare`: one line where the policy's contract was guessed (an older policy)."""
+    protocol: str = ""
+    """The name of the frozen protocol (``rik eval --protocol``) whose episodes these are; empty for none."""
     joints: str = "paper"
     """The hinges of doors (:data:`rik.episodes.draw.JOINTS`): the cell's preset, or the split's real
     doors."""
@@ -112,6 +114,8 @@ class EvalSpec:
             del data["action_frame"]
         if data["joints"] == "paper":  # runs from before measured joints stay finished
             del data["joints"]
+        if not data["protocol"]:
+            del data["protocol"]
         return data
 
     @classmethod
