@@ -38,10 +38,23 @@ def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
     return max(0.0, float(centre - half)), min(1.0, float(centre + half))
 
 
+MEASURED_COLUMN = "measured"
+"""The column of episodes whose door had a real door's hinge (``--joints measured``): their presets are many, one
+per door; ``episodes.csv`` and ``results.csv`` keep each door's."""
+
+
+def joint_columns(rows: Sequence[dict[str, Any]], presets: Sequence[str]) -> list[dict[str, Any]]:
+    """``rows`` with each ``preset`` outside ``presets`` (a real door's) replaced by :data:`MEASURED_COLUMN`."""
+    return [r if r["preset"] in presets else {**r, "preset": MEASURED_COLUMN} for r in rows]
+
+
 def table_markdown(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFAULT_PRESETS, *,
                    ci: bool = False) -> str:
     """Table 3 of the paper, rik's version: per handle type, one row per strategy (scripted, or a learned policy
-    in ``rik eval``'s rows), F/P/S per preset; with ``ci`` the S cell also gives its 95 % Wilson interval."""
+    in ``rik eval``'s rows), F/P/S per preset, the episodes on real doors' hinges in one :data:`MEASURED_COLUMN`
+    after them (:func:`joint_columns`); with ``ci`` the S cell also gives its 95 % Wilson interval."""
+    rows = joint_columns(rows, presets)
+    presets = [*presets, MEASURED_COLUMN]
     summary = summarise(rows)
     types = list(dict.fromkeys(r["handle_type"] for r in rows))
     strategies = list(dict.fromkeys(r["strategy"] for r in rows))

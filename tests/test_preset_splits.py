@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
 from pathlib import Path
@@ -143,3 +144,17 @@ def test_a_users_door_is_train_unless_placed(tmp_path: Path) -> None:
     (tmp_path / "mine.yaml").write_text(OVERLAY_DOOR + "splits:\n  presets:\n    test: [real-my-door]\n")
     catalog = load_catalog([tmp_path / "mine.yaml"])
     assert "real-my-door" in split_presets(catalog, "test") and len(split_presets(catalog, "test")) == 5
+
+
+def test_rik_eval_on_real_doors_tables_them_in_a_measured_column(rik, tmp_path: Path) -> None:
+    """Every episode is in the table: a door drawn with a real door's hinge counts in the ``measured`` column."""
+    r = rik("eval", "strategy:grasp_vertical", "--split", "test", "--kinds", "door", "--joints", "measured",
+            "--types", "knob", "--presets", "smooth", "-n", "1", "--episode-length", "40", "--videos", "0",
+            "--workers", "1", "--out", str(tmp_path / "eval"), "--variants", str(tmp_path / "variants"))
+    assert r.code == 0, r.err
+    table = (tmp_path / "eval/table.md").read_text()
+    assert "| strategy | measured F | measured P | measured S | n |" in table and table.rstrip().endswith("| 1 |")
+    (row,) = list(csv.DictReader((tmp_path / "eval/episodes.csv").open()))
+    assert row["preset"] in split_presets(builtin_catalog(), "test")
+    spec = json.loads((tmp_path / "eval/eval_info.json").read_text())["rik"]["spec"]
+    assert spec["joints"] == "measured" and spec["kinds"] == ["door"]

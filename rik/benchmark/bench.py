@@ -23,6 +23,7 @@ from rik.paths import pyplot
 from rik.registry.ids import parse_variant_id
 from rik.schemas.joints import CATALOG_LEVER_ARM
 from rik.sim.outcome import SUCCESS_OPENING
+from rik.tables import MEASURED_COLUMN
 
 if TYPE_CHECKING:
     from rik.outputs import Replaces
@@ -204,13 +205,11 @@ def run_bench(catalog: Catalog, tasks: Sequence[BenchTask], *, workers: int = 1,
 
 LAYOUTS = ("drawer", "door-left", "door-right", "flap-lift-up", "flap-drop-down")
 """Front layouts (:attr:`rik.schemas.base_units.Front.layout`) in the order the tables list them."""
-MEASURED_COLUMN = "measured"
-"""The column of the episodes whose hinge was a real door's preset."""
 
 
 def table_columns(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """``rows`` with each ``preset`` replaced by its table column: the paper preset, or :data:`MEASURED_COLUMN`
-    for a real door's (whichever door it was; ``results.csv`` keeps the door)."""
+    """``rows`` with each ``preset`` replaced by its table column: the paper preset, or
+    :data:`rik.tables.MEASURED_COLUMN` for a real door's (whichever door it was; ``results.csv`` keeps the door)."""
     return [{**r, "preset": MEASURED_COLUMN if r.get("joints") == "measured" else r["preset"]} for r in rows]
 
 
@@ -248,7 +247,7 @@ def layout_tables(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFAU
         mine = [r for r in columns if r["front_layout"] == layout]
         if not mine:
             continue
-        out += [f"### {layout} ({len(mine)} episodes)", "", table_markdown(mine, [*presets, MEASURED_COLUMN]),
+        out += [f"### {layout} ({len(mine)} episodes)", "", table_markdown(mine, presets),
                 miss_markdown(mine, [*presets, MEASURED_COLUMN]), ""]
     return "\n".join(out)
 
