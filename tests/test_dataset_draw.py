@@ -65,4 +65,12 @@ def test_specs_without_draw_keep_their_hash_and_the_examples_load() -> None:
     assert spec_hash(load_spec(example)) == "ac4fc7fcddaee1f45a48277a3404af7e7f41d87865c923f00b8247ccd32d0509"
     for spec in sorted((Path(__file__).parents[1] / "examples" / "policies").glob("*.yaml")):
         loaded = load_spec(spec)
-        assert loaded.variants.draw == 360 and loaded.outcomes == ("S",), spec
+        # the drawer experiments draw 360 (40 per cell); the joints ablation's arms 540 over every front kind
+        assert loaded.variants.draw == (540 if spec.name.startswith("joints-") else 360), spec
+        assert loaded.outcomes == ("S",), spec
+    paper, measured = (load_spec(Path(__file__).parents[1] / "examples" / "policies" / f"joints-{j}.yaml")
+                       for j in ("paper", "measured"))
+    assert (paper.variants.joints, measured.variants.joints) == ("paper", "measured")
+    assert paper.model_dump(exclude={"repo_id", "description", "variants"}) == measured.model_dump(
+        exclude={"repo_id", "description", "variants"})
+    assert paper.variants.model_dump(exclude={"joints"}) == measured.variants.model_dump(exclude={"joints"})
