@@ -91,7 +91,18 @@ if stage train; then
   for arm in "${ARMS[@]}"; do
     for seed in $SEEDS; do
       run="act-$arm-s$seed"
-      [ -f "runs/$run/checkpoints/last/pretrained_model/model.safetensors" ] && continue
+      last="runs/$run/checkpoints/last/pretrained_model"
+      if [ -f "$last/model.safetensors" ]; then
+        [ "$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["steps"])' "$last/train_config.json")" \
+          -ge "$STEPS" ] && [ -f "runs/$run/checkpoints/$(printf '%06d' "$STEPS")/pretrained_model/model.safetensors" ] \
+          && continue
+        while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do sleep 1; done
+        # a run a session left unfinished: on from its last checkpoint (its optimizer state, data order and flags)
+        uv run --project "$REPO" --locked lerobot-train --config_path="$last/train_config.json" --resume=true \
+          --steps="$STEPS" > "train-$run-resume-$(date +%s).log" 2>&1 &
+        pids+=($!)
+        continue
+      fi
       while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do sleep 1; done
       rm -rf "runs/$run"
       uv run --project "$REPO" --locked lerobot-train --dataset.repo_id="local/rik-$arm" --dataset.root="ds-$arm" \
