@@ -34,8 +34,8 @@
   (the servos' joint targets and the gripper's goal, e.g. the SO-100's degrees and percent open), applied joint by
   joint (:meth:`rik.sim.scene.SimScene.step_joints`);
 - **reward**: the gain in opening (fraction of the range) per step; **terminated** when the front is open to
-  rik's success threshold (90 %, as ManiSkill's OpenCabinetDrawer); **truncated** after ``episode_length``
-  control steps; ``info`` holds ``is_success``, the F/P/S ``outcome`` (rik.sim.outcome), ``opening`` and
+  rik's success threshold (90 % of the range; ManiSkill3's OpenCabinetDrawer-v1 counts 75 %); **truncated**
+  after ``episode_length`` control steps; ``info`` holds ``is_success``, the F/P/S ``outcome`` (rik.sim.outcome), ``opening`` and
   ``max_opening``, and the episode's variant, front, handle type and preset. The last finished episode's
   result stays in :attr:`OpenFrontEnv.last_result` (vector environments reset a finished one at once).
 
