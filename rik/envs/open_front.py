@@ -36,8 +36,9 @@
 - **reward**: the gain in opening (fraction of the range) per step; **terminated** when the front is open to
   rik's success threshold (90 % of the range; ManiSkill3's OpenCabinetDrawer-v1 counts 75 %); **truncated**
   after ``episode_length`` control steps; ``info`` holds ``is_success``, the F/P/S ``outcome``
-  (rik.sim.outcome), ``opening`` and ``max_opening``, and the episode's variant, front, handle type and preset. The last finished episode's
-  result stays in :attr:`OpenFrontEnv.last_result` (vector environments reset a finished one at once).
+  (rik.sim.outcome), ``opening`` and ``max_opening``, and the episode's variant, front, handle type and preset.
+  The last finished episode's result stays in :attr:`OpenFrontEnv.last_result` (vector environments reset a
+  finished one at once).
 
 Use: ``import rik.envs.open_front`` (registers the id), then ``gymnasium.make("rik/OpenFront-v0", variant=...)``.
 """
