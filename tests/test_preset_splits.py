@@ -158,3 +158,18 @@ def test_rik_eval_on_real_doors_tables_them_in_a_measured_column(rik, tmp_path: 
     assert row["preset"] in split_presets(builtin_catalog(), "test")
     spec = json.loads((tmp_path / "eval/eval_info.json").read_text())["rik"]["spec"]
     assert spec["joints"] == "measured" and spec["kinds"] == ["door"]
+
+
+def test_the_env_config_draws_real_doors_and_refuses_bad_joints(monkeypatch) -> None:
+    """``--env.joints=measured`` reaches the environment's draw; a bad name or a drawer-only draw is refused when
+    the config is made, in LeRobot's words (a ValueError that draccus shows), before any environment is built."""
+    from lerobot_env_rik import RikEnvConfig, env_kwargs
+
+    monkeypatch.setattr("sys.argv", ["lerobot-eval", "--env.type=rik"])
+    config = RikEnvConfig(split="val", kinds="drawer,door", joints="measured")
+    kwargs = env_kwargs(config)
+    assert kwargs["joints"] == "measured" and kwargs["kinds"] == ("drawer", "door")
+    with pytest.raises(ValueError, match=r"^--env\.\*: unknown joints 'real' \(joints: paper, measured\)$"):
+        RikEnvConfig(kinds="door", joints="real")
+    with pytest.raises(ValueError, match=r"^--env\.\*: joints 'measured': real doors' presets go on doors"):
+        RikEnvConfig(joints="measured")

@@ -106,6 +106,8 @@ class RikEnvConfig(EnvConfig):
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        from rik.episodes.draw import Draw
+        from rik.errors import RikError
         from rik.sim.scene import CONTROL_FPS
 
         try:
@@ -113,6 +115,10 @@ class RikEnvConfig(EnvConfig):
             io.validate(_catalog(), LABELS)
         except ContractError as exc:
             raise ValueError(str(exc)) from None
+        try:  # the draw's names (split, types, presets, kinds, joints), before any environment is built
+            Draw.parse(self.split, self.handle_types, self.presets, self.kinds, self.joints).check(_catalog())
+        except RikError as exc:
+            raise ValueError(f"--env.*: {exc}") from None
         if io.fps != CONTROL_FPS:
             raise ValueError(f"--env.fps={io.fps}: rik's environment steps at {CONTROL_FPS} Hz, and a policy acts at "
                              "its dataset's rate; export the episodes at their own rate (without --fps) and train "
