@@ -6,6 +6,12 @@ Usage (from the repository root)::
     uv run --locked python scripts/real_door_sim_error.py ../shared/data/real/everyday-door-force-profiles.csv \\
         --table docs/img/sysid-doors/sim-error.md --img docs/img/sysid-doors/sim-vs-real.png
 
+Your own doors, in the same CSV format (``trial,mechanism,class,angle bin,force [N]``: one row per 1° bin of an
+opening, the force at the handle)::
+
+    uv run --locked python scripts/real_door_presets.py my-doors.csv --out my-catalog/doors.yaml
+    uv run --locked python scripts/real_door_sim_error.py my-doors.csv --catalog my-catalog/doors.yaml
+
 The work is :mod:`rik.benchmark.real_doors` (what is compared, and how); this prints its table and writes the table
 and the plot grid. Variants are built into ``--variants`` (a temporary folder unless given).
 """
@@ -25,6 +31,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--table", type=Path, help="write the markdown table here")
     parser.add_argument("--img", type=Path, help="write the plot grid (PNG) here")
     parser.add_argument("--variants", type=Path, help="build the door variants here (default: a temporary folder)")
+    parser.add_argument("--catalog", type=Path, action="append", default=[],
+                        help="a user catalog holding the doors' presets (your own doors: the file "
+                             "scripts/real_door_presets.py YOUR.csv --out FILE wrote); repeatable")
     args = parser.parse_args(argv)
 
     from rik.benchmark.real_doors import error_table, plot_grid, simulate_doors
@@ -36,7 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with tempfile.TemporaryDirectory(prefix="rik-real-doors-") as scratch:
             variants = args.variants or Path(scratch)
-            results = simulate_doors(load_catalog(), args.csv, variants,
+            results = simulate_doors(load_catalog(args.catalog or None), args.csv, variants,
                                      progress=lambda door: print(f"  {door}", file=sys.stderr, flush=True))
     except RikError as exc:
         print(f"real_door_sim_error: error: {exc}", file=sys.stderr)

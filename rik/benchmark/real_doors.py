@@ -104,8 +104,9 @@ def simulate_door(catalog: Catalog, door: RealDoor, variants: Path) -> Simulated
 
     fitted = door.preset
     if fitted.id not in catalog.presets:
-        raise RikError(f"preset '{fitted.id}' of door '{door.group.name}' is not in the catalog; regenerate "
-                       "rik/registry/data/presets_measured.yaml with scripts/real_door_presets.py")
+        raise RikError(f"preset '{fitted.id}' of door '{door.group.name}' is not in the catalog; write the doors' "
+                       "presets with scripts/real_door_presets.py DATA.csv --out FILE and give the file with "
+                       "--catalog (rik's own doors: regenerate rik/registry/data/presets_measured.yaml)")
     fitted_q = np.concatenate([p.q for p in door.split.fitted])
     paper = door_paper_preset(door.split, catalog.presets)
     angles = tuple(np.asarray(p.q, np.float64) for p in door.split.heldout)

@@ -72,6 +72,28 @@ QUASI_STATIC = 1e-6
 nothing, fast enough that friction acts opening."""
 
 
+@dataclass(frozen=True)
+class DataOrigin:
+    """Where a door data file comes from, as its presets' source says it."""
+
+    reference: str
+    """The publication or measurement (a preset's ``source.reference``)."""
+    data: str
+    """The data file's name (``source.data``)."""
+    cited: str
+    """How a preset's description names it ("Jain et al. (BioRob 2010)")."""
+
+    @staticmethod
+    def user(path: str | Path) -> DataOrigin:
+        """A user's own measured doors in the file at ``path``."""
+        name = Path(path).name
+        return DataOrigin(f"the user's own measurements ({name})", name, f"the user's measurements ({name})")
+
+
+JAIN = DataOrigin(REFERENCE, DATA_FILE, "Jain et al. (BioRob 2010)")
+"""The study behind rik's built-in real doors."""
+
+
 @dataclass(frozen=True, eq=False)
 class OpeningSplit:
     """A door's openings: those fitted and those held out to test on (file order)."""
@@ -92,12 +114,12 @@ class RealDoor:
     preset: ResistancePreset
 
 
-def read_doors(path: str | Path) -> ProfileData:
+def read_doors(path: str | Path, drop_nan: bool = True) -> ProfileData:
     """The force profiles of the data file at ``path`` (its columns ``trial``, ``mechanism``, ``angle bin``,
-    ``force [N]``), in SI: angles in rad (1 bin = 1°), forces in N at the handle; the rows with a NaN force are
-    left out (8 in the published file)."""
+    ``force [N]``), in SI: angles in rad (1 bin = 1°), forces in N at the handle; with ``drop_nan`` the rows with a
+    NaN force are left out (8 in the published file), without it a NaN is an error naming the row."""
     return read_profiles(path, "hinge", position="angle bin", position_unit="bin", force="force [N]",
-                         trial="trial", group="mechanism", drop_nan=True)
+                         trial="trial", group="mechanism", drop_nan=drop_nan)
 
 
 def door_classes(path: str | Path) -> dict[str, str]:
@@ -214,11 +236,14 @@ def _convert(fit: ProfileFit, r: float) -> tuple[float, tuple[JointEffect, ...],
 
 
 def door_preset(group: ProfileGroup, door_class: str, presets: Mapping[str, ResistancePreset], *,
-                fit: ProfileFit | None = None, lever_arm: float = CATALOG_LEVER_ARM) -> ResistancePreset:
+                fit: ProfileFit | None = None, lever_arm: float = CATALOG_LEVER_ARM,
+                origin: DataOrigin | None = None) -> ResistancePreset:
     """The resistance preset of a real door (module docstring): its hinge side the quasi-static fit on its fitted
     openings (:func:`fit_door`, or ``fit``) at ``lever_arm`` (m), damping and armature the nearest paper preset's,
     its slide side :data:`BASE_SIDE`'s (from ``presets``, the catalog's); its source names the data, the door, the
-    trials and the preset's RMS error at the handle over the fitted and the held-out openings (N)."""
+    trials and the preset's RMS error at the handle over the fitted and the held-out openings (N); ``origin``:
+    where the data comes from (default: the study of Jain et al., :data:`JAIN`)."""
+    origin = origin or JAIN
     split = split_openings(group)
     fit = fit if fit is not None else fit_door(group)
     friction, effects, spring, level_note = _convert(fit, lever_arm)
@@ -237,25 +262,29 @@ def door_preset(group: ProfileGroup, door_class: str, presets: Mapping[str, Resi
              f"{found}; {level_note}. Damping and armature: the '{nearest.id}' preset's, nearest to the door's mean "
              f"opening force {np.mean(f_fit):.3g} N at the handle (not identifiable from quasi-static data: no "
              f"velocity or acceleration)")
-    source = PresetSource(kind=Provenance.measured, reference=REFERENCE, data=DATA_FILE, mechanism=group.name,
+    source = PresetSource(kind=Provenance.measured, reference=origin.reference, data=origin.data,
+                          mechanism=group.name,
                           trials_fitted=len(split.fitted), trials_heldout=tuple(p.name for p in split.heldout),
                           fit_rms_n=rms_fit, heldout_rms_n=rms_out, lever_arm_m=lever_arm)
     base = presets[BASE_SIDE]
     return ResistancePreset(
         id=preset_id(group.name), name=f"{group.name} ({door_class})",
-        description=(f"The hinge of a real {door_class.lower()} door, '{group.name}' of Jain et al. (BioRob 2010), "
+        description=(f"The hinge of a real {door_class.lower()} door, '{group.name}' of {origin.cited}, "
                      f"fitted to its measured opening forces; the slide is the {base.id} preset's (a door has none)."),
         slide=base.slide, hinge=hinge.model_copy(update={"notes": notes}), source=source)
 
 
-def real_door_presets(path: str | Path, presets: Mapping[str, ResistancePreset]) -> list[RealDoor]:
+def real_door_presets(path: str | Path, presets: Mapping[str, ResistancePreset],
+                      origin: DataOrigin | None = None) -> list[RealDoor]:
     """Every door of the data file at ``path`` (variants left out) with its fit and preset, in file order;
-    ``presets``: the catalog's (for the paper presets and :data:`BASE_SIDE`)."""
-    data = read_doors(path)
+    ``presets``: the catalog's (for the paper presets and :data:`BASE_SIDE`); ``origin``: where the data comes from
+    (default :data:`JAIN`, whose 8 NaN forces are left out; a user's own doors, :meth:`DataOrigin.user`, where a NaN
+    is an error)."""
+    data = read_doors(path, drop_nan=origin is None or origin == JAIN)  # a user's own data: every value counts
     classes = door_classes(path)
     out = []
     for group in doors(data):
         fit = fit_door(group)
         out.append(RealDoor(group, classes[group.name], split_openings(group), fit,
-                            door_preset(group, classes[group.name], presets, fit=fit)))
+                            door_preset(group, classes[group.name], presets, fit=fit, origin=origin)))
     return out
