@@ -45,6 +45,7 @@ def test_miss_reasons(row: dict, reason: str) -> None:
     assert miss_reason(row) == reason and (reason == "" or reason in MISS_REASONS)
 
 
+@pytest.mark.slow
 def test_bench_over_a_door_with_a_real_hinge_tables_it_per_layout(rik, tmp_path: Path) -> None:
     """One knob on a door per preset and joints: results.csv names the real door and the front's layout; table.md
     has a section per layout with a measured column and the misses' reasons."""

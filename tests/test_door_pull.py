@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from shared import builtin_catalog
 
 from rik.combinator.build import ensure_variant
@@ -38,6 +39,7 @@ def _pull(variants: Path, turn: bool) -> tuple[float, np.ndarray, np.ndarray, fl
     return scene.opening(), rotations[0], rotations[-1], angles[-1] - angles[0]
 
 
+@pytest.mark.slow
 def test_a_pinch_turns_with_the_door_and_opens_it(tmp_path: Path) -> None:
     """Held at its first orientation the pinch faces a handle turned about 95 degrees away and stops short of a
     success (the benchmark read P, 85 % open); turned with the door it opens it, and the gripper turned about the

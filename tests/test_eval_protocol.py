@@ -41,6 +41,7 @@ def test_the_committed_protocols_are_the_documented_draws() -> None:
         "measured", "paper", ("drawer", "door", "flap"), 90)
 
 
+@pytest.mark.slow
 def test_a_protocol_runs_its_episodes_and_says_so(rik, tmp_path: Path) -> None:
     (tmp_path / "tiny.yaml").write_text(TINY)
     r = rik("eval", "strategy:grasp_vertical", "--protocol", str(tmp_path / "tiny.yaml"), "--out",
@@ -51,6 +52,7 @@ def test_a_protocol_runs_its_episodes_and_says_so(rik, tmp_path: Path) -> None:
     assert spec["handle_types"] == ["knob"] and spec["presets"] == ["smooth"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("extra", "clash"), [
     (["--split", "val"], "--split"), (["--seed", "1000"], "--seed"), (["-n", "3"], "--episodes-per-cell"),
     (["--kinds", "door", "--joints", "measured"], "--kinds, --joints"), (["--episode-length", "40"],
@@ -71,6 +73,7 @@ def test_options_that_change_the_episodes_are_refused(rik, tmp_path: Path, monke
     assert not (tmp_path / "eval").exists()
 
 
+@pytest.mark.slow
 def test_a_user_catalog_from_the_environment_is_refused(rik, tmp_path: Path, monkeypatch) -> None:
     (tmp_path / "tiny.yaml").write_text(TINY)
     (tmp_path / "mine.yaml").write_text("schema: 1\n")
@@ -79,6 +82,7 @@ def test_a_user_catalog_from_the_environment_is_refused(rik, tmp_path: Path, mon
     assert r.code == 2 and "drop --catalog" in r.err and not (tmp_path / "e").exists()
 
 
+@pytest.mark.slow
 def test_another_robot_or_collision_model_is_refused(rik, tmp_path: Path) -> None:
     (tmp_path / "tiny.yaml").write_text(TINY)
     r = rik("eval", "strategy:planned", "--protocol", str(tmp_path / "tiny.yaml"), "--robot", "so100", "--out",
@@ -117,16 +121,27 @@ def test_another_robot_or_collision_model_is_refused(rik, tmp_path: Path) -> Non
     (TINY.replace("protocol: 1", "protocol: 2"), "field 'protocol': Input should be 1"),
     ("#" * 70_000, "over 64 KiB; a protocol is a few lines of YAML"),
 ])
-def test_bad_protocols_are_one_line(rik, tmp_path: Path, text: str, message: str) -> None:
+def test_bad_protocols_are_one_line(tmp_path: Path, text: str, message: str) -> None:
     path = tmp_path / "p.yaml"
     path.write_text(text, encoding="utf-8")
     with pytest.raises(RikError) as caught:
         read_protocol(path)
     assert str(caught.value).startswith(str(path)) and message in str(caught.value)
-    r = rik("eval", "strategy:planned", "--protocol", str(path), "--out", str(tmp_path / "e"))
-    assert r.code == 2 and r.err.count("\n") == 1 and message in r.err and not (tmp_path / "e").exists()
 
 
+@pytest.mark.slow
+def test_a_bad_protocol_stops_rik_eval_in_one_line(rik, tmp_path: Path) -> None:
+    """The library's refusal reaches the command as one line, exit 2, nothing written (every case above)."""
+    path = tmp_path / "p.yaml"
+    for text in (TINY + "speed: 2\n", TINY.replace("episode_length: 40", "episode_length: .inf"), "#" * 70_000):
+        path.write_text(text, encoding="utf-8")
+        with pytest.raises(RikError) as caught:
+            read_protocol(path)
+        r = rik("eval", "strategy:planned", "--protocol", str(path), "--out", str(tmp_path / "e"))
+        assert r.code == 2 and r.err == f"rik: error: {caught.value}\n" and not (tmp_path / "e").exists()
+
+
+@pytest.mark.slow
 def test_an_unreadable_protocol_is_one_line(rik, tmp_path: Path) -> None:
     r = rik("eval", "strategy:planned", "--protocol", str(tmp_path / "none.yaml"))
     assert r.code == 2 and r.err.startswith(f"rik: error: {tmp_path / 'none.yaml'}: cannot read the protocol")

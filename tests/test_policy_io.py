@@ -208,3 +208,18 @@ def test_the_rate_a_policy_acts_at_travels_and_is_refused_where_the_environment_
     monkeypatch.setattr("sys.argv", ["lerobot-eval", f"--policy.path={folder}", "--env.type=rik"])
     with pytest.raises(ValueError, match=r"^--env\.fps=10: rik's environment steps at 20 Hz"):
         RikEnvConfig()
+
+
+def test_the_env_config_draws_real_doors_and_refuses_bad_joints(monkeypatch) -> None:
+    """``--env.joints=measured`` reaches the environment's draw; a bad name or a drawer-only draw is refused when the
+    config is made, in LeRobot's words (a ValueError that draccus shows), before any environment is built."""
+    from lerobot_env_rik import RikEnvConfig, env_kwargs
+
+    monkeypatch.setattr("sys.argv", ["lerobot-eval", "--env.type=rik"])
+    config = RikEnvConfig(split="val", kinds="drawer,door", joints="measured")
+    kwargs = env_kwargs(config)
+    assert kwargs["joints"] == "measured" and kwargs["kinds"] == ("drawer", "door")
+    with pytest.raises(ValueError, match=r"^--env\.\*: unknown joints 'real' \(joints: paper, measured\)$"):
+        RikEnvConfig(kinds="door", joints="real")
+    with pytest.raises(ValueError, match=r"^--env\.\*: joints 'measured': real doors' presets go on doors"):
+        RikEnvConfig(joints="measured")

@@ -89,6 +89,7 @@ def test_measured_joints_need_doors_and_known_names() -> None:
         Draw("test", kinds=KINDS, joints="real").check(catalog)
 
 
+@pytest.mark.slow
 def test_record_split_draws_measured_joints_as_the_draw_says(rik, tmp_path: Path) -> None:
     """``rik record --split val --kinds door --joints measured`` records the draw's variant (a real door of val)."""
     seed = next(s for s in range(20) if Draw("val", kinds=("door",), joints="measured")
@@ -116,6 +117,7 @@ presets:
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("splits", "message"), [
     ("splits:\n  presets:\n    test: [smooth]\n",
      "field 'splits.presets.test': 'smooth' is not a measured preset (only measured presets are split; the paper's "
@@ -146,6 +148,7 @@ def test_a_users_door_is_train_unless_placed(tmp_path: Path) -> None:
     assert "real-my-door" in split_presets(catalog, "test") and len(split_presets(catalog, "test")) == 5
 
 
+@pytest.mark.slow
 def test_rik_eval_on_real_doors_tables_them_in_a_measured_column(rik, tmp_path: Path) -> None:
     """Every episode is in the table: a door drawn with a real door's hinge counts in the ``measured`` column."""
     r = rik("eval", "strategy:grasp_vertical", "--split", "test", "--kinds", "door", "--joints", "measured",
@@ -159,17 +162,3 @@ def test_rik_eval_on_real_doors_tables_them_in_a_measured_column(rik, tmp_path: 
     spec = json.loads((tmp_path / "eval/eval_info.json").read_text())["rik"]["spec"]
     assert spec["joints"] == "measured" and spec["kinds"] == ["door"]
 
-
-def test_the_env_config_draws_real_doors_and_refuses_bad_joints(monkeypatch) -> None:
-    """``--env.joints=measured`` reaches the environment's draw; a bad name or a drawer-only draw is refused when
-    the config is made, in LeRobot's words (a ValueError that draccus shows), before any environment is built."""
-    from lerobot_env_rik import RikEnvConfig, env_kwargs
-
-    monkeypatch.setattr("sys.argv", ["lerobot-eval", "--env.type=rik"])
-    config = RikEnvConfig(split="val", kinds="drawer,door", joints="measured")
-    kwargs = env_kwargs(config)
-    assert kwargs["joints"] == "measured" and kwargs["kinds"] == ("drawer", "door")
-    with pytest.raises(ValueError, match=r"^--env\.\*: unknown joints 'real' \(joints: paper, measured\)$"):
-        RikEnvConfig(kinds="door", joints="real")
-    with pytest.raises(ValueError, match=r"^--env\.\*: joints 'measured': real doors' presets go on doors"):
-        RikEnvConfig(joints="measured")

@@ -35,6 +35,7 @@ def _script(name: str, *args: str | Path) -> subprocess.CompletedProcess:
                           text=True, timeout=600, cwd=ROOT)
 
 
+@pytest.mark.slow
 def test_a_users_doors_become_presets_measured_against_their_held_out_openings(tmp_path: Path) -> None:
     data = _profiles(tmp_path / "my-doors.csv")
     mine = tmp_path / "mine.yaml"
@@ -56,6 +57,7 @@ def test_a_users_doors_become_presets_measured_against_their_held_out_openings(t
     assert again.returncode == 0, again.stderr
 
 
+@pytest.mark.slow
 def test_a_users_door_file_is_checked_and_nothing_else_is_overwritten(tmp_path: Path) -> None:
     data = _profiles(tmp_path / "my-doors.csv")
     theirs = tmp_path / "notes.yaml"
@@ -69,12 +71,14 @@ def test_a_users_door_file_is_checked_and_nothing_else_is_overwritten(tmp_path: 
         "--catalog (rik's own doors: regenerate rik/registry/data/presets_measured.yaml)")
 
 
+@pytest.mark.slow
 def test_nan_in_a_users_profiles_is_one_line(tmp_path: Path) -> None:
     bad = _script("real_door_presets.py", _profiles(tmp_path / "bad.csv", nan=True), "--out", tmp_path / "m.yaml")
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "bad.csv" in bad.stderr
     assert not (tmp_path / "m.yaml").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text", ["", "trial,mechanism\n0,x\n", "\x00\x01binary"])
 def test_a_malformed_profiles_file_is_one_line(tmp_path: Path, text: str) -> None:
     (tmp_path / "p.csv").write_text(text)
