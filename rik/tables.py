@@ -38,6 +38,38 @@ def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
     return max(0.0, float(centre - half)), min(1.0, float(centre + half))
 
 
+def newcombe(s1: int, n1: int, s2: int, n2: int, z: float = 1.96) -> tuple[float, float]:
+    """Newcombe's hybrid score interval (his method 10, 1998) of the difference of two independent success rates,
+    ``s1 / n1 - s2 / n2``: (low, high), fractions; built from each rate's :func:`wilson` interval."""
+    p1, p2 = s1 / n1, s2 / n2
+    l1, u1 = wilson(s1, n1, z)
+    l2, u2 = wilson(s2, n2, z)
+    low = p1 - p2 - math.sqrt((p1 - l1) ** 2 + (u2 - p2) ** 2)
+    high = p1 - p2 + math.sqrt((u1 - p1) ** 2 + (p2 - l2) ** 2)
+    return max(-1.0, low), min(1.0, high)
+
+
+def seed_handle_interval(success: Sequence[Sequence[bool]], handles: Sequence[str], resamples: int = 10_000,
+                         seed: int = 0) -> tuple[float, float]:
+    """A 95 % interval of a pooled success rate over training seeds and handles: ``success[s][e]`` is episode ``e``
+    of training seed ``s`` (every seed on the same episodes), ``handles[e]`` its handle. Each resample draws the
+    seeds with replacement and the handles with replacement (each with all its episodes); (low, high) are the
+    2.5 and 97.5 percentiles of the resampled rates, fractions. Deterministic for a ``seed``."""
+    import numpy as np
+
+    table = np.asarray(success, dtype=float)
+    names = sorted(set(handles))
+    of_handle = [np.flatnonzero(np.asarray(handles) == name) for name in names]
+    rng = np.random.default_rng(seed)
+    rates = np.empty(resamples)
+    for i in range(resamples):
+        seeds = rng.integers(table.shape[0], size=table.shape[0])
+        drawn = np.concatenate([of_handle[h] for h in rng.integers(len(names), size=len(names))])
+        rates[i] = table[seeds][:, drawn].mean()
+    low, high = np.percentile(rates, [2.5, 97.5])
+    return float(low), float(high)
+
+
 MEASURED_COLUMN = "measured"
 """The column of episodes whose door had a real door's hinge (``--joints measured``): their presets are many, one
 per door; ``episodes.csv`` and ``results.csv`` keep each door's."""

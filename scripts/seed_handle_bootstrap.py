@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rik.tables import seed_handle_interval
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -29,15 +31,8 @@ def main() -> None:
         raise SystemExit("seed_handle_bootstrap.py: the files do not hold the same episodes in the same order")
     success = np.array([[row["outcome"] == "S" for row in run] for run in runs], dtype=float)
     handles = [row["variant"].split("__")[1] for row in runs[0]]
-    names = sorted(set(handles))
-    of_handle = [np.flatnonzero(np.array(handles) == name) for name in names]
-    rng = np.random.default_rng(0)
-    rates = np.empty(args.resamples)
-    for i in range(args.resamples):
-        drawn_seeds = rng.integers(len(runs), size=len(runs))
-        drawn = np.concatenate([of_handle[h] for h in rng.integers(len(names), size=len(names))])
-        rates[i] = success[drawn_seeds][:, drawn].mean()
-    lo, hi = np.percentile(rates, [2.5, 97.5])
+    lo, hi = seed_handle_interval(success, handles, args.resamples)
+    names = set(handles)
     print(f"{int(success.sum())} of {success.size}: {success.mean():.1%} pooled over {len(runs)} seeds, "
           f"{len(names)} handles, {success.shape[1]} episodes each")
     print("per seed: " + ", ".join(f"{r:.1%}" for r in success.mean(axis=1)))

@@ -1,0 +1,115 @@
+"""The pre-registered joints ablation's report (docs/policies.md, "Pre-registered: real doors' joints against the
+paper's presets"), exactly the comparisons its plan names, from the test stage's evaluations.
+
+    uv run python scripts/joints_report.py experiments/joints [--out docs/policies/joints/report.md]
+
+Reads ``chosen.txt`` and ``eval/test/<chosen>-measured`` and ``-paper`` (each holding one folder per run,
+``act-<arm>-s<seed>-<chosen>/episodes.csv``, and ``strategy-planned``). For each arm (jp: the paper's presets in
+training; jm: the train split's real doors) and each test draw: successes pooled over the seeds with a 95 % Wilson
+interval, each seed's rate, and a 95 % interval resampling seeds and handles; per front layout the pooled counts.
+The primary comparison: on the measured draw, the doors' S of jm against jp, the difference of the pooled rates
+with Newcombe's interval and the paired seed differences. Secondary: every front; each arm's doors on the paper
+draw against the measured one. Writes nothing but ``--out``; prints the report.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+from pathlib import Path
+
+ARMS = {"jp": "(a) paper presets in training", "jm": "(b) real doors in training"}
+DRAWS = ("measured", "paper")
+LAYOUTS = ("drawer", "door-left", "door-right", "flap-lift-up", "flap-drop-down")
+
+
+def _runs(folder: Path, arm: str, chosen: str) -> list[list[dict[str, str]]]:
+    """The episodes of each seed's run of ``arm`` in one evaluation folder, seed order."""
+    runs = sorted(folder.glob(f"act-{arm}-s*-{chosen}/episodes.csv"))
+    return [list(csv.DictReader(path.open(encoding="utf-8"))) for path in runs]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("work", type=Path, help="the ablation's folder (scripts/joints_ablation.sh WORK_DIR)")
+    parser.add_argument("--out", type=Path, help="write the report (markdown) here")
+    args = parser.parse_args(argv)
+
+    from rik.outputs import RECORDED, write_text
+    from rik.registry.ids import parse_variant_id
+    from rik.registry.load import load_catalog
+    from rik.tables import newcombe, seed_handle_interval, wilson
+
+    chosen_file = args.work / "chosen.txt"
+    if not chosen_file.is_file():
+        print(f"joints_report: {chosen_file}: no choice on the validation split yet", file=sys.stderr)
+        return 2
+    chosen = chosen_file.read_text().strip()
+    catalog = load_catalog()
+
+    def layout(row: dict[str, str]) -> str:
+        base = catalog.base_units[parse_variant_id(catalog, row["variant"]).base]
+        return next(f for f in base.fronts if f.id == row["front"]).layout
+
+    runs = {(arm, draw): _runs(args.work / "eval" / "test" / f"{chosen}-{draw}", arm, chosen)
+            for arm in ARMS for draw in DRAWS}
+    missing = [f"{arm} on {draw}" for (arm, draw), r in runs.items() if not r]
+    if missing:
+        print(f"joints_report: no test evaluation of {', '.join(missing)} in {args.work}/eval/test", file=sys.stderr)
+        return 2
+
+    def rate(s: int, n: int) -> str:
+        lo, hi = wilson(s, n)
+        return f"{s} of {n}: {s / n:.0%} [{lo:.0%}, {hi:.0%}]"
+
+    def doors(rows: list[dict[str, str]]) -> list[dict[str, str]]:
+        return [r for r in rows if layout(r).startswith("door")]
+
+    lines = [f"# The joints ablation: the test split, once (candidate `{chosen}`, chosen on the validation split)", ""]
+    for draw in DRAWS:
+        lines += [f"## Test draw `--joints {draw}`", "",
+                  "| arm | seeds | S pooled (95 % Wilson) | per seed | seeds and handles (95 %) | "
+                  + " | ".join(LAYOUTS) + " |", "|---|---:|---|---|---|" + "---|" * len(LAYOUTS)]
+        for arm, name in ARMS.items():
+            seeds = runs[(arm, draw)]
+            success = [[r["outcome"] == "S" for r in run] for run in seeds]
+            s, n = sum(map(sum, success)), sum(map(len, success))
+            lo, hi = seed_handle_interval(success, [r["variant"].split("__")[1] for r in seeds[0]])
+            per = ", ".join(f"{sum(x) / len(x):.0%}" for x in success)
+            cells = []
+            for lay in LAYOUTS:
+                sel = [r["outcome"] == "S" for run in seeds for r in run if layout(r) == lay]
+                cells.append(f"{sum(sel)}/{len(sel)}" if sel else "-")
+            lines.append(f"| {name} | {len(seeds)} | {rate(s, n)} | {per} | [{lo:.0%}, {hi:.0%}] | "
+                         + " | ".join(cells) + " |")
+        lines.append("")
+    # the primary comparison: doors on the measured draw, (b) against (a)
+    a, b = runs[("jp", "measured")], runs[("jm", "measured")]
+    sa = [sum(r["outcome"] == "S" for r in doors(run)) for run in a]
+    sb = [sum(r["outcome"] == "S" for r in doors(run)) for run in b]
+    na, nb = len(doors(a[0])), len(doors(b[0]))
+    lo, hi = newcombe(sum(sb), nb * len(b), sum(sa), na * len(a))
+    paired = [f"{y / nb - x / na:+.0%}" for x, y in zip(sa, sb, strict=False)]
+    lines += ["## The primary comparison: real test doors, (b) against (a)", "",
+              f"Doors of the measured test draw: (a) {rate(sum(sa), na * len(a))}, (b) {rate(sum(sb), nb * len(b))}; "
+              f"difference (b) - (a) {sum(sb) / (nb * len(b)) - sum(sa) / (na * len(a)):+.0%}, 95 % Newcombe "
+              f"[{lo:+.0%}, {hi:+.0%}]; paired by training seed: {', '.join(paired)}.", ""]
+    for arm, name in ARMS.items():
+        on = {draw: [r["outcome"] == "S" for run in runs[(arm, draw)] for r in doors(run)] for draw in DRAWS}
+        lines.append(f"- {name}, doors: paper draw {rate(sum(on['paper']), len(on['paper']))}, measured draw "
+                     f"{rate(sum(on['measured']), len(on['measured']))}.")
+    planned = args.work / "eval" / "test" / f"{chosen}-measured" / "strategy-planned" / "episodes.csv"
+    if planned.is_file():
+        rows = list(csv.DictReader(planned.open(encoding="utf-8")))
+        lines.append(f"- The demonstrator (`planned`) on the measured draw: "
+                     f"{rate(sum(r['outcome'] == 'S' for r in rows), len(rows))}.")
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if args.out:
+        write_text(args.out, text, RECORDED)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
