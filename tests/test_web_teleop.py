@@ -173,8 +173,11 @@ FRONTS = {
     "a right door with a bar": "door-base-40-right__two_point-bow-128__normal",
     "a lift-up flap": "flap-lift-up-60__two_point-bow-128__normal",
     "a drop-down flap": "flap-drop-down-60__knob-mushroom-30__normal",
+    "a left door with a vertical D-pull": "door-wall-60-left__two_point-d-pull-128__normal",
 }
-"""Every kind of hinged front, each with a handle of its own (the drawers are the tests above)."""
+"""Every kind of hinged front, each with a handle of its own (the drawers are the tests above), and the vertical
+D-pull on a wall cabinet's left door that issue 53 saw slip under a person's keys (here, by the hint's keys, it opens
+in 4 presses; so does the double door's hex bar, left out to keep the suite's time)."""
 
 
 @pytest.fixture(scope="module")
