@@ -1,12 +1,13 @@
 """MuJoCo render settings against today's: what each costs and what it changes in the picture, per resolution.
 
 The first measurement of issue 54's "renders at the cost the picture needs": rik's MuJoCo frames are rendered with
-a 2048 px shadow map, 4x multisampling, shadows of both lights (key and fill) and reflections at every size. For each candidate setting and image
-size this renders the same frames as today's settings (four variants: a drawer, a door, a knob drawer, a flap; the
-front opened in 24 steps over its range; the ``front`` and ``wrist`` cameras) and prints, side by side in one run:
-milliseconds per frame and the speed-up against today's, and the picture against today's frame for frame (PSNR on
-8-bit sRGB and SSIM, median and worst). ``--png`` writes a side-by-side sheet (one door frame per setting and size)
-to look at. Nothing in rik changes: the settings are set on the model and scene for this run only.
+a 2048 px shadow map, 4x multisampling, shadows of both lights (key and fill) and reflections at every size. For
+each candidate setting and image size this renders the same frames as today's settings (four variants: a drawer, a
+door, a knob drawer, a flap; the front opened in 24 steps over its range; the ``front`` and ``wrist`` cameras) and
+prints, side by side in one run: milliseconds per frame and the speed-up against today's, and the picture against
+today's frame for frame (PSNR on 8-bit sRGB and SSIM, median and worst). ``--png`` writes a side-by-side sheet
+(one door frame per setting and size) to look at. Nothing in rik changes: the settings are set on the model and
+scene for this run only.
 
 Run: ``uv run python benchmarks/render_settings.py [--sizes 64,128] [--steps 24] [--png sheet.png]``.
 """
