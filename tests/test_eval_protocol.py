@@ -143,6 +143,13 @@ def test_a_bad_protocol_stops_rik_eval_in_one_line(rik, tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_an_unreadable_protocol_is_one_line(rik, tmp_path: Path) -> None:
+    import os
+
+    os.mkfifo(tmp_path / "fifo.yaml")  # would block a plain read for ever
+    for special in (tmp_path / "fifo.yaml", tmp_path):
+        r = rik("eval", "strategy:planned", "--protocol", str(special))
+        assert r.code == 2 and r.err == (f"rik: error: {special}: not a file; a protocol is a YAML file "
+                                         "(protocols/*.yaml)\n")
     r = rik("eval", "strategy:planned", "--protocol", str(tmp_path / "none.yaml"))
     assert r.code == 2 and r.err.startswith(f"rik: error: {tmp_path / 'none.yaml'}: cannot read the protocol")
     (tmp_path / "bin.yaml").write_bytes(b"\xff\xfe\x00")

@@ -64,6 +64,8 @@ def read_protocol(path: Path) -> Protocol:
     from rik.sim.outcome import SUCCESS_OPENING
 
     path = Path(path)
+    if path.exists() and not path.is_file():  # a folder, a FIFO (which would block the read), a device
+        raise RikError(f"{path}: not a file; a protocol is a YAML file (protocols/*.yaml)")
     try:
         with path.open("rb") as handle:
             raw = handle.read(MAX_PROTOCOL_BYTES + 1)
