@@ -37,7 +37,8 @@ def test_measured_tasks_are_the_paper_tasks_with_real_hinges() -> None:
      "no grasp found"),
     ({"outcome": "F", "log": "attempt 1: pinch | slip at 0% open"}, "slipped"),
     ({"outcome": "P", "log": "attempt 1: pinch | stall at 30% open"}, "stalled"),
-    ({"outcome": "F", "log": "attempt 1: pinch", "seconds": 30.0}, "time out"),
+    ({"outcome": "F", "log": "attempt 1: pinch", "seconds": 30.0}, "time out, lost"),
+    ({"outcome": "P", "log": "attempt 1: pinch", "seconds": 30.0, "held_at_end": True}, "time out, held"),
     ({"outcome": "F", "log": "attempt 1: pinch", "seconds": 12.0}, "stopped early"),
     ({"outcome": "P", "log": "attempt 1: pinch", "reachable_opening": 0.6}, "out of reach"),
 ])
@@ -59,6 +60,7 @@ def test_bench_over_a_door_with_a_real_hinge_tables_it_per_layout(rik, tmp_path:
     assert row["joints"] == "measured" and row["front_layout"] in ("door-left", "door-right")
     assert row["miss"] == miss_reason({**row, "seconds": float(row["seconds"]),
                                        "reachable_opening": float(row["reachable_opening"])})
+    assert row["held_at_end"] in ("True", "False")
     table = (out / "table.md").read_text()
     assert f"### {row['front_layout']} (1 episodes)" in table and "measured F | measured P | measured S" in table
     assert ("No misses." in table) == (row["outcome"] == "S")

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from rik.outputs import Replaces
     from rik.registry.catalog import Catalog
     from rik.schemas.joints import JointResistance
+    from rik.sim.scene import SimScene
 
 DEFAULT_STRATEGIES = ("grasp_horizontal", "grasp_vertical", "contact_rich")
 SWEEP_GRIP_FORCES = (5.0, 10.0, 20.0, 40.0, 80.0, 130.0)
@@ -140,8 +141,16 @@ def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) 
            "resistance": round(resistance, 4), "capacity_ratio": gripper.friction_capacity() / max(resistance, 1e-9),
            "outcome": classify(scene.opening()), "final_opening": round(scene.opening(), 4),
            "max_opening": round(recorder.max_opening, 4), "seconds": round(recorder.steps / scene.control_fps, 2),
-           "reachable_opening": reach, "log": " | ".join(operator.log)}
+           "reachable_opening": reach, "held_at_end": holds_handle(scene), "log": " | ".join(operator.log)}
     return {**row, "miss": miss_reason(row)}
+
+
+def holds_handle(scene: SimScene) -> bool:
+    """Whether two or more of the gripper's bodies (both jaws' pads) touch the operated handle now."""
+    m = scene.model
+    bodies = {int(m.geom_bodyid[ours]) for _, ours, other in scene.front_contacts()
+              if int(m.geom_bodyid[other]) == scene.front.handle_body}
+    return len(bodies) >= 2
 
 
 def handle_resistance(joint: JointResistance, joint_type: str) -> float:
@@ -156,7 +165,8 @@ def handle_resistance(joint: JointResistance, joint_type: str) -> float:
     return (joint.hold_at_closed() + joint.damping * PULL_SPEED / lever) / lever
 
 
-MISS_REASONS = ("no grasp found", "slipped", "stalled", "out of reach", "time out", "stopped early")
+MISS_REASONS = ("no grasp found", "slipped", "stalled", "out of reach", "time out, held", "time out, lost",
+                "stopped early")
 """Why an episode that did not succeed missed (:func:`miss_reason`), in the order tables list them."""
 
 
@@ -164,8 +174,9 @@ def miss_reason(row: dict[str, Any]) -> str:
     """Why the episode of a benchmark row did not succeed (``""`` where it did), from its outcome, the strategy's
     log and the arm's reach: ``no grasp found`` (no plan left to try), ``slipped`` or ``stalled`` (the last attempt's
     closed-loop check: the handle left the pads, or the front stopped moving), ``out of reach`` (the arm cannot
-    reach a success's opening), ``time out`` (still pulling at the episode's end), or ``stopped early`` (the
-    strategy ended its pull below a success for another reason)."""
+    reach a success's opening), ``time out, held`` or ``time out, lost`` (still pulling at the episode's end, the
+    handle between both pads or not: an open-loop pinch pulls on whether it holds or not), or ``stopped early``
+    (the strategy ended its pull below a success for another reason)."""
     if row["outcome"] == "S":
         return ""
     events = [e.strip() for e in str(row.get("log", "")).split("|") if e.strip()]
@@ -179,7 +190,7 @@ def miss_reason(row: dict[str, Any]) -> str:
     if last.startswith("stall"):
         return "stalled"
     if float(row.get("seconds", 0.0)) >= MAX_SECONDS - 0.05:
-        return "time out"
+        return "time out, held" if str(row.get("held_at_end", "False")) == "True" else "time out, lost"
     return "stopped early"
 
 
