@@ -79,6 +79,16 @@ def test_nan_in_a_users_profiles_is_one_line(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+def test_a_pipe_for_profiles_is_one_line_not_a_blocked_read(tmp_path: Path) -> None:
+    import os
+
+    os.mkfifo(tmp_path / "pipe.csv")
+    bad = _script("real_door_presets.py", tmp_path / "pipe.csv", "--out", tmp_path / "m.yaml")
+    assert bad.returncode == 2 and bad.stderr == (f"real_door_presets: error: {tmp_path / 'pipe.csv'}: not a regular "
+                                                  "file (a folder, a pipe or a device)\n")
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("text", ["", "trial,mechanism\n0,x\n", "\x00\x01binary"])
 def test_a_malformed_profiles_file_is_one_line(tmp_path: Path, text: str) -> None:
     (tmp_path / "p.csv").write_text(text)

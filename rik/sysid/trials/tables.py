@@ -155,5 +155,6 @@ def read_table(path: Path) -> RawTable:
     if kind is None:
         raise TrialError(path, None, None, f"unknown file type '{path.suffix}'; use .csv, .parquet or .pq")
     if not path.is_file():
-        raise TrialError(path, None, None, "no such file")
+        raise TrialError(path, None, None, "not a regular file (a folder, a pipe or a device)" if path.exists()
+                         else "no such file")
     return _read_csv(path) if kind == "csv" else _read_parquet(path)
