@@ -29,7 +29,6 @@ if TYPE_CHECKING:
     from rik.outputs import Replaces
     from rik.registry.catalog import Catalog
     from rik.schemas.joints import JointResistance
-    from rik.sim.scene import SimScene
 
 DEFAULT_STRATEGIES = ("grasp_horizontal", "grasp_vertical", "contact_rich")
 SWEEP_GRIP_FORCES = (5.0, 10.0, 20.0, 40.0, 80.0, 130.0)
@@ -141,16 +140,9 @@ def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) 
            "resistance": round(resistance, 4), "capacity_ratio": gripper.friction_capacity() / max(resistance, 1e-9),
            "outcome": classify(scene.opening()), "final_opening": round(scene.opening(), 4),
            "max_opening": round(recorder.max_opening, 4), "seconds": round(recorder.steps / scene.control_fps, 2),
-           "reachable_opening": reach, "held_at_end": holds_handle(scene), "log": " | ".join(operator.log)}
+           "reachable_opening": reach, "held_at_end": scene.handle_contact().handle_bodies >= 2,  # both jaws on it
+           "log": " | ".join(operator.log)}
     return {**row, "miss": miss_reason(row)}
-
-
-def holds_handle(scene: SimScene) -> bool:
-    """Whether two or more of the gripper's bodies (both jaws' pads) touch the operated handle now."""
-    m = scene.model
-    bodies = {int(m.geom_bodyid[ours]) for _, ours, other in scene.front_contacts()
-              if int(m.geom_bodyid[other]) == scene.front.handle_body}
-    return len(bodies) >= 2
 
 
 def handle_resistance(joint: JointResistance, joint_type: str) -> float:

@@ -93,6 +93,18 @@ class Drive(Protocol):
 
 
 @dataclass(frozen=True)
+class HandleContact:
+    """The gripper's contacts with the operated front (:meth:`SimScene.handle_contact`)."""
+
+    front: int
+    """Contacts with the front (panel and handle)."""
+    handle_bodies: int
+    """How many of the gripper's bodies touch the handle (2 or more: both jaws)."""
+    handle_force: float
+    """Normal force of the gripper's contacts with the handle, N."""
+
+
+@dataclass(frozen=True)
 class FrontInfo:
     """The front a scene operates: its joint, range and handle."""
 
@@ -221,6 +233,21 @@ class SimScene:
             ours, other = (g1, g2) if g1 in self.gripper_geoms else (g2, g1)
             if int(m.geom_bodyid[other]) in self.front_bodies:
                 yield i, ours, other
+
+    def handle_contact(self) -> HandleContact:
+        """The gripper's contacts with the operated front and its handle (:class:`HandleContact`)."""
+        import mujoco
+
+        m, d = self.model, self.data
+        front, force, bodies = 0, 0.0, set()
+        wrench = np.zeros(6)
+        for i, ours, other in self.front_contacts():
+            front += 1
+            if int(m.geom_bodyid[other]) == self.front.handle_body:
+                mujoco.mj_contactForce(m, d, i, wrench)
+                force += abs(float(wrench[0]))
+                bodies.add(int(m.geom_bodyid[ours]))
+        return HandleContact(front, len(bodies), force)
 
     def contact_summary(self) -> dict[str, float]:
         """Contacts between the gripper and the operated front (its panel and handle): how many, and the total

@@ -4,13 +4,12 @@ front's own path (a door's arc, a drawer's slide). Lengths in m, angles in rad."
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 if TYPE_CHECKING:
-    from rik.sim.scene import SimScene
+    from rik.sim.scene import HandleContact, SimScene
 
 HOLD_FORCE = 2.0
 """Normal force the jaws must press the handle with, together, to hold it, N."""
@@ -23,34 +22,6 @@ GRASP_STATES = ("free", "touching", "holding", "slipped")
 """What :class:`GraspWatch` reports: no contact with the front; a contact but no grip of the handle; both jaws press the
 handle with the grip closing; the jaws held the handle and it left them while the grip was not fully opened (pulled
 out, or the grip loosened)."""
-
-
-@dataclass(frozen=True)
-class HandleContact:
-    """The gripper's contacts with the operated front."""
-
-    front: int
-    """Contacts with the front (panel and handle)."""
-    handle_bodies: int
-    """How many of the gripper's bodies touch the handle (2 or more: both jaws)."""
-    handle_force: float
-    """Normal force of the gripper's contacts with the handle, N."""
-
-
-def handle_contact(scene: SimScene) -> HandleContact:
-    """The gripper's contacts with the operated front and its handle (:class:`HandleContact`)."""
-    import mujoco
-
-    m, d = scene.model, scene.data
-    front, force, bodies = 0, 0.0, set()
-    wrench = np.zeros(6)
-    for i, ours, other in scene.front_contacts():
-        front += 1
-        if int(m.geom_bodyid[other]) == scene.front.handle_body:
-            mujoco.mj_contactForce(m, d, i, wrench)
-            force += abs(float(wrench[0]))
-            bodies.add(int(m.geom_bodyid[ours]))
-    return HandleContact(front, len(bodies), force)
 
 
 class GraspWatch:

@@ -32,7 +32,7 @@ from rik.errors import RikError
 from rik.outputs import NameTaken, remove_directory
 from rik.paths import cache_dir
 from rik.sim.pose import nearest_angles
-from rik.teleop.feedback import BLOCKED_LEAD, GraspWatch, front_path_step, grasp_hint, grasp_text, handle_contact
+from rik.teleop.feedback import BLOCKED_LEAD, GraspWatch, front_path_step, grasp_hint, grasp_text
 from rik.teleop.keys import ANGULAR_SPEED, LEAD, LINEAR_SPEED
 
 if TYPE_CHECKING:
@@ -278,7 +278,7 @@ class TeleopSession:
             self.last_input_step = self.recorder.steps + 1
         targets, self.grip = self.joint_input
         self.recorder.step_joints(targets, self.grip)
-        self.grasp.update(handle_contact(self.scene), self.grip)
+        self.grasp.update(self.scene.handle_contact(), self.grip)
         return True
 
     def toggle_grip(self) -> None:
@@ -321,7 +321,7 @@ class TeleopSession:
             self.last_input_step = self.recorder.steps + 1
         self.target = np.concatenate([target, [self.grip]])
         self.recorder.step(self.target.copy())
-        self.grasp.update(handle_contact(self.scene), self.grip)
+        self.grasp.update(self.scene.handle_contact(), self.grip)
         after = self.scene.pose()
         self.blocked = bool(np.any(self.command[:3])
                             and np.linalg.norm(self.target[:3] - after[:3]) > BLOCKED_LEAD)
