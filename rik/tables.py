@@ -38,6 +38,13 @@ def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
     return max(0.0, float(centre - half)), min(1.0, float(centre + half))
 
 
+def rate_text(successes: int, n: int, between: str = " of ") -> str:
+    """``successes`` of ``n`` with the rate and its 95 % Wilson interval: ``21 of 90: 23% [16%, 33%]`` (``between``
+    "/" gives ``21/90: ...``)."""
+    low, high = wilson(successes, n)
+    return f"{successes}{between}{n}: {successes / n:.0%} [{low:.0%}, {high:.0%}]"
+
+
 def newcombe(s1: int, n1: int, s2: int, n2: int, z: float = 1.96) -> tuple[float, float]:
     """Newcombe's hybrid score interval (his method 10, 1998) of the difference of two independent success rates,
     ``s1 / n1 - s2 / n2``: (low, high), fractions; built from each rate's :func:`wilson` interval."""

@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     from rik.outputs import RECORDED, write_text
     from rik.registry.ids import parse_variant_id
     from rik.registry.load import load_catalog
-    from rik.tables import newcombe, seed_handle_interval, wilson
+    from rik.tables import newcombe, rate_text, seed_handle_interval
 
     chosen_file = args.work / "chosen.txt"
     if not chosen_file.is_file():
@@ -59,10 +59,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"joints_report: no test evaluation of {', '.join(missing)} in {args.work}/eval/test", file=sys.stderr)
         return 2
 
-    def rate(s: int, n: int) -> str:
-        lo, hi = wilson(s, n)
-        return f"{s} of {n}: {s / n:.0%} [{lo:.0%}, {hi:.0%}]"
-
     def doors(rows: list[dict[str, str]]) -> list[dict[str, str]]:
         return [r for r in rows if layout(r).startswith("door")]
 
@@ -81,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
             for lay in LAYOUTS:
                 sel = [r["outcome"] == "S" for run in seeds for r in run if layout(r) == lay]
                 cells.append(f"{sum(sel)}/{len(sel)}" if sel else "-")
-            lines.append(f"| {name} | {len(seeds)} | {rate(s, n)} | {per} | [{lo:.0%}, {hi:.0%}] | "
+            lines.append(f"| {name} | {len(seeds)} | {rate_text(s, n)} | {per} | [{lo:.0%}, {hi:.0%}] | "
                          + " | ".join(cells) + " |")
         lines.append("")
     # the primary comparison: doors on the measured draw, (b) against (a)
@@ -92,18 +88,19 @@ def main(argv: list[str] | None = None) -> int:
     lo, hi = newcombe(sum(sb), nb * len(b), sum(sa), na * len(a))
     paired = [f"{y / nb - x / na:+.0%}" for x, y in zip(sa, sb, strict=False)]
     lines += ["## The primary comparison: real test doors, (b) against (a)", "",
-              f"Doors of the measured test draw: (a) {rate(sum(sa), na * len(a))}, (b) {rate(sum(sb), nb * len(b))}; "
+              f"Doors of the measured test draw: (a) {rate_text(sum(sa), na * len(a))}, "
+              f"(b) {rate_text(sum(sb), nb * len(b))}; "
               f"difference (b) - (a) {sum(sb) / (nb * len(b)) - sum(sa) / (na * len(a)):+.0%}, 95 % Newcombe "
               f"[{lo:+.0%}, {hi:+.0%}]; paired by training seed: {', '.join(paired)}.", ""]
     for arm, name in ARMS.items():
         on = {draw: [r["outcome"] == "S" for run in runs[(arm, draw)] for r in doors(run)] for draw in DRAWS}
-        lines.append(f"- {name}, doors: paper draw {rate(sum(on['paper']), len(on['paper']))}, measured draw "
-                     f"{rate(sum(on['measured']), len(on['measured']))}.")
+        lines.append(f"- {name}, doors: paper draw {rate_text(sum(on['paper']), len(on['paper']))}, measured draw "
+                     f"{rate_text(sum(on['measured']), len(on['measured']))}.")
     planned = args.work / "eval" / "test" / f"{chosen}-measured" / "strategy-planned" / "episodes.csv"
     if planned.is_file():
         rows = list(csv.DictReader(planned.open(encoding="utf-8")))
         lines.append(f"- The demonstrator (`planned`) on the measured draw: "
-                     f"{rate(sum(r['outcome'] == 'S' for r in rows), len(rows))}.")
+                     f"{rate_text(sum(r['outcome'] == 'S' for r in rows), len(rows))}.")
     text = "\n".join(lines) + "\n"
     print(text)
     if args.out:

@@ -129,9 +129,9 @@ def run_task(catalog: Catalog, encoded: str, variants: Path = Path("variants")) 
     randomise_start(scene, rng)
     operator = make_operator(task.strategy)
     recorder = run_operator(scene, operator, rng, MAX_SECONDS)
-    front = next(f for f in catalog.base_units[parse_variant_id(catalog, task.variant).base].fronts
-                 if f.id == task.front)
-    preset = parse_variant_id(catalog, task.variant).preset
+    key = parse_variant_id(catalog, task.variant)
+    front = next(f for f in catalog.base_units[key.base].fronts if f.id == task.front)
+    preset = key.preset
     resistance = handle_resistance(catalog.presets[preset].for_joint(front.joint.type), front.joint.type.value)
     row = {**asdict(task), "preset": preset, "cell_preset": task.preset, "front_layout": front.layout,
            "joints": "paper" if catalog.presets[preset].in_default_set else "measured",
@@ -210,46 +210,41 @@ LAYOUTS = ("drawer", "door-left", "door-right", "flap-lift-up", "flap-drop-down"
 """Front layouts (:attr:`rik.schemas.base_units.Front.layout`) in the order the tables list them."""
 
 
-def table_columns(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """``rows`` with each ``preset`` replaced by its table column: the paper preset, or
-    :data:`rik.tables.MEASURED_COLUMN` for a real door's (whichever door it was; ``results.csv`` keeps the door)."""
-    return [{**r, "preset": MEASURED_COLUMN if r.get("joints") == "measured" else r["preset"]} for r in rows]
+def _layouts(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """The front layouts of ``rows`` in table order: :data:`LAYOUTS`, then any other, sorted."""
+    present = {r["front_layout"] for r in rows}
+    return [lay for lay in LAYOUTS if lay in present] + sorted(present - set(LAYOUTS))
 
 
 def layout_summary(rows: Sequence[dict[str, Any]]) -> str:
     """S per strategy and front layout (every handle type and preset pooled): successes of episodes, the rate and
     its 95 % Wilson interval; with measured joints, the paper presets' and the real doors' apart."""
-    from rik.tables import wilson
+    from rik.tables import rate_text
 
-    columns = table_columns(rows)
-    groups = [(lay, j) for lay in [*LAYOUTS, *sorted({r["front_layout"] for r in rows} - set(LAYOUTS))]
-              for j in ("paper", "measured") if any(r["front_layout"] == lay and r.get("joints", "paper") == j
-                                                     for r in columns)]
+    groups = [(lay, j) for lay in _layouts(rows) for j in ("paper", "measured")
+              if any(r["front_layout"] == lay and r.get("joints", "paper") == j for r in rows)]
     head = [lay if j == "paper" else f"{lay} (real doors)" for lay, j in groups]
     lines = ["| strategy | " + " | ".join(head) + " |", "|---|" + "---:|" * len(groups)]
     for s in dict.fromkeys(r["strategy"] for r in rows):
         cells = []
         for lay, j in groups:
-            sel = [r["outcome"] == "S" for r in columns
+            sel = [r["outcome"] == "S" for r in rows
                    if r["strategy"] == s and r["front_layout"] == lay and r.get("joints", "paper") == j]
-            lo, hi = wilson(sum(sel), len(sel))
-            cells.append(f"{sum(sel)}/{len(sel)}: {sum(sel) / len(sel):.0%} [{lo:.0%}, {hi:.0%}]" if sel else "-")
+            cells.append(rate_text(sum(sel), len(sel), "/") if sel else "-")
         lines.append(f"| {s} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
 def layout_tables(rows: Sequence[dict[str, Any]], presets: Sequence[str] = DEFAULT_PRESETS) -> str:
     """The summary (:func:`layout_summary`), then Table 3 per front layout (drawers, left and right doors, lift-up
-    and drop-down flaps; those present), the paper presets' columns then the measured doors', each followed by the
-    misses' reasons."""
-    from rik.tables import table_markdown
+    and drop-down flaps; those present), the paper presets' columns then the measured doors'
+    (:func:`rik.tables.joint_columns`), each followed by the misses' reasons."""
+    from rik.tables import joint_columns, table_markdown
 
-    columns = table_columns(rows)
+    columns = joint_columns(rows, presets)
     out = ["### S per front layout (every handle type and preset)", "", layout_summary(rows), ""]
-    for layout in [*LAYOUTS, *sorted({r["front_layout"] for r in rows} - set(LAYOUTS))]:
+    for layout in _layouts(rows):
         mine = [r for r in columns if r["front_layout"] == layout]
-        if not mine:
-            continue
         out += [f"### {layout} ({len(mine)} episodes)", "", table_markdown(mine, presets),
                 miss_markdown(mine, [*presets, MEASURED_COLUMN]), ""]
     return "\n".join(out)
