@@ -33,6 +33,7 @@ export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl} OMP_NUM_THREADS=1 MKL_NUM_TH
 REPO=$(pwd)
 RIK=(uv run --project "$REPO" --locked rik)
 source "$REPO/scripts/act_recipe.sh"
+source "$REPO/scripts/policy_folders.sh"  # chunked, checkpoint
 mkdir -p "$WORK/specs"
 cd "$WORK"
 stage() { [[ " $STAGES " == *" $1 "* ]]; }
@@ -40,11 +41,6 @@ spec_of() { case $1 in jp) echo joints-paper ;; jm) echo joints-measured ;; esac
 candidates() {  # the candidates of a run, in the order that breaks ties: the mean of the last quarter's weights,
   # then single checkpoints from the last back (each evaluated with 15 actions per prediction)
   echo "mean $STEPS $(( STEPS * 3 / 4 )) $(( STEPS / 2 ))"
-}
-checkpoint() {  # checkpoint RUN STEP: the folder of a saved step (the nearest saved one at or below STEP)
-  local saved
-  saved=$(ls "runs/$1/checkpoints" | grep -E '^[0-9]+$' | awk -v s="$2" '$1 + 0 <= s + 0' | sort -n | tail -n 1)
-  echo "runs/$1/checkpoints/$saved/pretrained_model"
 }
 policy() {  # policy RUN CANDIDATE: the folder of a candidate's weights, with n_action_steps 15 (made once)
   local out="policies/$1-$2"
@@ -57,14 +53,7 @@ policy() {  # policy RUN CANDIDATE: the folder of a candidate's weights, with n_
     else
       from=$(checkpoint "$1" "$2")
     fi
-    mkdir -p "$out.tmp"; cp -r "$from"/. "$out.tmp"/
-    python3 - "$out.tmp/config.json" <<'PY'
-import json, sys
-config = json.load(open(sys.argv[1]))
-config["n_action_steps"] = 15
-json.dump(config, open(sys.argv[1], "w"), indent=4)
-PY
-    mv "$out.tmp" "$out"
+    chunked "$from" "$out" 15
   fi
   echo "$out"
 }
