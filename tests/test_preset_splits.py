@@ -13,6 +13,7 @@ from shared import builtin_catalog
 
 from rik.episodes.draw import Draw
 from rik.errors import RikError
+from rik.registry.ids import parse_variant_id
 from rik.registry.load import load_catalog
 from rik.registry.splits import SPLITS, split_presets
 from rik.schemas.joints import MECHANISMS
@@ -67,8 +68,7 @@ def test_a_measured_draw_is_the_paper_draw_with_real_hinges(split: str | None) -
         assert b == measured.episode(catalog, seed)
         assert (a.front, a.handle_type) == (b.front, b.handle_type)
         assert a.variant.rsplit("__", 1)[0] == b.variant.rsplit("__", 1)[0]
-        base = next(u for u in catalog.base_units.values() for f in u.fronts
-                    if b.variant.startswith(u.id.replace("/", "-") + "__") and f.id == b.front)
+        base = catalog.base_units[parse_variant_id(catalog, b.variant).base]
         if next(f for f in base.fronts if f.id == b.front).kind == "door":
             assert b.preset in doors and b.variant.endswith("__" + b.preset)
             seen.add(b.preset)
