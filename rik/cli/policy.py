@@ -29,16 +29,13 @@ def _advance(progress: Any, label: str, total: int) -> Callable[[dict[str, Any]]
     return lambda r: progress.update(task, advance=1, last=f"seed {r['seed']} {r['variant']} {r['outcome']}")
 
 
-_DRAW_PARAMETERS = {"split": "--split", "kinds": "--kinds", "joints": "--joints", "types": "--types",
-                    "presets": "--presets", "per_cell": "--episodes-per-cell", "seed": "--seed",
-                    "episode_length": "--episode-length", "catalog": "--catalog"}
-"""``rik eval``'s parameters that choose the episodes, by their option: a ``--protocol`` fixes them."""
-
-
 def _given(ctx: typer.Context) -> list[str]:
-    """The draw options given on the command line (or, for --catalog, through RIK_CATALOG)."""
+    """The options of :data:`rik.evaluation.protocol.DRAW_OPTIONS` given on the command line (or, for --catalog,
+    through RIK_CATALOG)."""
+    from rik.evaluation.protocol import DRAW_OPTIONS
+
     said = ("COMMANDLINE", "ENVIRONMENT")  # by name: typer carries click's ParameterSource in a copy of its own
-    return [flag for name, flag in _DRAW_PARAMETERS.items()
+    return [flag for name, flag in DRAW_OPTIONS.items()
             if getattr(ctx.get_parameter_source(name), "name", None) in said]
 
 

@@ -23,9 +23,10 @@ if TYPE_CHECKING:
 PROTOCOL_FORMAT = 1
 MAX_PROTOCOL_BYTES = 64 * 1024
 """A protocol file is a few hundred bytes; a larger one is refused before it is parsed."""
-DRAW_OPTIONS = ("--split", "--kinds", "--joints", "--types", "--presets", "--episodes-per-cell", "--seed",
-                "--episode-length", "--catalog")
-"""``rik eval``'s options that would change a protocol's episodes."""
+DRAW_OPTIONS = {"split": "--split", "kinds": "--kinds", "joints": "--joints", "types": "--types",
+                "presets": "--presets", "per_cell": "--episodes-per-cell", "seed": "--seed",
+                "episode_length": "--episode-length", "catalog": "--catalog"}
+"""``rik eval``'s options that would change a protocol's episodes, by the command's parameter name."""
 
 
 class Protocol(BaseModel):
@@ -96,7 +97,7 @@ def read_protocol(path: Path) -> Protocol:
 
 def check_options(path: Path, given: list[str]) -> None:
     """Refuse, in one line, ``rik eval`` options given beside a protocol that would change its episodes."""
-    clash = [o for o in DRAW_OPTIONS if o in given]
+    clash = [o for o in DRAW_OPTIONS.values() if o in given]
     if clash:
         raise RikError(f"--protocol {path} fixes the episodes; drop {', '.join(clash)} (the protocol's own: "
                        "split, kinds, joints, handle types, presets, episodes per cell, seed, episode length, "
