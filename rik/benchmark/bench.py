@@ -87,8 +87,9 @@ def plan_tasks(catalog: Catalog, *, types: Sequence[str] = DEFAULT_TYPES, preset
                        f"{MAX_BENCH_EPISODES:,} episodes in all")
     for s in strategies:
         make_operator(s)
-    Draw(None, tuple(types), tuple(presets), tuple(kinds), joints).check(catalog)  # unknown names: one line
-    door_presets = Draw(None, joints=joints).door_presets(catalog)
+    draw = Draw(None, tuple(types), tuple(presets), tuple(kinds), joints)
+    draw.check(catalog)  # unknown names: one line
+    door_presets = draw.door_presets(catalog)
     if catalog.robot(robot).as_arm is not None and any(g is not None for g in grip_forces):
         raise RikError(f"--sweep grip-force varies the Hand-E's grip; robot {robot}'s gripper is its model's")
     compatible = {k.id for k in select_variants(catalog, handle_types=types, presets=presets)}
