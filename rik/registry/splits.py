@@ -15,7 +15,7 @@ so. Changing which built-in design or preset is in which split means a new :data
 from __future__ import annotations
 
 import difflib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from rik.errors import CatalogError, RikError, UnknownIdError
@@ -115,7 +115,8 @@ def assign_splits(entries: Sequence[RawEntry], builtin_designs: Mapping[str, boo
             if not isinstance(value, list):
                 raise CatalogError(shown, None, field, "must be a list of design ids", line)
             for i, design in enumerate(value):
-                _place(entry, key, i, design, builtin_designs, placed)
+                _place(entry, (SPLITS_KEY,), key, i, design, builtin_designs, placed, "design",
+                       lambda d: str(UnknownIdError("design", d, builtin_designs)), "a design")
         if entry.builtin and "version" not in data:
             raise CatalogError(shown, None, f"{SPLITS_KEY}.version", "required field is missing",
                                line_of(entry.file, (SPLITS_KEY,)))
@@ -153,45 +154,34 @@ def _place_presets(entry: RawEntry, value: object, measured: Mapping[str, bool],
         if not isinstance(ids, list):
             raise CatalogError(shown, None, where, "must be a list of measured preset ids", line)
         for i, preset in enumerate(ids):
-            line = line_of(entry.file, (SPLITS_KEY, PRESETS_KEY, split, i))
-            if not isinstance(preset, str):
-                raise CatalogError(shown, None, where, f"must list preset ids (got {preset!r})", line)
-            if preset not in measured:
-                raise CatalogError(shown, None, where, f"'{preset}' is not a measured preset (only measured presets "
-                                   "are split; the paper's are in every split)"
-                                   + ("" if not measured else f"; measured: {', '.join(list(measured)[:4])}, ..."),
-                                   line)
-            if measured[preset] and not entry.builtin:
-                raise CatalogError(shown, None, where, f"preset '{preset}' is built in and has its split in rik's "
-                                   "own splits.yaml; an overlay may place only its own presets", line)
-            if preset in placed:
-                other, other_entry, other_index = placed[preset]
-                other_line = line_of(other_entry.file, (SPLITS_KEY, PRESETS_KEY, other, other_index))
-                raise CatalogError(shown, None, where, f"preset '{preset}' is already in split '{other}' "
-                                   f"({display_path(other_entry.file)}:{other_line}); a door is in exactly one "
-                                   "split", line)
-            placed[preset] = (split, entry, i)
+            _place(entry, (SPLITS_KEY, PRESETS_KEY), split, i, preset, measured, placed, "preset",
+                   lambda p: f"'{p}' is not a measured preset (only measured presets are split; the paper's are in "
+                   "every split)" + ("" if not measured else f"; measured: {', '.join(list(measured)[:4])}, ..."),
+                   "a door")
 
 
-def _place(entry: RawEntry, split: str, index: int, design: object, builtin_designs: Mapping[str, bool],
-           placed: dict[str, tuple[str, RawEntry, int]]) -> None:
-    """Record ``design`` (item ``index`` of ``split`` in ``entry``) in ``placed``, or raise."""
+def _place(entry: RawEntry, at: tuple[str, ...], split: str, index: int, item: object, known: Mapping[str, bool],
+           placed: dict[str, tuple[str, RawEntry, int]], noun: str, unknown: Callable[[str], str],
+           one: str) -> None:
+    """Record ``item`` (entry ``index`` of ``split`` under the keys ``at`` of ``entry``'s file) in ``placed``, or
+    raise. ``known``: every id of its kind -> whether it is rik's own; ``noun`` names the kind (design, preset),
+    ``unknown(item)`` says why an id not in ``known`` cannot be placed, ``one`` what is in exactly one split."""
     shown = display_path(entry.file)
-    field = f"{SPLITS_KEY}.{split}"
-    line = line_of(entry.file, (SPLITS_KEY, split, index))
-    if not isinstance(design, str):
-        raise CatalogError(shown, None, field, f"must list design ids (got {design!r})", line)
-    if design not in builtin_designs:
-        raise CatalogError(shown, None, field, str(UnknownIdError("design", design, builtin_designs)), line)
-    if builtin_designs[design] and not entry.builtin:
-        raise CatalogError(shown, None, field, f"design '{design}' is built in and has its split in rik's own "
-                           "splits.yaml; an overlay may place only its own designs", line)
-    if not builtin_designs[design] and entry.builtin:  # pragma: no cover - built-in data never names overlay ids
-        raise CatalogError(shown, None, field, f"design '{design}' is not built in", line)
-    if design in placed:
-        other, other_entry, other_index = placed[design]
+    field = ".".join((*at, split))
+    line = line_of(entry.file, (*at, split, index))
+    if not isinstance(item, str):
+        raise CatalogError(shown, None, field, f"must list {noun} ids (got {item!r})", line)
+    if item not in known:
+        raise CatalogError(shown, None, field, unknown(item), line)
+    if known[item] and not entry.builtin:
+        raise CatalogError(shown, None, field, f"{noun} '{item}' is built in and has its split in rik's own "
+                           f"splits.yaml; an overlay may place only its own {noun}s", line)
+    if not known[item] and entry.builtin:  # pragma: no cover - built-in data never names overlay ids
+        raise CatalogError(shown, None, field, f"{noun} '{item}' is not built in", line)
+    if item in placed:
+        other, other_entry, other_index = placed[item]
         where = display_path(other_entry.file)
-        other_line = line_of(other_entry.file, (SPLITS_KEY, other, other_index))
-        raise CatalogError(shown, None, field, f"design '{design}' is already in split '{other}' "
-                           f"({where}:{other_line}); a design is in exactly one split", line)
-    placed[design] = (split, entry, index)
+        other_line = line_of(other_entry.file, (*at, other, other_index))
+        raise CatalogError(shown, None, field, f"{noun} '{item}' is already in split '{other}' "
+                           f"({where}:{other_line}); {one} is in exactly one split", line)
+    placed[item] = (split, entry, index)
