@@ -77,8 +77,9 @@ fi
 
 if stage train; then
   pids=()
-  for arm in "${ARMS[@]}"; do
-    for seed in $SEEDS; do
+  # seed by seed, both arms each (jp s0, jm s0, jp s1, ...): a session that ends early leaves whole pairs, not one arm
+  for seed in $SEEDS; do
+    for arm in "${ARMS[@]}"; do
       run="act-$arm-s$seed"
       last="runs/$run/checkpoints/last/pretrained_model"
       if [ -f "$last/model.safetensors" ]; then
