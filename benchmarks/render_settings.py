@@ -23,16 +23,20 @@ from pathlib import Path
 VARIANTS = ("drawer-chest-80__two_point-bow-128__normal", "door-wall-60-left__two_point-d-pull-128__normal",
             "drawer-bedside-45__knob-mushroom-30__high", "flap-lift-up-60__finger_pull-edge-j-150__smooth")
 CAMERAS = ("front", "wrist")
-SETTINGS = {  # name: (shadow map px, multisamples, shadows: "all" lights, the "key" light only or "none", reflections)
-    "today": (2048, 4, "all", True),
-    "shadow 1024": (1024, 4, "all", True),
-    "shadow 512": (512, 4, "all", True),
-    "shadow 512, no reflections": (512, 4, "all", False),
-    "shadow 512, key light only": (512, 4, "key", True),
-    "shadow 1024, key light only": (1024, 4, "key", True),
-    "shadow 512, key light only, 2x multisampling": (512, 2, "key", True),
-    "shadow 512, no multisampling": (512, 0, "all", True),
-    "no shadows": (2048, 4, "none", True),
+SETTINGS = {  # name: (shadow map px, multisamples, shadows: "all" lights, the "key" light only or "none", reflections,
+    #               supersampling: rendered at this many times the size a side, averaged down in blocks)
+    "today": (2048, 4, "all", True, 1),
+    "shadow 1024": (1024, 4, "all", True, 1),
+    "shadow 512": (512, 4, "all", True, 1),
+    "shadow 512, no reflections": (512, 4, "all", False, 1),
+    "shadow 512, key light only": (512, 4, "key", True, 1),
+    "shadow 1024, key light only": (1024, 4, "key", True, 1),
+    "shadow 512, key light only, 2x multisampling": (512, 2, "key", True, 1),
+    "shadow 512, no multisampling": (512, 0, "all", True, 1),
+    "shadow 512, 2x2 supersampled": (512, 0, "all", True, 2),
+    "shadow 256, 2x2 supersampled": (256, 0, "all", True, 2),
+    "shadow 1024, 2x2 supersampled": (1024, 0, "all", True, 2),
+    "no shadows": (2048, 4, "none", True, 1),
 }
 WARMUP = 2
 
@@ -52,6 +56,17 @@ def ssim(a, b) -> float:  # noqa: ANN001  (uint8 images, H x W x 3)
         c1, c2 = 0.01 ** 2, 0.03 ** 2
         out.append(float(np.mean((2 * mx * my + c1) * (2 * sxy + c2) / ((mx * mx + my * my + c1) * (sxx + syy + c2)))))
     return float(np.mean(out))
+
+
+def downsample(image, factor: int):  # noqa: ANN001, ANN201  (uint8 H x W x 3 -> uint8 H/f x W/f x 3)
+    """The mean of each ``factor`` x ``factor`` block, rounded to 8 bits (a copy, also at factor 1)."""
+    import numpy as np
+
+    if factor == 1:
+        return image.copy()
+    h, w, c = image.shape
+    blocks = image.reshape(h // factor, factor, w // factor, factor, c).astype(np.float32)
+    return np.rint(blocks.mean(axis=(1, 3))).astype(np.uint8)
 
 
 def psnr(a, b) -> float:  # noqa: ANN001
@@ -90,12 +105,12 @@ def main() -> None:
             for size in sizes:
                 frames: dict[str, list[np.ndarray]] = {}
                 casts = model.light_castshadow.copy()
-                for name, (shadow, samples, shadows, reflections) in SETTINGS.items():
+                for name, (shadow, samples, shadows, reflections, ss) in SETTINGS.items():
                     model.vis.quality.shadowsize, model.vis.quality.offsamples = shadow, samples
                     model.light_castshadow[:] = casts
                     if shadows == "key":  # the fill light's shadow off: one shadow map per frame instead of two
                         model.light_castshadow[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_LIGHT, "fill")] = 0
-                    renderer = mujoco.Renderer(model, size, size)
+                    renderer = mujoco.Renderer(model, size * ss, size * ss)
                     data = mujoco.MjData(model)
                     images = []
                     for k in range(args.steps + WARMUP):
@@ -107,7 +122,7 @@ def main() -> None:
                             renderer.update_scene(data, camera=cam)
                             renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows != "none"
                             renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = reflections
-                            image = renderer.render().copy()
+                            image = downsample(renderer.render(), ss)
                             if k >= WARMUP:
                                 seconds.setdefault((size, name), []).append(time.perf_counter() - start)
                                 images.append(image)

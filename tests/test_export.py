@@ -84,6 +84,9 @@ def test_export_loads_with_both_streams_metadata_and_matching_counts(dataset: Pa
     assert knob.meta.total_episodes == 3 and len(knob) == metas[next(m for m in metas if "knob" in m)].steps + 1
     card = (dataset / "README.md").read_text()
     assert "observation.images.front_rerendered" in card and "Real-IKEA" in card and "| normal |" in card
+    # how the sim stream was drawn: its render settings and its stream's key (a rebuild with others is another one)
+    assert ("MuJoCo rendered the sim stream with 512 px shadow maps and 4x multisampling (stream "
+            "`sim-32x24-shadow512-msaa4`" in " ".join(card.split()))
 
 
 @slow

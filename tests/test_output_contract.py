@@ -254,7 +254,7 @@ def test_a_file_deep_in_a_variant_or_a_stream_stops_its_replacement(rik, bow_var
     notes.unlink()
     assert rik("variants", "build", BOW, "--out", str(out), "--force").code == 0  # rik's own: rebuilt
 
-    stream = tmp_path / "renders" / "ep" / "sim-16x16"
+    stream = tmp_path / "renders" / "ep" / "sim-16x16-shadow512-msaa4"
     (stream / "front").mkdir(parents=True)
     (stream / "front" / "000000.png").write_bytes(b"png")
     (stream / MANIFEST).write_text('{"cameras": ["front"]}')

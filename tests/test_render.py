@@ -55,10 +55,15 @@ def test_sim_stream_has_every_camera_and_state_and_matches_a_live_render(episode
         assert len(list((result.directory / cam).glob("*.png"))) == len(table)
     manifest = json.loads((result.directory / "stream.json").read_text())
     assert manifest["states_sha256"] == meta.states_sha256 and manifest["width"] == 48
-    # Frame k is the recorded state k, seen by that camera.
+    # the settings it was drawn with, in its key and its manifest: a 512 px shadow map for a 48 px image
+    assert manifest["render_settings"] == {"shadow_size": 512, "multisamples": 4}
+    assert result.directory.name == manifest["key"] == "sim-48x32-shadow512-msaa4"
+    # Frame k is the recorded state k, seen by that camera with those settings.
     scene = episode_scene(CAT, episode, variants, meta)
+    assert scene.model.vis.quality.shadowsize == 2048  # the scene's own
     k = len(table) - 1
     scene.restore(states(table)[k])
+    scene.model.vis.quality.shadowsize = 512
     with mujoco.Renderer(scene.model, 32, 48) as r:
         r.update_scene(scene.data, camera="wrist")
         live = r.render()
@@ -245,3 +250,29 @@ def test_episode_whose_variant_cannot_be_rebuilt(episode: Path, tmp_path: Path) 
 @pytest.mark.parametrize(("text", "size"), [("256", (256, 256)), ("320x240", (320, 240)), ("64X48", (64, 48))])
 def test_resolution(text: str, size: tuple[int, int]) -> None:
     assert parse_resolution(text) == size
+
+
+@pytest.mark.parametrize(("size", "shadow"), [((8, 8), 512), ((64, 64), 512), ((128, 96), 512), ((129, 64), 1024),
+                                              ((256, 256), 1024), ((320, 240), 2048), ((4096, 4096), 2048)])
+def test_sim_settings_scale_the_shadow_map_with_the_image(size: tuple[int, int], shadow: int) -> None:
+    """Four shadow-map texels per pixel of the longer side, one of 512, 1024 and 2048 px; a stream's key says it."""
+    spec = StreamSpec("sim", *size)
+    assert spec.sim.shadow_size == shadow and spec.sim.multisamples == 4
+    assert spec.key == f"sim-{size[0]}x{size[1]}-shadow{shadow}-msaa4"
+
+
+def test_a_sim_renderer_leaves_the_scenes_model_as_it_was(variants: Path) -> None:
+    """The shadow map's size and the multisamples are set for the renderer's context only: the model is shared with
+    the scene (and the teleop viewer), whose own renders keep rik's 2048 px map."""
+    from rik.render.renderers import MujocoFrames
+    from rik.sim.build import build_scene
+
+    scene = build_scene(variants / BOW, None)
+    quality = scene.model.vis.quality
+    before = (quality.shadowsize, quality.offsamples)
+    frames = MujocoFrames(scene.model, ["front"], StreamSpec("sim", 16, 16))
+    try:
+        assert frames.render(scene.data, 0)["front"].shape == (16, 16, 3)
+    finally:
+        frames.close()
+    assert (quality.shadowsize, quality.offsamples) == before == (2048, 4)

@@ -200,7 +200,7 @@ def _description(catalog: Catalog, spec: ExportSpec, fps: int, checks: dict[str,
         streams = f"""- **Image streams:** {', '.join(f'`{k}`' for k in images)}. Keys without a suffix are MuJoCo's own
   rendering (the sim stream); `_rerendered` keys are the same states path-traced offline by Mitsuba 3
   ({spec.spp} spp{', denoised by Intel Open Image Denoise' if spec.denoise else ''}), pixel-aligned with the sim
-  stream. Images are {spec.io.width}x{spec.io.height}, codec {spec.codec}.
+  stream. Images are {spec.io.width}x{spec.io.height}, codec {spec.codec}.{sim_settings_text(spec)}
 """
         one_stream = f"""**Training on one stream.** Policies take every `observation.*` feature by default. To train on
 the sim stream only, give the policy's `input_features` just `observation.state`, \
@@ -317,3 +317,12 @@ def write_card(catalog: Catalog, root: Path, spec: ExportSpec, fps: int, checks:
                                        license="apache-2.0", repo_id=spec.repo_id, **fields)
     write_text(root / "README.md", str(card), Replaces.in_folder(MERGING))
     return root / "README.md"
+
+
+def sim_settings_text(spec: ExportSpec) -> str:
+    """The sim stream's render settings as the card says them (empty without a sim stream)."""
+    if "sim" not in spec.io.streams:
+        return ""
+    stream = spec.stream("sim")
+    return (f" MuJoCo rendered the sim stream with {stream.sim.shadow_size} px shadow maps and "
+            f"{stream.sim.multisamples}x multisampling (stream `{stream.key}`; another setting is another stream).")

@@ -81,7 +81,15 @@ class MujocoFrames:
         # grow it for larger images (up to MAX_SIDE), leaving it as it is for the sizes it holds
         vis = model.vis.global_
         vis.offwidth, vis.offheight = max(vis.offwidth, spec.width), max(vis.offheight, spec.height)
-        self.renderer = mujoco.Renderer(model, spec.height, spec.width)
+        # the context takes the shadow map's size and the multisamples when it is made: set them for it, then give
+        # the model (shared with the scene and other renderers) its own back
+        quality = model.vis.quality
+        own = quality.shadowsize, quality.offsamples
+        quality.shadowsize, quality.offsamples = spec.sim.shadow_size, spec.sim.multisamples
+        try:
+            self.renderer = mujoco.Renderer(model, spec.height, spec.width)
+        finally:
+            quality.shadowsize, quality.offsamples = own
         self.start_clock()
 
     def start_clock(self) -> None:

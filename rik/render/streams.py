@@ -2,8 +2,9 @@
 
 A stream of one episode is a folder ``<renders>/<episode id>/<key>/`` holding ``<camera>/<frame:06d>.png`` for
 every camera and every recorded state, plus ``stream.json`` (what was rendered, how, from which states). The
-key names the stream and its settings, e.g. ``sim-256x256`` or ``rerendered-256x256-16spp-oidn``, so streams
-at other settings sit beside it. Frames are written into ``.<key>.partial/`` (each PNG through a temporary
+key names the stream and its settings, e.g. ``sim-256x256-shadow1024-msaa4`` or ``rerendered-256x256-16spp-oidn``,
+so streams at other settings sit beside it (and a stream rendered with other settings is another stream, not a
+silent change). Frames are written into ``.<key>.partial/`` (each PNG through a temporary
 file and a rename) and the folder is renamed into place when every frame is there: a finished stream is never
 redone, an interrupted one resumes at its first missing frame (frames are deterministic, seeded by their
 index), and a stream of an episode recorded again (another states sha256) is rendered again.
@@ -45,6 +46,39 @@ MAX_SPP = 4096
 """Most samples per pixel of the re-render (as ``rik rerender --spp`` allows)."""
 
 
+MULTISAMPLES = 4
+"""Multisamples per pixel of MuJoCo's frames (on llvmpipe 2 render the same frames as 4; docs/benchmarks.md)."""
+SHADOW_TEXELS_PER_PIXEL = 4
+"""Shadow map texels per image pixel on the image's longer side (:func:`sim_settings`)."""
+SHADOW_SIZES = (512, 1024, 2048)
+"""The shadow map sizes a sim stream is rendered with, px a side: the smallest that holds
+:data:`SHADOW_TEXELS_PER_PIXEL` per image pixel, 2048 (rik's scenes' own) above."""
+
+
+@dataclass(frozen=True)
+class SimSettings:
+    """How MuJoCo renders a sim stream's frames: what decides its cost and picture, recorded in its key and
+    ``stream.json``."""
+
+    shadow_size: int
+    """Each shadow-casting light's shadow map, px a side (rik's scenes are compiled with 2048)."""
+    multisamples: int = MULTISAMPLES
+
+    @property
+    def tag(self) -> str:
+        return f"shadow{self.shadow_size}-msaa{self.multisamples}"
+
+
+def sim_settings(width: int, height: int) -> SimSettings:
+    """The settings of a ``width`` x ``height`` sim frame: a shadow map of :data:`SHADOW_TEXELS_PER_PIXEL` texels per
+    pixel of the longer side, rounded up to one of :data:`SHADOW_SIZES` (512 px up to 128 px images, 1024 up to 256,
+    2048 above). Chosen by ``benchmarks/render_settings.py`` (docs/rendering.md): at 64 and 128 px a 512 px map
+    renders 1.6-2.3 times faster than 2048 with the same picture (PSNR 36-37 dB median; the worst frames differ by a
+    shadow edge moved about a pixel on the wrist camera)."""
+    need = SHADOW_TEXELS_PER_PIXEL * max(width, height)
+    return SimSettings(next((s for s in SHADOW_SIZES if s >= need), SHADOW_SIZES[-1]))
+
+
 @dataclass(frozen=True)
 class StreamSpec:
     """What a stream is: which renderer, at what size and, for the re-render, quality."""
@@ -68,10 +102,15 @@ class StreamSpec:
             raise RikError(f"--spp {self.spp}: give 1 to {MAX_SPP} samples per pixel")
 
     @property
+    def sim(self) -> SimSettings:
+        """MuJoCo's render settings at this size (the sim stream's; :func:`sim_settings`)."""
+        return sim_settings(self.width, self.height)
+
+    @property
     def key(self) -> str:
         size = f"{self.width}x{self.height}"
         if self.kind == "sim":
-            return f"sim-{size}"
+            return f"sim-{size}-{self.sim.tag}"
         return f"rerendered-{size}-{self.spp}spp-{'oidn' if self.denoise else 'raw'}"
 
 
@@ -160,7 +199,9 @@ class StreamWriter:
 
     def publish(self, info: dict[str, Any]) -> Path:
         """Write the manifest and move the finished stream into place (replacing an outdated one)."""
-        manifest = {"stream": self.spec.kind, "key": self.spec.key, **asdict(self.spec), "cameras": self.cameras,
+        settings = {"render_settings": asdict(self.spec.sim)} if self.spec.kind == "sim" else {}
+        manifest = {"stream": self.spec.kind, "key": self.spec.key, **asdict(self.spec), **settings,
+                    "cameras": self.cameras,
                     "frames": self.frames, "states_sha256": self.sha, **info}
         remove_file(self.staging / ".states_sha256", PRIVATE)
         write_text(self.staging / MANIFEST, json.dumps(manifest, indent=2) + "\n", PRIVATE)
