@@ -46,6 +46,7 @@ Use: ``import rik.envs.open_front`` (registers the id), then ``gymnasium.make("r
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -128,6 +129,12 @@ class OpenFrontEnv(gym.Env):
         self._scenes: OrderedDict[tuple[str, str | None], SimScene] = OrderedDict()
         self._renderers: dict[str, FrameRenderer] = {}
         self._renderer_model: Any = None
+        self.reads_next: Callable[[], bool] | None = None
+        """Whether the policy reads the next observation's images (None: it does; :mod:`rik.lerobot.observation_use`):
+        a step whose images no policy reads keeps the last frames instead of rendering new ones."""
+        self._pixels: dict[str, np.ndarray] | None = None
+        self.frames_rendered = 0
+        """Observations whose images were rendered (every camera and stream of the contract), since the start."""
         self.last_result: dict[str, Any] | None = None
         self._episode: dict[str, Any] = {"seed": -1}
         first = variant if variant is not None else self._draw.episode(self._catalog, 0).variant  # type: ignore[union-attr]
@@ -253,11 +260,11 @@ class OpenFrontEnv(gym.Env):
         if self.layout.ee_pose:
             obs["ee_pose"] = self.layout.ee(self.scene).astype(np.float32)
         if self.io.streams:
-            pixels = {}
-            for stream in self.io.streams:
-                for cam, img in self._renderer(stream).render(self.scene.data, self._steps).items():
-                    pixels[image_name(cam, stream)] = img
-            obs["pixels"] = pixels
+            if self._pixels is None or self._steps == 0 or self.reads_next is None or self.reads_next():
+                self._pixels = {image_name(cam, stream): img for stream in self.io.streams
+                                for cam, img in self._renderer(stream).render(self.scene.data, self._steps).items()}
+                self.frames_rendered += 1
+            obs["pixels"] = self._pixels
         return obs
 
     def _info(self) -> dict[str, Any]:

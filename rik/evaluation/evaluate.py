@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 from rik.errors import RikError
+from rik.lerobot.observation_use import observation_use
 from rik.lerobot.policy_files import check_policy_folder
 from rik.lerobot.policy_io import AUTO, PolicyIO, read_policy
 from rik.outputs import Replaces, check_own_files, recorded, save_figure, write_text, writing
@@ -286,8 +287,10 @@ def _context(spec: EvalSpec) -> dict[str, Any]:
         env_pre, env_post = make_env_pre_post_processors(env_cfg=cfg, policy_cfg=policy_cfg)
         # the states are kept per step only for state policies: with images every step's frames would be copied
         stats = {} if spec.io.cameras else _state_stats(pre, spec.io.robot)
-        ctx |= {"policy": policy, "processors": (env_pre, env_post, pre, post), "stats": stats,
-                "vec": cfg.create_envs(n_envs=1)[cfg.type][0]}
+        vec = cfg.create_envs(n_envs=1)[cfg.type][0]
+        # an image policy's frames are rendered only for the steps whose images it reads (a chunk's first)
+        vec.envs[0].unwrapped.reads_next = observation_use(policy)
+        ctx |= {"policy": policy, "processors": (env_pre, env_post, pre, post), "stats": stats, "vec": vec}
     else:
         import gymnasium as gym
 

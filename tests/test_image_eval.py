@@ -1,0 +1,188 @@
+"""Image evaluation renders only the frames a policy reads (issue 54): a chunking policy (ACT, diffusion) reads the
+observation its next prediction stacks and drops the others, so ``rik eval`` renders a policy's cameras for those
+steps only (:mod:`rik.lerobot.observation_use`) and hands the last frames to the steps in between.
+
+The claim is checked on real lerobot policies, not on a model of them: the same observations fed in full and fed
+with every unread one replaced by a stale one give the same actions; and an episode of ``rik eval`` with a real
+image ACT policy in rik's environment ends in the same state whether every step or only the read ones are
+rendered, counting the renders."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from shared import BOW, builtin_catalog
+
+from rik.lerobot.features import OBS_ENV_STATE, OBS_STATE
+from rik.lerobot.observation_use import every_observation, observation_use
+from rik.lerobot.policy_io import POLICY_IO_FILE, PolicyIO
+
+pytestmark = pytest.mark.slow  # real policies and an episode of rik eval: out of the everyday tier
+
+SIZE = (16, 16)
+IO = PolicyIO(cameras=("front", "wrist"), streams=("sim",), image_size=SIZE)
+
+
+def _features(io: PolicyIO) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The policy's input and output features of a dataset of contract ``io`` (LeRobot's types)."""
+    from lerobot.configs.types import FeatureType, PolicyFeature
+
+    kinds = {OBS_STATE: FeatureType.STATE, OBS_ENV_STATE: FeatureType.ENV, "action": FeatureType.ACTION}
+    inputs, outputs = {}, {}
+    for key, feature in io.features().items():
+        shape = tuple(feature["shape"])
+        if feature["dtype"] == "video":
+            inputs[key] = PolicyFeature(FeatureType.VISUAL, (shape[2], shape[0], shape[1]))
+        elif key in kinds:
+            (outputs if key == "action" else inputs)[key] = PolicyFeature(kinds[key], shape)
+    return inputs, outputs
+
+
+def _act(chunk: int, temporal: float | None = None) -> Any:
+    """A small image ACT policy (random weights, no download) reading :data:`IO`'s state and cameras."""
+    from lerobot.policies.act.configuration_act import ACTConfig
+    from lerobot.policies.act.modeling_act import ACTPolicy
+
+    inputs, outputs = _features(IO)
+    config = ACTConfig(device="cpu", push_to_hub=False, pretrained_backbone_weights=None, dim_model=16,
+                       dim_feedforward=32, n_heads=2, n_encoder_layers=1, n_decoder_layers=1, chunk_size=chunk,
+                       n_action_steps=1 if temporal is not None else chunk, temporal_ensemble_coeff=temporal,
+                       latent_dim=4, use_vae=False, input_features=inputs, output_features=outputs)
+    return ACTPolicy(config).eval()
+
+
+def _diffusion() -> Any:
+    """A small diffusion policy (two observations stacked, four actions per chunk, two denoising steps)."""
+    from lerobot.configs.types import FeatureType, PolicyFeature
+    from lerobot.policies.diffusion.configuration_diffusion import DiffusionConfig
+    from lerobot.policies.diffusion.modeling_diffusion import DiffusionPolicy
+
+    config = DiffusionConfig(device="cpu", push_to_hub=False, n_obs_steps=2, horizon=8, n_action_steps=4,
+                             down_dims=(8, 16), diffusion_step_embed_dim=8, num_inference_steps=2,
+                             input_features={OBS_STATE: PolicyFeature(FeatureType.STATE, (11,)),
+                                             OBS_ENV_STATE: PolicyFeature(FeatureType.ENV, (13,))},
+                             output_features={"action": PolicyFeature(FeatureType.ACTION, (7,))})
+    return DiffusionPolicy(config).eval()
+
+
+def _observations(policy: Any, steps: int) -> list[dict[str, Any]]:
+    import torch
+
+    gen = torch.Generator().manual_seed(0)
+    return [{key: torch.randn((1, *feature.shape), generator=gen) for key, feature in
+             policy.config.input_features.items()} for _ in range(steps)]
+
+
+def _actions(policy: Any, observations: list[dict[str, Any]], stale: bool) -> tuple[np.ndarray, list[bool]]:
+    """The policy's actions over ``observations`` (one episode), and whether each was read, as
+    :func:`observation_use` says; with ``stale`` every observation it says is not read is replaced by the last one
+    that was (as the environment hands the last frames on)."""
+    import torch
+
+    torch.manual_seed(0)  # diffusion draws its noise per prediction: the same draws in both runs
+    policy.reset()
+    reads_next = observation_use(policy)
+    read, actions, given = [True], [], observations[0]
+    with torch.no_grad():
+        for k, obs in enumerate(observations):
+            if k == 0 or not stale or read[-1]:
+                given = obs
+            actions.append(policy.select_action(dict(given)).numpy().copy())
+            read.append(reads_next())
+    return np.concatenate(actions), read[:-1]
+
+
+@pytest.mark.parametrize("make", [lambda: _act(5), _diffusion], ids=["act", "diffusion"])
+def test_a_chunking_policy_acts_the_same_on_the_observations_it_is_said_to_read(make: Any) -> None:
+    """Fed every observation, or only those :func:`observation_use` says it reads (the others stale): the same
+    actions, and most observations are not read (ACT: one in five; diffusion: two in four)."""
+    policy = make()
+    observations = _observations(policy, 20)
+    fresh, read = _actions(policy, observations, stale=False)
+    stale, read_again = _actions(policy, observations, stale=True)
+    np.testing.assert_array_equal(fresh, stale)
+    assert read == read_again
+    expected = [k % 5 == 0 for k in range(20)] if policy.name == "act" else [k % 4 in (0, 3) for k in range(20)]
+    assert read == expected
+
+
+def test_the_reads_say_when_stale_observations_would_change_the_actions() -> None:
+    """The check above can fail: said to read one observation in two instead of one in five, stale observations
+    reach ACT's predictions and change its actions."""
+    policy = _act(5)
+    observations = _observations(policy, 20)
+    fresh, _ = _actions(policy, observations, stale=False)
+    policy.reset()
+    import torch
+
+    with torch.no_grad():
+        given, wrong = observations[0], []
+        for k, obs in enumerate(observations):
+            given = obs if k % 2 == 0 else given  # a wrong rule: every other observation
+            wrong.append(policy.select_action(dict(given)).numpy().copy())
+    assert not np.array_equal(fresh, np.concatenate(wrong))
+
+
+def test_policies_that_read_every_observation_are_rendered_every_step() -> None:
+    """ACT with temporal ensembling predicts every step; a type whose queues rik does not know reads every
+    observation too."""
+    assert observation_use(_act(5, temporal=0.01)) is every_observation
+
+    class Other:
+        name = "pi0"
+
+    assert observation_use(Other()) is every_observation
+
+
+@pytest.fixture(scope="module")
+def image_policy(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A small image ACT policy (5 actions a chunk) saved by LeRobot with its processors and rik's contract."""
+    import torch
+    from lerobot.policies.factory import make_pre_post_processors
+
+    policy = _act(5)
+    stats = {key: {"mean": torch.zeros(feature.shape[0], *([1, 1] if len(feature.shape) == 3 else [])),
+                   "std": torch.ones(feature.shape[0], *([1, 1] if len(feature.shape) == 3 else []))}
+             for key, feature in {**policy.config.input_features, **policy.config.output_features}.items()}
+    pre, post = make_pre_post_processors(policy.config, dataset_stats=stats)
+    folder = tmp_path_factory.mktemp("image-policy") / "policy"
+    for part in (policy, pre, post):
+        part.save_pretrained(folder)
+    (folder / POLICY_IO_FILE).write_text(IO.to_json())
+    return folder
+
+
+def test_rik_eval_renders_only_the_frames_an_image_policy_reads(image_policy: Path, bow_variants: Path,
+                                                                 tmp_path: Path) -> None:
+    """One 20-step episode of rik eval (the train split's draw of seed 22 is the bow drawer), rendered every step
+    and then only where the policy reads: 22 observations rendered against 6 (the start, every fifth step, and the
+    vector environment's reset after the last step, in both), and the same episode to the last joint of the robot."""
+    from rik.evaluation import evaluate
+
+    variants = tmp_path / "variants"
+    shutil.copytree(bow_variants, variants)
+    spec = evaluate.prepare(builtin_catalog(), evaluate.EvalSpec(
+        str(image_policy), split="train", handle_types=("two_point",), presets=("normal",), kinds=("drawer",),
+        episodes_per_cell=1, seed=22, episode_length=20, videos=0, variants=str(variants)))
+    assert spec.io.cameras == ("front", "wrist") and spec.io.image_size == SIZE
+    ends, rendered = {}, {}
+    for mode in ("every step", "read only"):
+        vec = evaluate._context(spec)["vec"]
+        env = vec.envs[0].unwrapped
+        assert env.reads_next is not None  # rik eval gave the environment the policy's reads
+        if mode == "every step":
+            env.reads_next = None
+        before = env.frames_rendered
+        row = evaluate.run_episode(spec, 22)
+        assert row["variant"] == BOW and row["steps"] == 20
+        rendered[mode] = env.frames_rendered - before
+        ends[mode] = (env.scene.data.qpos.copy(), row["final_opening"], row["sum_reward"])
+        evaluate._CONTEXT.clear()  # the next mode's environment and policy made anew
+        vec.close()
+    assert rendered == {"every step": 22, "read only": 6}
+    np.testing.assert_array_equal(ends["every step"][0], ends["read only"][0])
+    assert ends["every step"][1:] == ends["read only"][1:]
