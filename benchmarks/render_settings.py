@@ -1,12 +1,14 @@
 """MuJoCo render settings against today's: what each costs and what it changes in the picture, per resolution.
 
-The first measurement of issue 54's "renders at the cost the picture needs": rik's MuJoCo frames are rendered with
-a 2048 px shadow map, 4x multisampling, shadows of both lights (key and fill) and reflections at every size. For
+How issue 54's render settings were chosen. "Today's" are rik's scenes' own (and every sim stream's before issue
+54): a 2048 px shadow map, 4x multisampling, shadows of both lights (key and fill) and reflections at every size;
+sim streams now take the shadow map's size from the image's (:func:`rik.render.streams.sim_settings`). For
 each candidate setting and image size this renders the same frames as today's settings (four variants: a drawer, a
 door, a knob drawer, a flap; the front opened in 24 steps over its range; the ``front`` and ``wrist`` cameras) and
 prints, side by side in one run: milliseconds per frame and the speed-up against today's, and the picture against
 today's frame for frame (PSNR on 8-bit sRGB and SSIM, median and worst). ``--png`` writes a side-by-side sheet
-(one door frame per setting and size) to look at. Nothing in rik changes: the settings are set on the model and
+(one door frame per setting and size) to look at, and ``<png>-worst.png`` the frame of each variant and size that
+the chosen setting (:data:`CHOSEN`) changes most. Nothing in rik changes: the settings are set on the model and
 scene for this run only.
 
 Run: ``uv run python benchmarks/render_settings.py [--sizes 64,128] [--steps 24] [--png sheet.png]``.
@@ -38,6 +40,9 @@ SETTINGS = {  # name: (shadow map px, multisamples, shadows: "all" lights, the "
     "shadow 1024, 2x2 supersampled": (1024, 0, "all", True, 2),
     "no shadows": (2048, 4, "none", True, 1),
 }
+CHOSEN = "shadow 512"
+"""The setting rik renders 64-128 px sim frames with (:func:`rik.render.streams.sim_settings`): ``--png`` also
+writes its worst frame per variant and size beside today's (``<png>-worst.png``)."""
 WARMUP = 2
 
 
@@ -95,6 +100,7 @@ def main() -> None:
     seconds: dict[tuple[int, str], list[float]] = {}
     quality: dict[tuple[int, str], list[tuple[float, float]]] = {}
     sheet: dict[tuple[int, str], np.ndarray] = {}
+    worst: dict[tuple[str, int], tuple[float, np.ndarray, np.ndarray]] = {}
     print(f"CPU cores: {os.cpu_count()}; {len(VARIANTS)} variants x {args.steps} openings x {len(CAMERAS)} cameras "
           f"per setting and size")
     with tempfile.TemporaryDirectory() as tmp:
@@ -134,6 +140,9 @@ def main() -> None:
                 for name in SETTINGS:
                     quality.setdefault((size, name), []).extend(
                         (psnr(a, b), ssim(a, b)) for a, b in zip(frames["today"], frames[name], strict=True))
+                scores = [psnr(a, b) for a, b in zip(frames["today"], frames[CHOSEN], strict=True)]
+                k = int(np.argmin(scores))
+                worst[(vid, size)] = (scores[k], frames["today"][k], frames[CHOSEN][k])
             model.vis.quality.shadowsize, model.vis.quality.offsamples = saved
     print(f"\n{'setting':<46}{'px':>5}{'ms/frame':>10}{'x today':>9}{'PSNR med':>10}{'PSNR min':>10}"
           f"{'SSIM med':>10}{'SSIM min':>10}")
@@ -157,6 +166,17 @@ def main() -> None:
                 axes[i][j].axis("off")
         fig.tight_layout()
         print(f"sheet: {save_figure(fig, args.png, RECORDED)}")
+        fig, axes = pyplot().subplots(len(worst), 3, figsize=(6.6, 2.3 * len(worst)), dpi=120, squeeze=False)
+        for i, ((vid, size), (score, today, chosen)) in enumerate(worst.items()):
+            diff = np.clip(4 * np.abs(today.astype(np.int16) - chosen.astype(np.int16)), 0, 255).astype(np.uint8)
+            for j, (image, title) in enumerate(((today, "today"), (chosen, CHOSEN), (diff, "|difference| x4"))):
+                axes[i][j].imshow(image, interpolation="nearest")
+                axes[i][j].set_title(f"{title}, {size} px" + (f"\n{vid[:34]}, PSNR {score:.1f} dB" if j == 0 else ""),
+                                     fontsize=6)
+                axes[i][j].axis("off")
+        fig.tight_layout()
+        path = args.png.with_name(f"{args.png.stem}-worst{args.png.suffix}")
+        print(f"worst frames of {CHOSEN!r}: {save_figure(fig, path, RECORDED)}")
 
 
 if __name__ == "__main__":

@@ -73,8 +73,8 @@ def sim_settings(width: int, height: int) -> SimSettings:
     """The settings of a ``width`` x ``height`` sim frame: a shadow map of :data:`SHADOW_TEXELS_PER_PIXEL` texels per
     pixel of the longer side, rounded up to one of :data:`SHADOW_SIZES` (512 px up to 128 px images, 1024 up to 256,
     2048 above). Chosen by ``benchmarks/render_settings.py`` (docs/rendering.md): at 64 and 128 px a 512 px map
-    renders 1.6-2.3 times faster than 2048 with the same picture (PSNR 36-37 dB median; the worst frames differ by a
-    shadow edge moved about a pixel on the wrist camera)."""
+    renders 1.6-1.7 times faster than 2048 with the same picture in the front camera (PSNR 36-37 dB median); on the
+    wrist camera's close-ups shadow edges are coarser (the worst frames, 22 dB: docs/rendering.md)."""
     need = SHADOW_TEXELS_PER_PIXEL * max(width, height)
     return SimSettings(next((s for s in SHADOW_SIZES if s >= need), SHADOW_SIZES[-1]))
 
