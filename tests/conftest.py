@@ -53,7 +53,7 @@ own (``keyboard.up`` waits for the page, which a starved machine may never sched
 FILE_SECONDS: dict[str, tuple[int, int]] = {
     "test_web_teleop.py": (139, 0), "test_sysid_discover.py": (107, 0), "test_policy_loop.py": (101, 0),
     "test_dataset_ray.py": (94, 0), "test_dataset_build.py": (86, 0), "test_cli_catalog.py": (83, 4),
-    "test_env_robots.py": (81, 0), "test_export.py": (77, 3), "test_finger.py": (75, 0), "test_render.py": (65, 0), "test_image_eval.py": (17, 0),
+    "test_env_robots.py": (81, 0), "test_export.py": (77, 3), "test_finger.py": (75, 0), "test_render.py": (65, 0), "test_image_eval.py": (17, 0), "test_images_only.py": (20, 0),
     "test_policy_experiment.py": (52, 0), "test_teleop_viewer.py": (44, 0), "test_assets_import.py": (39, 0),
     "test_export_robots.py": (39, 0), "test_web_viewer3d.py": (34, 1), "test_sysid_foreign_discover.py": (33, 0),
     "test_combinator.py": (9, 21), "test_web_catalog.py": (24, 0), "test_sysid_cli.py": (4, 18),

@@ -42,7 +42,7 @@ def _policy(folder: Path, contract: dict | str | None = None, env_width: int = 1
 
 
 HANDLE = {"format": 1, "robot": "hand-e", "action_frame": "handle", "handle_shape": "kind", "cameras": [],
-          "streams": [], "image_size": [96, 128], "fps": 20}
+          "streams": [], "image_size": [96, 128], "fps": 20, "environment_state": True}
 
 
 def test_a_dataset_says_its_contract_and_an_older_one_its_features(handle_export: Path) -> None:

@@ -56,6 +56,10 @@ def export_lerobot(
         handle_shape: Annotated[str, typer.Option("--handle-shape", help="End observation.environment_state with "
                                                   "the handle's shape: none; kind (its type and mount, 5 "
                                                   "numbers); full (and its grasp dimensions, 11).")] = "none",
+        environment_state: Annotated[bool, typer.Option(
+            "--environment-state/--no-environment-state", help="Write observation.environment_state, the "
+            "simulator's state of the front and its handle; without it a policy learns from the robot's own state "
+            "and the images only, as a real robot would (needs --streams).")] = True,
         resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted export into --out.")] = False,
         push_to_hub: Annotated[bool, typer.Option("--push-to-hub", help="Upload the finished dataset to the "
                                                   "Hugging Face Hub as --repo-id (needs a login).")] = False,
@@ -75,7 +79,8 @@ def export_lerobot(
     width, height = parse_resolution(res)
     io = EXPORT_IO.with_options({"streams": parse_streams(streams), "cameras": cameras or "",
                                  "image_size": (height, width), "action_frame": action_frame,
-                                 "handle_shape": handle_shape}, LABELS)  # the contract, once
+                                 "handle_shape": handle_shape, "environment_state": environment_state},
+                                LABELS)  # the contract, once
     spec = ExportSpec(repo_id, io, fps=fps, codec=codec, spp=spp, denoise=denoise, variant=variant,
                       shard_episodes=shard_episodes, outcomes=parse_outcomes(outcomes))
     cat = load_catalog(overlays(catalog))

@@ -60,7 +60,8 @@ def check_spec_shape(path: Path) -> None:
 def spec_data(spec: DatasetSpec) -> dict[str, Any]:
     """The spec as JSON data, every default filled in (what its hash covers), but ``robot`` where it is the
     Hand-E, an operator's ``action_noise`` where it has none, ``outcomes`` where all are exported,
-    ``action_frame`` where it is the world, ``handle_shape`` where it is none and the variants' ``joints`` where
+    ``action_frame`` where it is the world, ``handle_shape`` where it is none, ``environment_state`` where it is
+    true and the variants' ``joints`` where
     they are the paper's: specs written
     before those existed keep their
     hash, and the datasets built from them stay current."""
@@ -78,6 +79,8 @@ def spec_data(spec: DatasetSpec) -> dict[str, Any]:
         del data["variants"]["joints"]
     if data.get("handle_shape") == "none":
         del data["handle_shape"]
+    if data.get("environment_state") is True:  # specs from before the option keep their hash
+        del data["environment_state"]
     if data["variants"].get("draw") is None:
         data["variants"].pop("draw", None)
     return data

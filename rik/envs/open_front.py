@@ -149,9 +149,10 @@ class OpenFrontEnv(gym.Env):
                     raise RikError(f"cameras: no camera {cam!r} in the scene (cameras: {', '.join(known)})")
         self.task_description = ""
         spaces: dict[str, gym.Space[Any]] = {
-            "agent_pos": gym.spaces.Box(-np.inf, np.inf, (len(self.layout.state_names),), np.float32),
-            "environment_state": gym.spaces.Box(
-                -np.inf, np.inf, (len(env_state_names(self.handle_shape, self._from_gripper)),), np.float32)}
+            "agent_pos": gym.spaces.Box(-np.inf, np.inf, (len(self.layout.state_names),), np.float32)}
+        if self.io.environment_state:
+            spaces["environment_state"] = gym.spaces.Box(
+                -np.inf, np.inf, (len(env_state_names(self.handle_shape, self._from_gripper)),), np.float32)
         if self.layout.ee_pose:
             spaces["ee_pose"] = gym.spaces.Box(-np.inf, np.inf, (len(EE_NAMES),), np.float32)
         if self.io.streams:
@@ -254,9 +255,10 @@ class OpenFrontEnv(gym.Env):
         return self.task_description
 
     def _obs(self) -> dict[str, Any]:
-        obs: dict[str, Any] = {"agent_pos": self.layout.state(self.scene).astype(np.float32),
-                               "environment_state": environment_state(self.scene, self._shape,
-                                                                      self._from_gripper).astype(np.float32)}
+        obs: dict[str, Any] = {"agent_pos": self.layout.state(self.scene).astype(np.float32)}
+        if self.io.environment_state:  # the simulator's state of the front: none for a policy of images only
+            obs["environment_state"] = environment_state(self.scene, self._shape, self._from_gripper).astype(
+                np.float32)
         if self.layout.ee_pose:
             obs["ee_pose"] = self.layout.ee(self.scene).astype(np.float32)
         if self.io.streams:

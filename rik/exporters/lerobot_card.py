@@ -240,12 +240,16 @@ in your data loader.
 """
     else:
         state, action = _layout_bullets(layout, joint_driven)
-    state_text = state + f"""- **`observation.environment_state`** (the front's state, {len(ENV_STATE_NAMES)} numbers):
+    state_text = state + (f"""- **`observation.environment_state`** (the front's state, {len(ENV_STATE_NAMES)} numbers):
   {_names(ENV_STATE_NAMES)}: the front's joint position (m for a drawer, rad for a door or flap) and velocity (m/s
   or rad/s), its opening (fraction of the range), the handle's grasp point (m, world), its orientation (unit
   quaternion w, x, y, z with w >= 0, world) and the unit direction in which the grasp point moves as the front
   opens (world).
-"""
+""" if spec.io.environment_state else """- **No `observation.environment_state`** (`--no-environment-state`): the
+  simulator's state of the front and its handle is left out, so a policy learns from the robot's own state and the
+  images, as a real robot would have them; rik's environment then gives none either (its contract,
+  `meta/rik_policy_io.json`, says `environment_state: false`).
+""")
     if layout.action_frame == "gripper":
         before = ", before the handle's shape" if handle_shape != "none" else ""
         count = len(GRIPPER_GRASP_NAMES)

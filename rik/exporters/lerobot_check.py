@@ -105,7 +105,7 @@ def check_frame_counts(root: Path) -> dict[str, int]:
 def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> int | None:
     """rik's state layout of a dataset's ``features`` (info.json) for the robot of ``robot`` (None: the Hand-E): 2
     (``observation.state`` of the robot in its layout, ``observation.environment_state`` of the front, with or
-    without the handle's shape), 1 (one
+    without the handle's shape, or none in an export with ``--no-environment-state``), 1 (one
     14-number ``observation.state``, Hand-E exports made before the split), or None (not a rik layout)."""
     from rik.lerobot.features import ENV_STATE_LAYOUTS
     from rik.sim.robots.layout import robot_layout
@@ -115,10 +115,11 @@ def state_layout(features: dict[str, Any], robot: RobotLayout | None = None) -> 
     def names(key: str) -> tuple[str, ...] | None:
         return tuple(features[key].get("names") or ()) if key in features else None
 
-    if names(OBS_STATE) == robot.state_names and names(OBS_ENV_STATE) in ENV_STATE_LAYOUTS.values():
-        return 2
     if names(OBS_STATE) == LAYOUT_1_STATE_NAMES and OBS_ENV_STATE not in features:
         return 1
+    if names(OBS_STATE) == robot.state_names and (OBS_ENV_STATE not in features
+                                                  or names(OBS_ENV_STATE) in ENV_STATE_LAYOUTS.values()):
+        return 2  # without the front's state: an export of the robot's state and images only
     return None
 
 
@@ -128,7 +129,8 @@ def describe_layout(layout: int | None, robot: RobotLayout | None = None) -> str
         who = "the robot's" if robot is None or robot.is_pose else f"robot {robot.robot_id}'s"
         n = 11 if robot is None else len(robot.state_names)
         return (f"2 (observation.state: {who} {n} numbers; observation.environment_state: the front's 13, and the "
-                "handle's shape's 5 or 11 where exported with --handle-shape kind or full)")
+                "handle's shape's 5 or 11 where exported with --handle-shape kind or full; none with "
+                "--no-environment-state)")
     if layout == 1:
         return ("1 (one 14-number observation.state, no observation.environment_state: an export made before the "
                 "state split; export the episodes again for layout 2)")

@@ -37,7 +37,8 @@ EXPORT_IO = PolicyIO(streams=STREAMS, image_size=(256, 256))
 """An export's contract unless told otherwise: both streams of every camera at 256x256 px, the world frame, no
 handle shape (its robot is the episodes')."""
 LABELS = {"action_frame": "--action-frame {}", "handle_shape": "--handle-shape {}", "streams": "--streams",
-          "cameras": "--cameras", "image_size": "--res {}", "robot": "--robot {}"}
+          "cameras": "--cameras", "image_size": "--res {}", "robot": "--robot {}",
+          "environment_state": "--no-environment-state"}
 """How a problem of the contract names ``rik export-lerobot``'s options."""
 SIZE_OPTIONS = ("width", "height")
 """Keyword arguments of :class:`ExportSpec` that set one side of the contract's image size (px)."""
@@ -93,7 +94,8 @@ class ExportSpec:
         return {"repo_id": self.repo_id, "streams": list(io.streams), "cameras": list(io.cameras),
                 "width": io.width, "height": io.height, "fps": self.fps, "codec": self.codec, "spp": self.spp,
                 "denoise": self.denoise, "variant": self.variant, "shard_episodes": self.shard_episodes,
-                "outcomes": list(self.outcomes), "action_frame": io.action_frame, "handle_shape": io.handle_shape}
+                "outcomes": list(self.outcomes), "action_frame": io.action_frame, "handle_shape": io.handle_shape,
+                **({} if io.environment_state else {"environment_state": False})}
 
 
 OUTCOMES = ("F", "P", "S")

@@ -101,6 +101,9 @@ class RikEnvConfig(EnvConfig):
     handle_shape: str = AUTO
     """What of the handle's shape ends ``environment_state``: ``none``, ``kind`` or ``full``, or ``auto``: as the
     policy of ``--policy.path`` says (``none`` without one)."""
+    environment_state: bool = True
+    """Whether the environment gives ``environment_state`` (the simulator's state of the front): false for a policy
+    of the robot's state and images only (its contract says so)."""
     render_mode: str = "rgb_array"
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)

@@ -83,6 +83,9 @@ class PolicyIO:
     """(height, width) of its images, px."""
     fps: int = 20
     """The rate it acts at, Hz: its dataset's frame rate (rik records at 20 Hz; ``--fps`` resamples)."""
+    environment_state: bool = True
+    """Whether it reads ``observation.environment_state``, the simulator's state of the front and its handle (a real
+    robot has none: a policy without it reads its own state and its cameras only)."""
 
     @property
     def height(self) -> int:
@@ -110,8 +113,8 @@ class PolicyIO:
 
     def features(self, layout: RobotLayout | None = None) -> dict[str, dict[str, Any]]:
         """The LeRobot features of a dataset of this contract (``layout``: the robot's, when already at hand)."""
-        return dataset_features(layout or self.layout(), self.handle_shape, self.cameras, self.streams,
-                                self.image_size)
+        return dataset_features(layout or self.layout(), self.handle_shape if self.environment_state else None,
+                                self.cameras, self.streams, self.image_size)
 
     # ---- checks -----------------------------------------------------------------------------------------------
     def validate(self, catalog: Catalog | None = None, labels: Mapping[str, str] | None = None) -> PolicyIO:
@@ -238,6 +241,14 @@ def _pair(value: Any, where: str, options: bool) -> tuple[int, int]:
     return (value[0], value[1])  # their range: CHECKS (also of a contract built in Python)
 
 
+def _flag(value: Any, where: str, options: bool) -> bool:
+    if options and isinstance(value, str) and value.lower() in ("true", "false"):
+        return value.lower() == "true"
+    if not isinstance(value, bool):
+        raise RikError(f"{where}: {_shown(value)} is not true or false")
+    return value
+
+
 def _count(value: Any, where: str, options: bool) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
         raise RikError(f"{where}: {_shown(value)} is not a whole number")
@@ -245,7 +256,8 @@ def _count(value: Any, where: str, options: bool) -> int:
 
 
 PARSERS: dict[str, Callable[[Any, str, bool], Any]] = {"str": _text, "tuple[str, ...]": _names,
-                                                       "tuple[int, int]": _pair, "int": _count}
+                                                       "tuple[int, int]": _pair, "int": _count,
+                                                       "bool": _flag}
 """A field's declared type -> its parser (value, where, from options): a new field of one of these types needs no
 code here."""
 FIELD_TYPES = {f.name: str(f.type) for f in fields(PolicyIO)}
@@ -275,6 +287,17 @@ def _size(io: PolicyIO, value: Any) -> str | None:
     return None
 
 
+def _state_or_images(io: PolicyIO, value: Any) -> str | None:
+    if value:
+        return None
+    if not io.streams:
+        return "a policy without the front's state reads the robot's state and images: give it streams (sim)"
+    if io.handle_shape != "none" or io.action_frame == "gripper":
+        return ("the handle's shape and the gripper frame's grasp point are part of the front's state: use "
+                "handle_shape none and the world or handle frame")
+    return None
+
+
 def _rate(io: PolicyIO, value: Any) -> str | None:
     whole = isinstance(value, int) and not isinstance(value, bool)
     return None if whole and 1 <= value <= MAX_FPS else f"give 1 to {MAX_FPS} frames per second"
@@ -287,10 +310,12 @@ CHECKS: dict[str, Callable[[PolicyIO, Any], str | None]] = {
     "cameras": _items("camera", CAMERAS, "no {} {} in the scene (cameras: {})"),
     "image_size": _size,
     "fps": _rate,
+    "environment_state": _state_or_images,
 }
 """Field -> the check of its value (None: fine; else the problem, after the field's label)."""
 LABELS = {"robot": "robot '{}'", "action_frame": "action frame '{}'", "handle_shape": "handle_shape {}",
-          "cameras": "cameras", "streams": "streams", "image_size": "image_size {}"}
+          "cameras": "cameras", "streams": "streams", "image_size": "image_size {}",
+          "environment_state": "environment_state {}"}
 """How a problem names each field by default (the environment's keyword arguments); ``{}``: the value."""
 
 
@@ -338,7 +363,9 @@ def io_of_info(root: Path, robot: str | None = None, catalog: Catalog | None = N
         raise RikError(f"{info_file}: robot_type {info.get('robot_type')!r} with observation.state "
                        f"{', '.join(state) or '(none)'} is no robot of rik's catalog")
     chosen = next((r for r in robots if r.id == robot), robots[0])
-    env = next((key for key, known in ENV_STATE_LAYOUTS.items() if known == names(OBS_ENV_STATE)), None)
+    has_env_state = OBS_ENV_STATE in feats
+    env = next((key for key, known in ENV_STATE_LAYOUTS.items() if known == names(OBS_ENV_STATE)),
+               None) if has_env_state else ("none", False)
     if env is None:
         raise RikError(f"{info_file}: observation.environment_state holds {', '.join(names(OBS_ENV_STATE))}, none "
                        "of rik's layouts")
@@ -348,7 +375,7 @@ def io_of_info(root: Path, robot: str | None = None, catalog: Catalog | None = N
     streams = tuple(dict.fromkeys(s for (c, s), _ in images if c is not None))
     size = tuple(images[0][1].get("shape", (96, 128))[:2]) if images else (96, 128)
     return PolicyIO(chosen.id, frame, env[0], cameras, streams, (int(size[0]), int(size[1])),
-                    _count(info.get("fps"), f"{info_file}: field 'fps'", False))
+                    _count(info.get("fps"), f"{info_file}: field 'fps'", False), has_env_state)
 
 
 # ---- a policy's contract -----------------------------------------------------------------------------------------
@@ -429,6 +456,9 @@ def read_policy(folder: Path, *, robot: str = DEFAULT_ROBOT, allow_rerendered: b
         layout = said.validate(catalog, {"action_frame": f"{file}: field 'action_frame' {{}}"}).layout(catalog)
         inputs = policy_inputs(folder, config, layout, (said.handle_shape, said.action_frame == "gripper"),
                                allow_rerendered=allow_rerendered, said=str(file))
+        if not said.environment_state and OBS_ENV_STATE in (config.get("input_features") or {}):
+            raise RikError(f"{file}: field 'environment_state' is false, but the policy reads "
+                           f"{OBS_ENV_STATE}: the policy was not trained on that dataset")
         io = replace(said, cameras=inputs.cameras, streams=inputs.streams, image_size=inputs.image_size)
         return PolicyContract(io, inputs.policy_type, file, folder)
     layout = robot_layout(entry.as_arm)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, field_validator, model_validator
 
 from rik.schemas.common import CatalogId, Frozen, SimpleId
 
@@ -131,6 +131,9 @@ class DatasetSpec(Frozen):
     handle_shape: str = "none"
     """What of the handle's shape ends ``observation.environment_state``: ``none``, ``kind`` (its type and mount
     flags) or ``full`` (and the catalog's grasp dimensions); a field of the contract, as ``action_frame``."""
+    environment_state: StrictBool = True
+    """Whether the dataset holds ``observation.environment_state`` (the simulator's state of the front); false: the
+    robot's own state and the images only, as a real robot has them (needs ``streams``); a field of the contract."""
 
     @field_validator("resolution")
     @classmethod
