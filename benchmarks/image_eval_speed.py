@@ -34,24 +34,18 @@ CAMERAS = ("front", "wrist")
 def image_policy(folder: Path) -> Path:
     """The recipe's ACT reading two 64 px cameras, random weights, saved with its processors and rik's contract."""
     import torch
-    from lerobot.configs.types import FeatureType, PolicyFeature
+    from lerobot.configs.types import FeatureType
     from lerobot.policies.act.configuration_act import ACTConfig
     from lerobot.policies.act.modeling_act import ACTPolicy
     from lerobot.policies.factory import make_pre_post_processors
+    from lerobot.utils.feature_utils import dataset_to_policy_features
 
     from rik.lerobot.policy_io import POLICY_IO_FILE, PolicyIO
 
     io = PolicyIO(cameras=CAMERAS, streams=("sim",), image_size=SIZE)
-    kinds = {"observation.state": FeatureType.STATE, "observation.environment_state": FeatureType.ENV}
-    inputs, outputs = {}, {}
-    for key, feature in io.features().items():
-        shape = tuple(feature["shape"])
-        if feature["dtype"] == "video":
-            inputs[key] = PolicyFeature(FeatureType.VISUAL, (shape[2], shape[0], shape[1]))
-        elif key in kinds:
-            inputs[key] = PolicyFeature(kinds[key], shape)
-        elif key == "action":
-            outputs[key] = PolicyFeature(FeatureType.ACTION, shape)
+    features = dataset_to_policy_features(io.features())  # as lerobot's make_policy makes them from a dataset
+    inputs = {k: f for k, f in features.items() if f.type is not FeatureType.ACTION}
+    outputs = {k: f for k, f in features.items() if f.type is FeatureType.ACTION}
     config = ACTConfig(device="cpu", push_to_hub=False, pretrained_backbone_weights=None, dim_model=128,
                        dim_feedforward=512, n_heads=4, n_encoder_layers=4, n_decoder_layers=1, chunk_size=20,
                        n_action_steps=10, use_vae=True, latent_dim=32, n_vae_encoder_layers=4,

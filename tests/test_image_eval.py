@@ -28,18 +28,14 @@ IO = PolicyIO(cameras=("front", "wrist"), streams=("sim",), image_size=SIZE)
 
 
 def _features(io: PolicyIO) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The policy's input and output features of a dataset of contract ``io`` (LeRobot's types)."""
-    from lerobot.configs.types import FeatureType, PolicyFeature
+    """The policy's input and output features of a dataset of contract ``io``, as lerobot's ``make_policy`` makes
+    them from a dataset's (``dataset_to_policy_features``)."""
+    from lerobot.configs.types import FeatureType
+    from lerobot.utils.feature_utils import dataset_to_policy_features
 
-    kinds = {OBS_STATE: FeatureType.STATE, OBS_ENV_STATE: FeatureType.ENV, "action": FeatureType.ACTION}
-    inputs, outputs = {}, {}
-    for key, feature in io.features().items():
-        shape = tuple(feature["shape"])
-        if feature["dtype"] == "video":
-            inputs[key] = PolicyFeature(FeatureType.VISUAL, (shape[2], shape[0], shape[1]))
-        elif key in kinds:
-            (outputs if key == "action" else inputs)[key] = PolicyFeature(kinds[key], shape)
-    return inputs, outputs
+    features = dataset_to_policy_features(io.features())
+    return ({k: f for k, f in features.items() if f.type is not FeatureType.ACTION},
+            {k: f for k, f in features.items() if f.type is FeatureType.ACTION})
 
 
 def _act(chunk: int, temporal: float | None = None) -> Any:
