@@ -268,6 +268,13 @@ BAD_SPECS = {
                          ["bad.yaml, field 'operators.0.strategy': unknown strategy 'teleport'", "contact_rich"]),
     "selects_nothing": (BASE + "variants: {handles: [knob/mushroom-30], handle_types: [two_point]}\n",
                         ["bad.yaml, field 'variants': the selection keeps no variant"]),
+    "environment_state_not_a_flag": (BASE + 'environment_state: "no"\n',
+                                     ["bad.yaml:4, field 'environment_state': input should be a valid boolean "
+                                      "(got 'no')"]),
+    "no_front_state_and_no_images": (BASE + "environment_state: false\nstreams: []\n",
+                                     ["bad.yaml, field 'environment_state': environment_state False: a policy "
+                                      "without the front's state reads the robot's state and images: give it "
+                                      "streams (sim)"]),
     "unknown_robot": (BASE + "robot: so10\n",
                       ["bad.yaml, field 'robot': no robot 'so10' in the catalog; did you mean 'so101' or 'so100'? (the catalog's robots: hand-e, panda-2f85, so100, so101)"]),
 }
