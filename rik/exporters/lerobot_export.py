@@ -184,8 +184,8 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
                                                        spec.io.action_frame) for s in sources]
     remove_directory(root, SHARD_FOLDER)  # an unfinished shard is redone from scratch
     root.parent.mkdir(parents=True, exist_ok=True)
-    env_shape = spec.io.handle_shape if spec.io.environment_state else None
-    features = dataset_features(layout, env_shape, cameras, spec.io.streams, spec.io.image_size)
+    features = dataset_features(layout, spec.io.handle_shape, cameras, spec.io.streams, spec.io.image_size,
+                                environment_state=spec.io.environment_state)
     ds = LeRobotDataset.create(repo_id=repo_id, fps=fps, features=features,
                                root=root / "ds", robot_type=layout.robot_type, use_videos=bool(spec.io.streams),
                                video_backend="pyav",
@@ -207,7 +207,8 @@ def write_shard(catalog: Catalog, root: Path, repo_id: str, sources: list[Episod
             assert episode is not None
             streams = source.streams if renders is None else render_streams(catalog, episode, spec, cameras,
                                                                             renders, variants)
-            task, frames, count = episode_frames(catalog, episode, streams, cameras, fps, variants, env_shape)
+            task, frames, count = episode_frames(catalog, episode, streams, cameras, fps, variants,
+                                                   spec.io.handle_shape, spec.io.environment_state)
             for frame in frames:
                 ds.add_frame({**frame, TASK: task})
             extra.clear()

@@ -159,21 +159,22 @@ def load_episode(catalog: Catalog, directory: Path, meta: EpisodeMeta | None = N
 
 
 def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[str, Path], cameras: Sequence[str],
-                   fps: int, variants: Path, handle_shape: str | None = "none"
+                   fps: int, variants: Path, handle_shape: str = "none", environment_state: bool = True
                    ) -> tuple[str, Iterator[dict[str, np.ndarray]], int]:
     """(task, frame dicts for ``add_frame`` without the task, frame count) of one episode read by
     :func:`load_episode`, resampled to ``fps``, its images read from ``streams`` (stream kind -> finished stream
     folder); the front's state followed by the grasp point from the gripper (a gripper-frame layout's) and the
-    handle's shape ``handle_shape`` (None: no front's state)."""
+    handle's shape ``handle_shape`` (none of them with ``environment_state`` False)."""
     from rik.render.streams import read_frame
-    from rik.sim.observation import environment_state, handle_shape_state
+    from rik.sim.observation import environment_state as front_state
+    from rik.sim.observation import handle_shape_state
 
     meta, layout, actions, targets = episode.meta, episode.layout, episode.actions, episode.targets
     scene = episode.recorded.scene(catalog, variants)
     recorded = episode.recorded.states
     picks = resample_indices(len(recorded), meta.fps, fps)
     task = task_text(catalog, meta, scene.front.kind)
-    shape = handle_shape_state(catalog, meta.handle, handle_shape or "none")
+    shape = handle_shape_state(catalog, meta.handle, handle_shape)
 
     def frames() -> Iterator[dict[str, np.ndarray]]:
         for k in picks:
@@ -181,8 +182,8 @@ def episode_frames(catalog: Catalog, episode: LoadedEpisode, streams: Mapping[st
             frame: dict[str, np.ndarray] = {OBS_STATE: layout.state(scene).astype(np.float32)}
             if layout.ee_pose:
                 frame[EE_POSE] = layout.ee(scene).astype(np.float32)
-            if handle_shape is not None:
-                env_state = environment_state(scene, shape, layout.action_frame == "gripper")
+            if environment_state:
+                env_state = front_state(scene, shape, layout.action_frame == "gripper")
                 frame[OBS_ENV_STATE] = env_state.astype(np.float32)
             action = (layout.joint_action(targets[k], float(targets[k][-1])) if meta.action_kind == "joints"
                       else layout.action(actions[k], targets[k], layout.frame_origin(scene)))

@@ -93,15 +93,16 @@ def _vector(names: Sequence[str]) -> dict[str, Any]:
     return {"dtype": "float32", "shape": (len(names),), "names": list(names)}
 
 
-def dataset_features(layout: RobotLayout, handle_shape: str | None, cameras: Sequence[str], streams: Sequence[str],
-                     size: tuple[int, int]) -> dict[str, dict[str, Any]]:
+def dataset_features(layout: RobotLayout, handle_shape: str, cameras: Sequence[str], streams: Sequence[str],
+                     size: tuple[int, int], *, environment_state: bool = True) -> dict[str, dict[str, Any]]:
     """The LeRobot feature dict of a dataset of one robot's episodes (``layout``, whose action frame says whether
-    the grasp point from the gripper follows the front's state), the handle's shape ``handle_shape`` at the end of
-    the front's state, and one video per camera and stream of ``size`` (height, width) px."""
+    the grasp point from the gripper follows the front's state), the front's state with the handle's shape
+    ``handle_shape`` at its end (none with ``environment_state`` False: a policy of the robot's state and images
+    only), and one video per camera and stream of ``size`` (height, width) px."""
     out: dict[str, dict[str, Any]] = {OBS_STATE: _vector(layout.state_names)}
     if layout.ee_pose:
         out[EE_POSE] = _vector(EE_NAMES)
-    if handle_shape is not None:  # None: no front's state (a policy of the robot's state and images only)
+    if environment_state:
         out[OBS_ENV_STATE] = _vector(env_state_names(handle_shape, layout.action_frame == "gripper"))
     out[ACTION] = _vector(layout.action_names)
     height, width = size

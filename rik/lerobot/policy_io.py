@@ -113,8 +113,8 @@ class PolicyIO:
 
     def features(self, layout: RobotLayout | None = None) -> dict[str, dict[str, Any]]:
         """The LeRobot features of a dataset of this contract (``layout``: the robot's, when already at hand)."""
-        return dataset_features(layout or self.layout(), self.handle_shape if self.environment_state else None,
-                                self.cameras, self.streams, self.image_size)
+        return dataset_features(layout or self.layout(), self.handle_shape, self.cameras, self.streams,
+                                self.image_size, environment_state=self.environment_state)
 
     # ---- checks -----------------------------------------------------------------------------------------------
     def validate(self, catalog: Catalog | None = None, labels: Mapping[str, str] | None = None) -> PolicyIO:
