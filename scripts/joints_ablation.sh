@@ -16,6 +16,10 @@
 # stage refuses to run before the choice is written (chosen.txt) and runs each evaluation once (it skips a folder
 # that holds one); at full size it runs the committed protocols (protocols/fronts-measured-test-v1.yaml and
 # fronts-paper-test-v1.yaml) with rik eval --protocol.
+# The publish stage (not in the default STAGES: it writes into the repository) copies the published policy, chosen on
+# the validation split (the (b) run whose chosen candidate has the most validation successes over both draws, ties
+# to the lower seed), to PUBLISH (default docs/policies/joints/best): weights, config, processors and rik's contract,
+# no optimizer state. It refuses to replace a folder that is already there.
 set -euo pipefail
 WORK=${1:-experiments/joints}
 DEMOS=${DEMOS:-540}            # drawn demonstrations per arm (60 per handle type x preset cell), seeds 0..DEMOS-1
@@ -27,6 +31,7 @@ EPISODE_LENGTH=${EPISODE_LENGTH:-400}
 WORKERS=${WORKERS:-2}
 JOBS=${JOBS:-2}                # trainings at once
 STAGES=${STAGES:-data train val test}
+PUBLISH=$(realpath -m "${PUBLISH:-docs/policies/joints/best}")  # where the publish stage puts the published policy
 KINDS=drawer,door,flap
 ARMS=(jp jm)                   # jp: the paper's presets; jm: the train split's real doors on the doors
 export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl} OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
@@ -151,4 +156,32 @@ if stage test; then
     fi
   done
   echo "test evaluations: eval/test/$chosen-measured, eval/test/$chosen-paper"
+fi
+
+if stage publish; then
+  [ -s chosen.txt ] || { echo "joints_ablation.sh: no choice on the validation split yet (chosen.txt)" >&2; exit 1; }
+  chosen=$(cat chosen.txt)
+  [ -e "$PUBLISH" ] && { echo "joints_ablation.sh: $PUBLISH is already there; not replaced" >&2; exit 1; }
+  # the (b) run with the most validation successes of the chosen candidate, both draws pooled; ties to the lower seed
+  run=$(python3 - "$chosen" $SEEDS <<'PY'
+import csv, sys
+chosen, seeds = sys.argv[1], sys.argv[2:]
+def successes(seed):
+    return sum(row["outcome"] == "S" for joints in ("measured", "paper")
+               for row in csv.DictReader(open(f"eval/val/{chosen}-{joints}/act-jm-s{seed}-{chosen}/episodes.csv")))
+counts = {seed: successes(seed) for seed in seeds}
+for seed, n in counts.items():
+    print(f"# act-jm-s{seed}-{chosen}: {n} validation successes", file=sys.stderr)
+print(f"act-jm-s{max(seeds, key=lambda s: (counts[s], -int(s)))}")
+PY
+)
+  from=$(policy "$run" "$chosen")
+  mkdir -p "$(dirname "$PUBLISH")"
+  rm -rf "$PUBLISH.tmp"
+  mkdir "$PUBLISH.tmp"
+  cp "$from"/config.json "$from"/model.safetensors "$from"/policy_*processor*.json "$from"/policy_*.safetensors \
+    "$from"/rik_policy_io.json "$PUBLISH.tmp"/
+  printf '%s\n' "$run-$chosen (chosen on the validation split; copied from $WORK/$from)" > "$PUBLISH.tmp/SOURCE.txt"
+  mv "$PUBLISH.tmp" "$PUBLISH"
+  echo "published: $PUBLISH ($run-$chosen)"
 fi
