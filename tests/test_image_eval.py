@@ -182,3 +182,87 @@ def test_rik_eval_renders_only_the_frames_an_image_policy_reads(image_policy: Pa
     assert rendered == {"every step": 22, "read only": 6}
     np.testing.assert_array_equal(ends["every step"][0], ends["read only"][0])
     assert ends["every step"][1:] == ends["read only"][1:]
+
+
+# ---- the visual gap: a policy's streams drawn by the other renderer (rik eval --renderer) ---------------------------
+def _front(variants: Path, streams: tuple[str, ...], renderer: str | None = None, spp: int = 4,
+           size: tuple[int, int] = (24, 32)) -> np.ndarray:
+    """The front camera's first image of the bow drawer (reset seed 0) in an environment of ``streams`` at ``size``,
+    drawn by ``renderer`` (None: each stream its own)."""
+    from rik.envs.open_front import OpenFrontEnv
+
+    env = OpenFrontEnv(BOW, variants_dir=variants, spp=spp, renderer=renderer,
+                       io=PolicyIO(cameras=("front",), streams=streams, image_size=size))
+    try:
+        (image,) = env.reset(seed=0)[0]["pixels"].values()
+        return image
+    finally:
+        env.close()
+
+
+def test_a_stream_drawn_by_the_other_renderer_is_that_renderers_picture_under_the_streams_key(
+        bow_variants: Path) -> None:
+    """A policy of MuJoCo's pictures shown Mitsuba's (``renderer="rerendered"``) gets, under its own key, the very
+    image the Mitsuba stream gives; and the other way. The two renderers' pictures differ, so the check can fail."""
+    sim, mitsuba = _front(bow_variants, ("sim",)), _front(bow_variants, ("rerendered",))
+    assert np.abs(sim.astype(int) - mitsuba).mean() > 2.0  # two renderers, two pictures
+    np.testing.assert_array_equal(_front(bow_variants, ("sim",), "rerendered"), mitsuba)
+    np.testing.assert_array_equal(_front(bow_variants, ("rerendered",), "sim"), sim)
+
+
+def test_rik_eval_shows_a_sim_policy_mitsubas_pictures_and_records_it(image_policy: Path, bow_variants: Path,
+                                                                       rik, tmp_path: Path) -> None:
+    import json
+
+    variants = tmp_path / "variants"
+    shutil.copytree(bow_variants, variants)
+    r = rik("eval", str(image_policy), "--renderer", "rerendered", "--split", "train", "--types", "two_point",
+            "--presets", "normal", "-n", "1", "--seed", "22", "--episode-length", "5", "--videos", "0",
+            "--workers", "1", "--out", str(tmp_path / "eval"), "--variants", str(variants))
+    assert r.code == 0, r.out + r.err
+    info = json.loads((tmp_path / "eval" / "eval_info.json").read_text(encoding="utf-8"))
+    assert info["rik"]["spec"]["renderer"] == "rerendered"
+    assert info["overall"]["n_episodes"] == 1
+    # the environment rik eval makes for it shows the policy Mitsuba's picture under MuJoCo's key
+    from rik.evaluation import evaluate
+
+    spec = evaluate.prepare(builtin_catalog(), evaluate.EvalSpec(
+        str(image_policy), split="train", handle_types=("two_point",), presets=("normal",), episodes_per_cell=1,
+        seed=22, episode_length=5, videos=0, variants=str(variants), renderer="rerendered"))
+    vec = evaluate._context(spec)["vec"]
+    try:
+        shown = vec.envs[0].unwrapped.reset(seed=0, options={"variant": BOW})[0]["pixels"]["front"]
+    finally:
+        evaluate._CONTEXT.clear()
+        vec.close()
+    np.testing.assert_array_equal(shown, _front(variants, ("rerendered",), spp=16, size=SIZE))
+
+
+@pytest.mark.parametrize(("operator", "renderer", "message"), [
+    ("image", "mitsuba", "--renderer mitsuba: use one of sim, rerendered"),
+    ("image", "sim\x00", "--renderer sim"),
+    ("strategy:planned", "sim", "--renderer sim: strategy:planned reads no images; leave --renderer out"),
+    ("state", "rerendered", "reads no images; leave --renderer out"),
+])
+def test_rik_eval_refuses_a_renderer_it_cannot_use_in_one_line(image_policy: Path, rik, tmp_path: Path,
+                                                                operator: str, renderer: str, message: str) -> None:
+    from shared import act_config_folder
+
+    folder = {"image": str(image_policy), "state": str(tmp_path / "state")}.get(operator, operator)
+    if operator == "state":
+        act_config_folder(tmp_path / "state")
+    r = rik("eval", folder, "--renderer", renderer, "-n", "1", "--out", str(tmp_path / "eval"),
+            "--variants", str(tmp_path / "variants"))
+    assert r.code == 2 and message in r.err and len(r.err.strip().splitlines()) == 1, r.out + r.err
+    assert "Traceback" not in r.err and not (tmp_path / "eval").exists() and not (tmp_path / "variants").exists()
+
+
+def test_the_environment_and_its_config_refuse_an_unknown_renderer() -> None:
+    from rik.envs.open_front import OpenFrontEnv
+    from rik.errors import RikError
+    from rik.lerobot.env_config import RikEnvConfig
+
+    with pytest.raises(RikError, match="renderer 'mitsuba': use one of sim, rerendered"):
+        OpenFrontEnv(BOW, renderer="mitsuba")
+    with pytest.raises(ValueError, match="--env.renderer=mitsuba: use one of sim, rerendered"):
+        RikEnvConfig(renderer="mitsuba")

@@ -62,6 +62,10 @@ def eval_policy(
                                                     "episode is cut off (20 per second).")] = 400,
         rerendered: Annotated[bool, typer.Option("--rerendered", help="Render Mitsuba's stream for a policy "
                                                  "trained on _rerendered images (slow without a GPU).")] = False,
+        renderer: Annotated[str, typer.Option("--renderer", help="Draw every image the policy reads with this "
+                                              "renderer, sim (MuJoCo) or rerendered (Mitsuba), whatever stream it "
+                                              "was trained on: the visual gap it pays (default: each stream its "
+                                              "own).", show_default=False)] = "",
         videos: Annotated[int, typer.Option("--videos", min=0, help="Episodes filmed (the first ones).")] = 4,
         labels: Annotated[list[str] | None, typer.Option("--label", help="Name of the policy in the table "
                                                          "(default: its type and training run); with several "
@@ -136,7 +140,7 @@ def eval_policy(
     specs = [prepare(cat, EvalSpec(p, draw.split, draw.handle_types, draw.presets, draw.kinds, per_cell, seed,
                                    episode_length, rerendered, videos, str(variants),
                                    labels[i] if labels else "", request, joints=draw.joints,
-                                   protocol=frozen.name if frozen else ""))
+                                   protocol=frozen.name if frozen else "", renderer=renderer))
              for i, p in enumerate(policies)]
     if frozen is not None:
         for spec in specs:

@@ -19,7 +19,9 @@
   export's ``--handle-shape``); for a robot whose
   layout has one (the Panda), ``ee_pose`` = its gripper frame in its base frame (``ee.x`` .. ``ee.wz``: m and a
   rotation vector, rad), float32; with image streams also ``pixels`` = ``{camera: uint8 HxWx3}`` (``front``,
-  ``wrist``; ``front_rerendered`` for Mitsuba's stream);
+  ``wrist``; ``front_rerendered`` for Mitsuba's stream); ``renderer="rerendered"`` (or ``"sim"``) draws every
+  stream with that renderer under the stream's own keys: a policy trained on MuJoCo's pictures shown Mitsuba's, or
+  the other way (the visual gap it pays);
 - **action** (``action_mode``): ``delta``, 7 numbers in [-1, 1] (the last in [0, 1]): a target-pose change scaled by
   :data:`rik.sim.observation.MAX_DELTA` (m and rad per control step) and the gripper command (0 open, 1 closed
   with full force); or
@@ -47,6 +49,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -54,7 +57,7 @@ import gymnasium as gym
 import numpy as np
 
 from rik.errors import RikError
-from rik.lerobot.features import CAMERAS, ENV_ENTRY_POINT, ENV_ID, env_state_names, image_name
+from rik.lerobot.features import CAMERAS, ENV_ENTRY_POINT, ENV_ID, STREAMS, env_state_names, image_name
 from rik.lerobot.policy_io import PolicyIO
 from rik.sim.observation import delta_to_absolute, environment_state, handle_shape_state
 from rik.sim.outcome import SUCCESS_OPENING, classify
@@ -89,7 +92,7 @@ class OpenFrontEnv(gym.Env):
                  cameras: tuple[str, ...] | None = None, image_size: tuple[int, int] | None = None,
                  handle_shape: str | None = None, spp: int = 16, episode_length: int = EPISODE_LENGTH,
                  variants_dir: str | Path = "variants", render_mode: str | None = None,
-                 catalog_paths: tuple[str, ...] = ()) -> None:
+                 catalog_paths: tuple[str, ...] = (), renderer: str | None = None) -> None:
         from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES, Draw
         from rik.registry.load import load_catalog
 
@@ -102,8 +105,11 @@ class OpenFrontEnv(gym.Env):
         if self.io.fps != CONTROL_FPS:
             raise RikError(f"fps {self.io.fps}: the environment steps at {CONTROL_FPS} Hz, and a policy acts at its "
                            "dataset's rate; export the episodes at their own rate (without --fps) and train again")
+        if renderer is not None and renderer not in STREAMS:
+            raise RikError(f"renderer {renderer!r}: use one of {', '.join(STREAMS)} (or none: each stream its own)")
+        self._drawn_by = renderer
         if self.io.streams:
-            _check_images(self.io, spp)
+            _check_images(self.io if renderer is None else replace(self.io, streams=(renderer,)), spp)
         if isinstance(catalog_paths, str | Path):  # one path, not a tuple of its characters
             catalog_paths = (str(catalog_paths),)
         self._catalog = load_catalog([Path(p) for p in catalog_paths])
@@ -206,7 +212,8 @@ class OpenFrontEnv(gym.Env):
             self._renderer_model = self.scene.model
         if stream not in self._renderers:
             h, w = self.io.image_size
-            spec = StreamSpec(stream, w, h, spp=self._spp)  # type: ignore[arg-type]
+            # the stream's own renderer, or the one every stream is drawn with (renderer=)
+            spec = StreamSpec(self._drawn_by or stream, w, h, spp=self._spp)  # type: ignore[arg-type]
             cameras = list(self.io.cameras) or ["front"]  # a state-only contract: the front camera films it
             self._renderers[stream] = make_renderer(self.scene.model, self.scene.data, cameras, spec,
                                                     self._catalog.finishes)

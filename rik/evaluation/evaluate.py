@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 from rik.errors import RikError
+from rik.lerobot.features import STREAMS
 from rik.lerobot.observation_use import observation_use
 from rik.lerobot.policy_files import check_policy_folder
 from rik.lerobot.policy_io import AUTO, PolicyIO, read_policy
@@ -79,6 +80,9 @@ class EvalSpec:
     joints: str = "paper"
     """The hinges of doors (:data:`rik.episodes.draw.JOINTS`): the cell's preset, or the split's real
     doors."""
+    renderer: str = ""
+    """Empty: each image stream the policy reads drawn by its own renderer; ``sim`` or ``rerendered``: every one
+    drawn by that renderer (the visual gap a policy pays, ``rik eval --renderer``)."""
 
     def draw(self) -> Any:
         """The :class:`rik.episodes.draw.Draw` of these episodes."""
@@ -117,6 +121,8 @@ class EvalSpec:
             del data["joints"]
         if not data["protocol"]:
             del data["protocol"]
+        if not data["renderer"]:  # runs from before --renderer stay finished
+            del data["renderer"]
         return data
 
     @classmethod
@@ -143,14 +149,23 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     spec.draw().check(catalog)
     catalog.robot(spec.io.robot)  # an unknown robot: one line with suggestions
     asked = spec.io.action_frame
+    if spec.renderer and spec.renderer not in STREAMS:
+        raise RikError(f"--renderer {spec.renderer}: use one of {', '.join(STREAMS)}")
     if spec.strategy is not None:
         make_operator(spec.strategy)
+        if spec.renderer:
+            raise RikError(f"--renderer {spec.renderer}: {spec.operator} reads no images; leave --renderer out")
         io = replace(spec.io, action_frame="world" if asked == AUTO else asked).validate(labels=LABELS)
         prepared = replace(spec, label=spec.label or spec.strategy, io=io)
         env_config(prepared)  # what the --env.type=rik config refuses, before anything is built
         return prepared
-    contract = read_policy(Path(spec.operator), robot=spec.io.robot, allow_rerendered=spec.allow_rerendered)
+    # a policy of Mitsuba's images drawn by MuJoCo needs no Mitsuba: --renderer says which renderer runs
+    contract = read_policy(Path(spec.operator), robot=spec.io.robot,
+                           allow_rerendered=spec.allow_rerendered or bool(spec.renderer))
     io = contract.io
+    if spec.renderer and not io.streams:
+        raise RikError(f"--renderer {spec.renderer}: the policy in {spec.operator} reads no images; leave --renderer "
+                       "out")
     if asked != AUTO and asked != io.action_frame:
         if contract.source is not None:
             raise RikError(f"--action-frame {asked}: the policy's {contract.source} says {io.action_frame}; leave "
@@ -182,7 +197,7 @@ def env_config(spec: EvalSpec) -> Any:
         return RikEnvConfig.for_contract(spec.io, episode_length=spec.episode_length, split=spec.split or "all",
                                          handle_types=",".join(spec.handle_types), presets=",".join(spec.presets),
                                          kinds=",".join(spec.kinds), joints=spec.joints,
-                                         variants_dir=spec.variants)
+                                         variants_dir=spec.variants, renderer=spec.renderer)
     except ValueError as exc:  # the config's refusals, in LeRobot's words (draccus shows them to lerobot-eval)
         where = "" if spec.strategy is not None else f"{spec.operator}: "
         raise RikError(f"{where}{exc}") from None

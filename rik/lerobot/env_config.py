@@ -40,6 +40,7 @@ from rik.lerobot.features import (
     OBS_ENV_STATE,
     OBS_IMAGES,
     OBS_STATE,
+    STREAMS,
     image_name,
 )
 from rik.lerobot.policy_io import AUTO, FIELD_TYPES, ContractError, PolicyIO, read_policy
@@ -92,6 +93,10 @@ class RikEnvConfig(EnvConfig):
     observation_width: int = 128
     spp: int = 16
     """Samples per pixel of the ``rerendered`` stream."""
+    renderer: str = ""
+    """Empty: each stream drawn by its own renderer. ``rerendered`` or ``sim``: every stream drawn by that one,
+    under the stream's own keys (a policy of MuJoCo's pictures shown Mitsuba's, or the other way: the visual gap it
+    pays)."""
     variants_dir: str = "variants"
     """Folder of built variants (missing ones are built there)."""
     action_frame: str = AUTO
@@ -122,6 +127,9 @@ class RikEnvConfig(EnvConfig):
             Draw.parse(self.split, self.handle_types, self.presets, self.kinds, self.joints).check(_catalog())
         except RikError as exc:
             raise ValueError(f"--env.*: {exc}") from None
+        if self.renderer and self.renderer not in STREAMS:
+            raise ValueError(f"--env.renderer={self.renderer}: use one of {', '.join(STREAMS)}, or leave it empty "
+                             "(each stream drawn by its own renderer)")
         if io.fps != CONTROL_FPS:
             raise ValueError(f"--env.fps={io.fps}: rik's environment steps at {CONTROL_FPS} Hz, and a policy acts at "
                              "its dataset's rate; export the episodes at their own rate (without --fps) and train "
@@ -256,4 +264,5 @@ def env_kwargs(cfg: RikEnvConfig) -> dict[str, Any]:
     draw = Draw.parse(cfg.split, cfg.handle_types, cfg.presets, cfg.kinds, cfg.joints)
     return {"variant": None, "split": draw.split, "handle_types": draw.handle_types, "presets": draw.presets,
             "kinds": draw.kinds, "joints": draw.joints, "io": cfg.io, "action_mode": action_mode(cfg), "spp": cfg.spp,
-            "episode_length": cfg.episode_length, "variants_dir": cfg.variants_dir, "render_mode": cfg.render_mode}
+            "episode_length": cfg.episode_length, "variants_dir": cfg.variants_dir, "render_mode": cfg.render_mode,
+            "renderer": cfg.renderer or None}
