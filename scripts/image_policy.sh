@@ -13,6 +13,12 @@
 # noise: it checks the pipeline, not the result):
 #   DEMOS=9 STEPS=40 SEEDS="0" VAL_PER_CELL=1 PER_CELL=1 EPISODE_LENGTH=100 bash scripts/image_policy.sh \
 #     experiments/pixels-small
+# Which stream teaches better (issue 54, point 4; for a GPU machine: Mitsuba renders the data set and every
+# evaluation of the rerendered arm): STREAM=rerendered runs the same plan on Mitsuba's pictures of the same
+# demonstrations (its own data set ds-px-rr and runs act-px-rr-s<seed>, its own choice on the validation split),
+# and the gap stage evaluates each arm's chosen checkpoints on the test episodes drawn by the other renderer
+# (rik eval --renderer): the visual gap a policy pays, both ways. The stage needs both arms' choices:
+#   bash scripts/image_policy.sh; STREAM=rerendered bash scripts/image_policy.sh; STAGES=gap bash scripts/image_policy.sh
 set -euo pipefail
 WORK=${1:-experiments/pixels}
 DEMOS=${DEMOS:-360}            # drawn demonstrations (seeds 0..DEMOS-1)
@@ -26,6 +32,8 @@ WORKERS=${WORKERS:-2}
 DEVICE=${DEVICE:-cpu}
 LOADERS=${LOADERS:-0}          # lerobot-train's --num_workers
 STAGES=${STAGES:-data train val test}
+STREAM=${STREAM:-sim}          # the stream the policy is trained on: sim (MuJoCo) or rerendered (Mitsuba)
+case $STREAM in sim) ARM=px ;; rerendered) ARM=px-rr ;; *) echo "image_policy.sh: STREAM=$STREAM: use sim or rerendered" >&2; exit 2 ;; esac
 export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl}
 REPO=$(pwd)
 RIK=(uv run --project "$REPO" --locked rik)
@@ -35,20 +43,59 @@ mkdir -p "$WORK/specs"
 cd "$WORK"
 stage() { [[ " $STAGES " == *" $1 "* ]]; }
 steps() { local k; for k in 1 2 3 4 5; do echo $(( STEPS * k / 5 )); done; }  # the candidates: each saved fifth
-runs() { local seed; for seed in $SEEDS; do echo "act-px-s$seed"; done; }
+runs() { local seed; for seed in $SEEDS; do echo "act-${1:-$ARM}-s$seed"; done; }  # runs [ARM]
+eval_dir() { case ${1:-$ARM} in px) echo eval ;; px-rr) echo eval-rr ;; esac; }  # eval_dir [ARM]: an arm's evaluations
+chosen_file() { case ${1:-$ARM} in px) echo chosen.txt ;; px-rr) echo chosen-rr.txt ;; esac; }
+chosen_step() {  # chosen_step [ARM]: the step chosen on the validation split
+  local file
+  file=$(chosen_file "${1:-$ARM}")
+  [ -s "$file" ] || { echo "image_policy.sh: no choice on the validation split yet ($file)" >&2; exit 1; }
+  cat "$file"
+}
+EV=$(eval_dir)
 run_of() { basename "$(dirname "$(dirname "$(dirname "$1")")")"; }  # runs/RUN/checkpoints/STEP/pretrained_model -> RUN
-evaluate() {  # evaluate SPLIT SEED PER_CELL OUT POLICY...: one rik eval of several policies on one draw
-  local split=$1 seed=$2 per_cell=$3 out=$4 labels=() p
+evaluate() {  # evaluate SPLIT SEED PER_CELL OUT POLICY... [-- RIK_EVAL_OPTION...]: one rik eval of several policies on
+  # one draw
+  local split=$1 seed=$2 per_cell=$3 out=$4 labels=() policies=() p
   shift 4
+  while [ $# -gt 0 ] && [ "$1" != -- ]; do policies+=("$1"); shift; done
+  [ $# -gt 0 ] && shift
   [ -f "$out/table.md" ] && return 0
-  for p in "$@"; do labels+=(--label "$(run_of "$p")"); done
-  "${RIK[@]}" eval "$@" "${labels[@]}" --out "$out" --split "$split" --kinds drawer --seed "$seed" \
-    --episodes-per-cell "$per_cell" --episode-length "$EPISODE_LENGTH" --videos 0 --workers "$WORKERS" > "$out.log" 2>&1
+  for p in "${policies[@]}"; do labels+=(--label "$(run_of "$p")"); done
+  "${RIK[@]}" eval "${policies[@]}" "${labels[@]}" --out "$out" --split "$split" --kinds drawer --seed "$seed" \
+    --episodes-per-cell "$per_cell" --episode-length "$EPISODE_LENGTH" --videos 0 --workers "$WORKERS" "$@" \
+    > "$out.log" 2>&1 || failed "$out.log"
+}
+failed() {  # failed LOG: say which step failed and its last line, then stop
+  echo "image_policy.sh: a step failed ($PWD/$1): $(tail -n 1 "$1")" >&2
+  exit 1
+}
+own_renderer() {  # the option an arm's policies need to be drawn by their own renderer: Mitsuba for the rerendered arm
+  [ "${1:-$ARM}" = px-rr ] && echo --rerendered
+  return 0
+}
+protocol_eval() {  # protocol_eval OUT POLICY... [-- RIK_EVAL_OPTION...]: the test episodes, once: at full size the
+  # committed protocol exactly, otherwise the reduced draw
+  local out=$1 policies=() labels=() p
+  shift
+  while [ $# -gt 0 ] && [ "$1" != -- ]; do policies+=("$1"); shift; done
+  [ $# -gt 0 ] && shift
+  if [ "$PER_CELL" = 10 ] && [ "$EPISODE_LENGTH" = 400 ]; then
+    [ -f "$out/table.md" ] && return 0
+    for p in "${policies[@]}"; do labels+=(--label "$(run_of "$p")"); done
+    "${RIK[@]}" eval "${policies[@]}" "${labels[@]}" --out "$out" --videos 4 --workers "$WORKERS" \
+      --protocol "$REPO/protocols/drawers-test-v1.yaml" "$@" > "$out.log" 2>&1 || failed "$out.log"
+  else
+    evaluate test 1000 "$PER_CELL" "$out" "${policies[@]}" -- "$@"
+  fi
 }
 
 if stage data; then
-  sed -E -e "s/^  draw: 360( |$)/  draw: $DEMOS\1/" "$REPO/examples/policies/planned-360-pixels.yaml" > specs/px.yaml
-  [ -d ds-px ] || "${RIK[@]}" dataset build specs/px.yaml --out ds-px --work work-px --variants variants -j "$WORKERS"
+  sed -E -e "s/^  draw: 360( |$)/  draw: $DEMOS\1/" -e "s/^streams: \[sim\]/streams: [$STREAM]/" \
+    -e "s|^repo_id: local/rik-px$|repo_id: local/rik-$ARM|" "$REPO/examples/policies/planned-360-pixels.yaml" \
+    > "specs/$ARM.yaml"
+  [ -d "ds-$ARM" ] || "${RIK[@]}" dataset build "specs/$ARM.yaml" --out "ds-$ARM" --work "work-$ARM" \
+    --variants variants -j "$WORKERS"
 fi
 
 if stage train; then
@@ -57,38 +104,41 @@ if stage train; then
     last="runs/$run/checkpoints/last/pretrained_model"
     if [ -f "runs/$run/checkpoints/$(printf '%06d' "$STEPS")/pretrained_model/model.safetensors" ]; then continue; fi
     if [ -f "$last/model.safetensors" ]; then  # a run a session left unfinished: on from its last checkpoint
+      log="train-$run-resume-$(date +%s).log"
       uv run --project "$REPO" --locked lerobot-train --config_path="$last/train_config.json" --resume=true \
-        --steps="$STEPS" > "train-$run-resume-$(date +%s).log" 2>&1
+        --steps="$STEPS" > "$log" 2>&1 || failed "$log"
       continue
     fi
     rm -rf "runs/$run"
-    uv run --project "$REPO" --locked lerobot-train --dataset.repo_id=local/rik-px --dataset.root=ds-px \
+    uv run --project "$REPO" --locked lerobot-train --dataset.repo_id="local/rik-$ARM" --dataset.root="ds-$ARM" \
       --policy.push_to_hub=false --policy.device="$DEVICE" --steps="$STEPS" --batch_size="$BATCH" --log_freq=100 \
       --save_freq=$(( STEPS / 5 > 1 ? STEPS / 5 : 1 )) --env_eval_freq=1000000 --output_dir="runs/$run" \
       --wandb.enable=false --num_workers="$LOADERS" --seed="$seed" "${ACT[@]}" \
-      --policy.pretrained_backbone_weights=null --dataset.image_transforms.enable=true > "train-$run.log" 2>&1
+      --policy.pretrained_backbone_weights=null --dataset.image_transforms.enable=true > "train-$run.log" 2>&1 \
+      || failed "train-$run.log"
   done
 fi
 
 if stage val; then
-  mkdir -p eval/val
+  mkdir -p "$EV/val"
   for step in $(steps); do
     folders=()
     for run in $(runs); do folders+=("$(checkpoint "$run" "$step")"); done
-    evaluate val 3000 "$VAL_PER_CELL" "eval/val/step-$step" "${folders[@]}"
+    evaluate val 3000 "$VAL_PER_CELL" "$EV/val/step-$step" "${folders[@]}" -- $(own_renderer)
   done
   # the learning curve (Wilson intervals, pooled over the seeds and per seed) and the choice: the step with the most
   # successes pooled over the seeds; ties to the earlier step
-  uv run --project "$REPO" --locked python - $(steps) > chosen.txt <<'PY'
+  uv run --project "$REPO" --locked python - "$EV" $(steps) > "$(chosen_file)" <<'PY'
 import csv, glob, sys
 from rik.tables import rate_text
+ev, steps = sys.argv[1], sys.argv[2:]
 best, best_s, lines = None, -1, ["| step | pooled | per seed |", "|---:|---|---|"]
-for step in sys.argv[1:]:
+for step in steps:
     # one policy's episodes.csv lies in the evaluation's folder, several policies' each in its label's folder
-    files = sorted(glob.glob(f"eval/val/step-{step}/**/episodes.csv", recursive=True))
+    files = sorted(glob.glob(f"{ev}/val/step-{step}/**/episodes.csv", recursive=True))
     rows = [row for f in files for row in csv.DictReader(open(f))]
     if not rows:
-        sys.exit(f"image_policy.sh: no episodes of step {step} in eval/val/step-{step}")
+        sys.exit(f"image_policy.sh: no episodes of step {step} in {ev}/val/step-{step}")
     s = sum(row["outcome"] == "S" for row in rows)
     seeds = sorted({row["strategy"] for row in rows})
     per = "; ".join(f"{k}: {rate_text(sum(r['outcome'] == 'S' for r in rows if r['strategy'] == k), sum(r['strategy'] == k for r in rows))}"
@@ -96,28 +146,30 @@ for step in sys.argv[1:]:
     lines.append(f"| {step} | {rate_text(s, len(rows))} | {per} |")
     if s > best_s:
         best, best_s = step, s
-open("eval/val/curve.md", "w").write("\n".join(lines) + "\n")
+open(f"{ev}/val/curve.md", "w").write("\n".join(lines) + "\n")
 print(best)
 PY
-  echo "learning curve: eval/val/curve.md; chosen on the validation split: step $(cat chosen.txt)"
+  echo "learning curve: $EV/val/curve.md; chosen on the validation split: step $(cat "$(chosen_file)")"
 fi
 
 if stage test; then
-  [ -s chosen.txt ] || { echo "image_policy.sh: no choice on the validation split yet (chosen.txt)" >&2; exit 1; }
-  chosen=$(cat chosen.txt)
+  chosen=$(chosen_step)
   folders=()
   for run in $(runs); do folders+=("$(checkpoint "$run" "$chosen")"); done
-  out="eval/test/step-$chosen"
-  mkdir -p eval/test
-  if [ "$PER_CELL" = 10 ] && [ "$EPISODE_LENGTH" = 400 ]; then  # the full size: the committed protocol, exactly
-    if [ ! -f "$out/table.md" ]; then
-      labels=()
-      for p in "${folders[@]}"; do labels+=(--label "$(run_of "$p")"); done
-      "${RIK[@]}" eval "${folders[@]}" "${labels[@]}" --out "$out" --videos 4 --workers "$WORKERS" \
-        --protocol "$REPO/protocols/drawers-test-v1.yaml" > "$out.log" 2>&1
-    fi
-  else
-    evaluate test 1000 "$PER_CELL" "$out" "${folders[@]}"
-  fi
-  echo "test evaluation: $out"
+  mkdir -p "$EV/test"
+  protocol_eval "$EV/test/step-$chosen" "${folders[@]}" -- $(own_renderer)
+  echo "test evaluation: $EV/test/step-$chosen"
+fi
+
+if stage gap; then  # each arm's chosen checkpoints on the test episodes drawn by the other renderer: the visual gap
+  for arm in px px-rr; do
+    case $arm in px) other=rerendered ;; px-rr) other=sim ;; esac
+    chosen=$(chosen_step "$arm")
+    folders=()
+    for run in $(runs "$arm"); do folders+=("$(checkpoint "$run" "$chosen")"); done
+    out="$(eval_dir "$arm")/test/step-$chosen-drawn-by-$other"
+    mkdir -p "$(dirname "$out")"
+    protocol_eval "$out" "${folders[@]}" -- --renderer "$other"
+    echo "the visual gap of $arm: $out against $(eval_dir "$arm")/test/step-$chosen"
+  done
 fi
