@@ -69,7 +69,11 @@ evaluate() {  # evaluate SPLIT SEED PER_CELL JOINTS OUT POLICY...: one rik eval 
   for p in "$@"; do labels+=(--label "$(basename "$p")"); done
   "${RIK[@]}" eval "$@" "${labels[@]}" --out "$out" --split "$split" --kinds "$KINDS" --joints "$joints" \
     --seed "$seed" --episodes-per-cell "$per_cell" --episode-length "$EPISODE_LENGTH" --videos 0 --workers "$WORKERS" \
-    > "$out.log" 2>&1
+    > "$out.log" 2>&1 || failed "$out.log"
+}
+failed() {  # failed LOG: say which step failed and its last line, then stop
+  echo "joints_ablation.sh: a step failed ($PWD/$1): $(tail -n 1 "$1")" >&2
+  exit 1
 }
 
 if stage data; then
@@ -107,7 +111,9 @@ if stage train; then
       pids+=($!)
     done
   done
-  for pid in "${pids[@]}"; do wait "$pid"; done
+  for pid in "${pids[@]}"; do
+    wait "$pid" || { echo "joints_ablation.sh: a training failed (its log: train-act-*.log in $PWD)" >&2; exit 1; }
+  done
 fi
 
 RUNS=()
@@ -150,7 +156,7 @@ if stage test; then
       labels=()
       for p in "${folders[@]}" strategy:planned; do labels+=(--label "$(basename "$p")"); done
       "${RIK[@]}" eval "${folders[@]}" strategy:planned "${labels[@]}" --out "$out" --videos 0 --workers "$WORKERS" \
-        --protocol "$REPO/protocols/fronts-$joints-test-v1.yaml" > "$out.log" 2>&1
+        --protocol "$REPO/protocols/fronts-$joints-test-v1.yaml" > "$out.log" 2>&1 || failed "$out.log"
     else
       evaluate test 1000 "$PER_CELL" "$joints" "$out" "${folders[@]}" "strategy:planned"
     fi
