@@ -211,24 +211,20 @@ def test_a_stream_drawn_by_the_other_renderer_is_that_renderers_picture_under_th
 
 
 def test_rik_eval_shows_a_sim_policy_mitsubas_pictures_and_records_it(image_policy: Path, bow_variants: Path,
-                                                                       rik, tmp_path: Path) -> None:
-    import json
+                                                                       tmp_path: Path) -> None:
+    """``--renderer rerendered`` (the CLI passes it to the spec, as the refusals below show): the spec keeps it for
+    ``eval_info.json`` and back, and the environment rik eval makes for the policy shows Mitsuba's picture under
+    MuJoCo's key."""
+    from rik.evaluation import evaluate
 
     variants = tmp_path / "variants"
     shutil.copytree(bow_variants, variants)
-    r = rik("eval", str(image_policy), "--renderer", "rerendered", "--split", "train", "--types", "two_point",
-            "--presets", "normal", "-n", "1", "--seed", "22", "--episode-length", "5", "--videos", "0",
-            "--workers", "1", "--out", str(tmp_path / "eval"), "--variants", str(variants))
-    assert r.code == 0, r.out + r.err
-    info = json.loads((tmp_path / "eval" / "eval_info.json").read_text(encoding="utf-8"))
-    assert info["rik"]["spec"]["renderer"] == "rerendered"
-    assert info["overall"]["n_episodes"] == 1
-    # the environment rik eval makes for it shows the policy Mitsuba's picture under MuJoCo's key
-    from rik.evaluation import evaluate
-
     spec = evaluate.prepare(builtin_catalog(), evaluate.EvalSpec(
         str(image_policy), split="train", handle_types=("two_point",), presets=("normal",), episodes_per_cell=1,
         seed=22, episode_length=5, videos=0, variants=str(variants), renderer="rerendered"))
+    data = spec.to_data()  # what eval_info.json keeps under rik.spec
+    assert data["renderer"] == "rerendered" and evaluate.EvalSpec.from_data(data).renderer == "rerendered"
+    assert "renderer" not in evaluate.EvalSpec(str(image_policy)).to_data()  # earlier runs' specs stay as they were
     vec = evaluate._context(spec)["vec"]
     try:
         shown = vec.envs[0].unwrapped.reset(seed=0, options={"variant": BOW})[0]["pixels"]["front"]
