@@ -38,7 +38,7 @@ export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl}
 REPO=$(pwd)
 RIK=(uv run --project "$REPO" --locked rik)
 source "$REPO/scripts/act_recipe.sh"
-source "$REPO/scripts/policy_folders.sh"  # checkpoint
+source "$REPO/scripts/policy_folders.sh"  # checkpoint, failed
 mkdir -p "$WORK/specs"
 cd "$WORK"
 stage() { [[ " $STAGES " == *" $1 "* ]]; }
@@ -65,10 +65,6 @@ evaluate() {  # evaluate SPLIT SEED PER_CELL OUT POLICY... [-- RIK_EVAL_OPTION..
   "${RIK[@]}" eval "${policies[@]}" "${labels[@]}" --out "$out" --split "$split" --kinds drawer --seed "$seed" \
     --episodes-per-cell "$per_cell" --episode-length "$EPISODE_LENGTH" --videos 0 --workers "$WORKERS" "$@" \
     > "$out.log" 2>&1 || failed "$out.log"
-}
-failed() {  # failed LOG: say which step failed and its last line, then stop
-  echo "image_policy.sh: a step failed ($PWD/$1): $(tail -n 1 "$1")" >&2
-  exit 1
 }
 own_renderer() {  # the option an arm's policies need to be drawn by their own renderer: Mitsuba for the rerendered arm
   [ "${1:-$ARM}" = px-rr ] && echo --rerendered

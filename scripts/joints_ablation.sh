@@ -38,7 +38,7 @@ export HF_HUB_OFFLINE=1 MUJOCO_GL=${MUJOCO_GL:-egl} OMP_NUM_THREADS=1 MKL_NUM_TH
 REPO=$(pwd)
 RIK=(uv run --project "$REPO" --locked rik)
 source "$REPO/scripts/act_recipe.sh"
-source "$REPO/scripts/policy_folders.sh"  # chunked, checkpoint
+source "$REPO/scripts/policy_folders.sh"  # chunked, checkpoint, failed
 mkdir -p "$WORK/specs"
 cd "$WORK"
 stage() { [[ " $STAGES " == *" $1 "* ]]; }
@@ -70,10 +70,6 @@ evaluate() {  # evaluate SPLIT SEED PER_CELL JOINTS OUT POLICY...: one rik eval 
   "${RIK[@]}" eval "$@" "${labels[@]}" --out "$out" --split "$split" --kinds "$KINDS" --joints "$joints" \
     --seed "$seed" --episodes-per-cell "$per_cell" --episode-length "$EPISODE_LENGTH" --videos 0 --workers "$WORKERS" \
     > "$out.log" 2>&1 || failed "$out.log"
-}
-failed() {  # failed LOG: say which step failed and its last line, then stop
-  echo "joints_ablation.sh: a step failed ($PWD/$1): $(tail -n 1 "$1")" >&2
-  exit 1
 }
 
 if stage data; then
