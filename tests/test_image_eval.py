@@ -185,19 +185,25 @@ def test_rik_eval_renders_only_the_frames_an_image_policy_reads(image_policy: Pa
 
 
 # ---- the visual gap: a policy's streams drawn by the other renderer (rik eval --renderer) ---------------------------
-def _front(variants: Path, streams: tuple[str, ...], renderer: str | None = None, spp: int = 4,
-           size: tuple[int, int] = (24, 32)) -> np.ndarray:
-    """The front camera's first image of the bow drawer (reset seed 0) in an environment of ``streams`` at ``size``,
-    drawn by ``renderer`` (None: each stream its own)."""
+def _fronts(variants: Path, streams: tuple[str, ...], renderer: str | None = None, spp: int = 4,
+            size: tuple[int, int] = (24, 32)) -> dict[str, np.ndarray]:
+    """The front camera's first images of the bow drawer (reset seed 0), one per stream, in an environment of
+    ``streams`` at ``size``, drawn by ``renderer`` (None: each stream its own)."""
     from rik.envs.open_front import OpenFrontEnv
 
     env = OpenFrontEnv(BOW, variants_dir=variants, spp=spp, renderer=renderer,
                        io=PolicyIO(cameras=("front",), streams=streams, image_size=size))
     try:
-        (image,) = env.reset(seed=0)[0]["pixels"].values()
-        return image
+        return dict(env.reset(seed=0)[0]["pixels"])
     finally:
         env.close()
+
+
+def _front(variants: Path, streams: tuple[str, ...], renderer: str | None = None, spp: int = 4,
+           size: tuple[int, int] = (24, 32)) -> np.ndarray:
+    """The front camera's first image of a single stream (:func:`_fronts`)."""
+    (image,) = _fronts(variants, streams, renderer, spp, size).values()
+    return image
 
 
 def test_a_stream_drawn_by_the_other_renderer_is_that_renderers_picture_under_the_streams_key(
@@ -208,6 +214,10 @@ def test_a_stream_drawn_by_the_other_renderer_is_that_renderers_picture_under_th
     assert np.abs(sim.astype(int) - mitsuba).mean() > 2.0  # two renderers, two pictures
     np.testing.assert_array_equal(_front(bow_variants, ("sim",), "rerendered"), mitsuba)
     np.testing.assert_array_equal(_front(bow_variants, ("rerendered",), "sim"), sim)
+    both = _fronts(bow_variants, ("sim", "rerendered"), "sim")  # both streams drawn once, by MuJoCo
+    assert set(both) == {"front", "front_rerendered"}
+    for image in both.values():
+        np.testing.assert_array_equal(image, sim)
 
 
 def test_rik_eval_shows_a_sim_policy_mitsubas_pictures_and_records_it(image_policy: Path, bow_variants: Path,

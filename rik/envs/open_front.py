@@ -204,20 +204,22 @@ class OpenFrontEnv(gym.Env):
         return self._scenes[key]
 
     def _renderer(self, stream: str) -> FrameRenderer:
+        """The renderer that draws ``stream``: its own, or the one every stream is drawn with (``renderer=``); one
+        per renderer kind and scene."""
         from rik.render.renderers import make_renderer
         from rik.render.streams import StreamSpec
 
         if self._renderer_model is not self.scene.model:
             self._close_renderers()
             self._renderer_model = self.scene.model
-        if stream not in self._renderers:
+        kind = self._drawn_by or stream
+        if kind not in self._renderers:
             h, w = self.io.image_size
-            # the stream's own renderer, or the one every stream is drawn with (renderer=)
-            spec = StreamSpec(self._drawn_by or stream, w, h, spp=self._spp)  # type: ignore[arg-type]
+            spec = StreamSpec(kind, w, h, spp=self._spp)  # type: ignore[arg-type]
             cameras = list(self.io.cameras) or ["front"]  # a state-only contract: the front camera films it
-            self._renderers[stream] = make_renderer(self.scene.model, self.scene.data, cameras, spec,
-                                                    self._catalog.finishes)
-        return self._renderers[stream]
+            self._renderers[kind] = make_renderer(self.scene.model, self.scene.data, cameras, spec,
+                                                  self._catalog.finishes)
+        return self._renderers[kind]
 
     def _close_renderers(self) -> None:
         for r in self._renderers.values():
@@ -270,8 +272,13 @@ class OpenFrontEnv(gym.Env):
             obs["ee_pose"] = self.layout.ee(self.scene).astype(np.float32)
         if self.io.streams:
             if self._pixels is None or self._steps == 0 or self.reads_next is None or self.reads_next():
+                drawn: dict[str, dict[str, np.ndarray]] = {}  # by renderer: streams drawn by one are drawn once
+                for stream in self.io.streams:
+                    kind = self._drawn_by or stream
+                    if kind not in drawn:
+                        drawn[kind] = self._renderer(stream).render(self.scene.data, self._steps)
                 self._pixels = {image_name(cam, stream): img for stream in self.io.streams
-                                for cam, img in self._renderer(stream).render(self.scene.data, self._steps).items()}
+                                for cam, img in drawn[self._drawn_by or stream].items()}
                 self.frames_rendered += 1
             obs["pixels"] = self._pixels
         return obs
