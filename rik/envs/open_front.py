@@ -57,7 +57,7 @@ import gymnasium as gym
 import numpy as np
 
 from rik.errors import RikError
-from rik.lerobot.features import CAMERAS, ENV_ENTRY_POINT, ENV_ID, STREAMS, env_state_names, image_name
+from rik.lerobot.features import CAMERAS, ENV_ENTRY_POINT, ENV_ID, check_renderer, env_state_names, image_name
 from rik.lerobot.policy_io import PolicyIO
 from rik.sim.observation import delta_to_absolute, environment_state, handle_shape_state
 from rik.sim.outcome import SUCCESS_OPENING, classify
@@ -105,9 +105,8 @@ class OpenFrontEnv(gym.Env):
         if self.io.fps != CONTROL_FPS:
             raise RikError(f"fps {self.io.fps}: the environment steps at {CONTROL_FPS} Hz, and a policy acts at its "
                            "dataset's rate; export the episodes at their own rate (without --fps) and train again")
-        if renderer is not None and renderer not in STREAMS:
-            raise RikError(f"renderer {renderer!r}: use one of {', '.join(STREAMS)} (or none: each stream its own)")
-        self._drawn_by = renderer
+        check_renderer(renderer, f"renderer {renderer!r}")
+        self._drawn_by = renderer = renderer or None
         if self.io.streams:
             _check_images(self.io if renderer is None else replace(self.io, streams=(renderer,)), spp)
         if isinstance(catalog_paths, str | Path):  # one path, not a tuple of its characters

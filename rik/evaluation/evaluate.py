@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 from rik.episodes.draw import DEFAULT_KINDS, DEFAULT_PRESETS, DEFAULT_TYPES
 from rik.errors import RikError
-from rik.lerobot.features import STREAMS
+from rik.lerobot.features import check_renderer
 from rik.lerobot.observation_use import observation_use
 from rik.lerobot.policy_files import check_policy_folder
 from rik.lerobot.policy_io import AUTO, PolicyIO, read_policy
@@ -149,8 +149,7 @@ def prepare(catalog: Any, spec: EvalSpec) -> EvalSpec:
     spec.draw().check(catalog)
     catalog.robot(spec.io.robot)  # an unknown robot: one line with suggestions
     asked = spec.io.action_frame
-    if spec.renderer and spec.renderer not in STREAMS:
-        raise RikError(f"--renderer {spec.renderer}: use one of {', '.join(STREAMS)}")
+    check_renderer(spec.renderer, f"--renderer {spec.renderer}")
     if spec.strategy is not None:
         make_operator(spec.strategy)
         if spec.renderer:

@@ -40,7 +40,7 @@ from rik.lerobot.features import (
     OBS_ENV_STATE,
     OBS_IMAGES,
     OBS_STATE,
-    STREAMS,
+    check_renderer,
     image_name,
 )
 from rik.lerobot.policy_io import AUTO, FIELD_TYPES, ContractError, PolicyIO, read_policy
@@ -127,9 +127,10 @@ class RikEnvConfig(EnvConfig):
             Draw.parse(self.split, self.handle_types, self.presets, self.kinds, self.joints).check(_catalog())
         except RikError as exc:
             raise ValueError(f"--env.*: {exc}") from None
-        if self.renderer and self.renderer not in STREAMS:
-            raise ValueError(f"--env.renderer={self.renderer}: use one of {', '.join(STREAMS)}, or leave it empty "
-                             "(each stream drawn by its own renderer)")
+        try:
+            check_renderer(self.renderer, f"--env.renderer={self.renderer}")
+        except RikError as exc:
+            raise ValueError(str(exc)) from None
         if io.fps != CONTROL_FPS:
             raise ValueError(f"--env.fps={io.fps}: rik's environment steps at {CONTROL_FPS} Hz, and a policy acts at "
                              "its dataset's rate; export the episodes at their own rate (without --fps) and train "

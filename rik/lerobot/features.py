@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
+from rik.errors import RikError
 from rik.sim.observation import ENV_STATE_NAMES, GRIPPER_GRASP_NAMES, HANDLE_SHAPES
 from rik.sim.robots.layout import ACTION_FRAMES, EE_NAMES, FRAME_ACTION_NAMES
 
@@ -23,7 +24,8 @@ if TYPE_CHECKING:
 
 __all__ = ["ACTION", "ACTION_FRAMES", "CAMERAS", "EE_POSE", "ENV_ID", "ENV_KEYS", "ENV_STATE_LAYOUTS",
            "HANDLE_SHAPES", "OBS_ENV_STATE", "OBS_IMAGES", "OBS_STATE", "STREAMS", "STREAM_SUFFIX", "TASK",
-           "action_frame_of", "dataset_features", "env_layout_of_width", "env_state_names", "image_key", "image_name"]
+           "action_frame_of", "check_renderer", "dataset_features", "env_layout_of_width", "env_state_names",
+           "image_key", "image_name"]
 
 OBS_STATE = "observation.state"
 """The robot's state (:data:`rik.sim.observation.ROBOT_STATE_NAMES`, or an arm's joints)."""
@@ -53,6 +55,13 @@ STREAM_SUFFIX = {"sim": "", "rerendered": "_rerendered"}
 """Image stream -> suffix of its camera names: ``front`` is MuJoCo's image, ``front_rerendered`` Mitsuba's."""
 STREAMS = tuple(STREAM_SUFFIX)
 """The image streams: ``sim`` (MuJoCo) and ``rerendered`` (Mitsuba)."""
+
+
+def check_renderer(renderer: str | None, option: str) -> None:
+    """Refuse a renderer that draws every image stream (``rik eval --renderer``) unless it is one of :data:`STREAMS`;
+    empty or ``None``: each stream drawn by its own. ``option`` names the setting in the one-line error."""
+    if renderer and renderer not in STREAMS:
+        raise RikError(f"{option}: use one of {', '.join(STREAMS)}, or none (each stream drawn by its own renderer)")
 
 ENV_STATE_LAYOUTS = {(shape, from_gripper): ENV_STATE_NAMES + (GRIPPER_GRASP_NAMES if from_gripper else ()) + names
                      for from_gripper in (False, True) for shape, names in HANDLE_SHAPES.items()}
