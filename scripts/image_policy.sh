@@ -54,17 +54,22 @@ chosen_step() {  # chosen_step [ARM]: the step chosen on the validation split
 }
 EV=$(eval_dir)
 run_of() { basename "$(dirname "$(dirname "$(dirname "$1")")")"; }  # runs/RUN/checkpoints/STEP/pretrained_model -> RUN
+split_policies() {  # split_policies POLICY... [-- RIK_EVAL_OPTION...]: sets POLICIES, their LABELS (the runs' names)
+  # and the OPTIONS after --
+  POLICIES=() LABELS=() OPTIONS=()
+  while [ $# -gt 0 ] && [ "$1" != -- ]; do POLICIES+=("$1"); LABELS+=(--label "$(run_of "$1")"); shift; done
+  [ $# -gt 0 ] && shift
+  OPTIONS=("$@")
+}
 evaluate() {  # evaluate SPLIT SEED PER_CELL OUT POLICY... [-- RIK_EVAL_OPTION...]: one rik eval of several policies on
   # one draw
-  local split=$1 seed=$2 per_cell=$3 out=$4 labels=() policies=() p
+  local split=$1 seed=$2 per_cell=$3 out=$4
   shift 4
-  while [ $# -gt 0 ] && [ "$1" != -- ]; do policies+=("$1"); shift; done
-  [ $# -gt 0 ] && shift
   [ -f "$out/table.md" ] && return 0
-  for p in "${policies[@]}"; do labels+=(--label "$(run_of "$p")"); done
-  "${RIK[@]}" eval "${policies[@]}" "${labels[@]}" --out "$out" --split "$split" --kinds drawer --seed "$seed" \
-    --episodes-per-cell "$per_cell" --episode-length "$EPISODE_LENGTH" --videos 0 --workers "$WORKERS" "$@" \
-    > "$out.log" 2>&1 || failed "$out.log"
+  split_policies "$@"
+  "${RIK[@]}" eval "${POLICIES[@]}" "${LABELS[@]}" --out "$out" --split "$split" --kinds drawer --seed "$seed" \
+    --episodes-per-cell "$per_cell" --episode-length "$EPISODE_LENGTH" --videos 0 --workers "$WORKERS" \
+    "${OPTIONS[@]}" > "$out.log" 2>&1 || failed "$out.log"
 }
 own_renderer() {  # the option an arm's policies need to be drawn by their own renderer: Mitsuba for the rerendered arm
   [ "${1:-$ARM}" = px-rr ] && echo --rerendered
@@ -72,17 +77,15 @@ own_renderer() {  # the option an arm's policies need to be drawn by their own r
 }
 protocol_eval() {  # protocol_eval OUT POLICY... [-- RIK_EVAL_OPTION...]: the test episodes, once: at full size the
   # committed protocol exactly, otherwise the reduced draw
-  local out=$1 policies=() labels=() p
+  local out=$1
   shift
-  while [ $# -gt 0 ] && [ "$1" != -- ]; do policies+=("$1"); shift; done
-  [ $# -gt 0 ] && shift
   if [ "$PER_CELL" = 10 ] && [ "$EPISODE_LENGTH" = 400 ]; then
     [ -f "$out/table.md" ] && return 0
-    for p in "${policies[@]}"; do labels+=(--label "$(run_of "$p")"); done
-    "${RIK[@]}" eval "${policies[@]}" "${labels[@]}" --out "$out" --videos 4 --workers "$WORKERS" \
-      --protocol "$REPO/protocols/drawers-test-v1.yaml" "$@" > "$out.log" 2>&1 || failed "$out.log"
+    split_policies "$@"
+    "${RIK[@]}" eval "${POLICIES[@]}" "${LABELS[@]}" --out "$out" --videos 4 --workers "$WORKERS" \
+      --protocol "$REPO/protocols/drawers-test-v1.yaml" "${OPTIONS[@]}" > "$out.log" 2>&1 || failed "$out.log"
   else
-    evaluate test 1000 "$PER_CELL" "$out" "${policies[@]}" -- "$@"
+    evaluate test 1000 "$PER_CELL" "$out" "$@"
   fi
 }
 
