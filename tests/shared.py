@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import functools
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
@@ -65,6 +65,29 @@ def act_config_folder(folder: Path, cameras: tuple[str, ...] = (), size: tuple[i
                        device="cpu", push_to_hub=False)
     folder.mkdir()
     config._save_pretrained(folder)
+    return folder
+
+
+def save_untrained(policy: Any, folder: Path, contract: str | None = None) -> Path:
+    """Save ``policy`` (a LeRobot policy, weights as made) into ``folder`` as LeRobot does, with its processors
+    (statistics of zero mean and unit deviation for each of its features) and, where given, rik's contract (the
+    JSON of a :class:`~rik.lerobot.policy_io.PolicyIO`)."""
+    import torch
+    from lerobot.policies.factory import make_pre_post_processors
+
+    from rik.lerobot.policy_io import POLICY_IO_FILE
+
+    config = policy.config
+    stats = {}
+    for key, feature in {**config.input_features, **config.output_features}.items():
+        per_channel = [1, 1] if len(feature.shape) == 3 else []  # an image's: one per channel
+        stats[key] = {"mean": torch.zeros(feature.shape[0], *per_channel),
+                      "std": torch.ones(feature.shape[0], *per_channel)}
+    pre, post = make_pre_post_processors(config, dataset_stats=stats)
+    for part in (policy, pre, post):
+        part.save_pretrained(folder)
+    if contract is not None:
+        (folder / POLICY_IO_FILE).write_text(contract)
     return folder
 
 

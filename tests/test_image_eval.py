@@ -19,7 +19,7 @@ from shared import BOW, builtin_catalog
 
 from rik.lerobot.features import OBS_ENV_STATE, OBS_STATE
 from rik.lerobot.observation_use import every_observation, observation_use
-from rik.lerobot.policy_io import POLICY_IO_FILE, PolicyIO
+from rik.lerobot.policy_io import PolicyIO
 
 pytestmark = pytest.mark.slow  # real policies and an episode of rik eval: out of the everyday tier
 
@@ -137,19 +137,9 @@ def test_policies_that_read_every_observation_are_rendered_every_step() -> None:
 @pytest.fixture(scope="module")
 def image_policy(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A small image ACT policy (5 actions a chunk) saved by LeRobot with its processors and rik's contract."""
-    import torch
-    from lerobot.policies.factory import make_pre_post_processors
+    from shared import save_untrained
 
-    policy = _act(5)
-    stats = {key: {"mean": torch.zeros(feature.shape[0], *([1, 1] if len(feature.shape) == 3 else [])),
-                   "std": torch.ones(feature.shape[0], *([1, 1] if len(feature.shape) == 3 else []))}
-             for key, feature in {**policy.config.input_features, **policy.config.output_features}.items()}
-    pre, post = make_pre_post_processors(policy.config, dataset_stats=stats)
-    folder = tmp_path_factory.mktemp("image-policy") / "policy"
-    for part in (policy, pre, post):
-        part.save_pretrained(folder)
-    (folder / POLICY_IO_FILE).write_text(IO.to_json())
-    return folder
+    return save_untrained(_act(5), tmp_path_factory.mktemp("image-policy") / "policy", IO.to_json())
 
 
 def test_rik_eval_renders_only_the_frames_an_image_policy_reads(image_policy: Path, bow_variants: Path,

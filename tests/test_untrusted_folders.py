@@ -47,16 +47,10 @@ def _features() -> dict[str, Any]:
 def _save(policy_class: Any, config: Any, folder: Path) -> Path:
     """A policy of ``config`` saved by LeRobot into ``folder`` with its processors (zero means, unit deviations)."""
     import torch
-    from lerobot.policies.factory import make_pre_post_processors
+    from shared import save_untrained
 
-    widths = {"observation.state": 11, "observation.environment_state": 13, "action": 7}
     torch.manual_seed(0)
-    policy = policy_class(config)
-    stats = {k: {"mean": torch.zeros(n), "std": torch.ones(n)} for k, n in widths.items()}
-    pre, post = make_pre_post_processors(config, dataset_stats=stats)
-    for part in (policy, pre, post):
-        part.save_pretrained(folder)
-    return folder
+    return save_untrained(policy_class(config), folder)
 
 
 @pytest.fixture(scope="module")
