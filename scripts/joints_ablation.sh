@@ -12,7 +12,9 @@
 # Reduced size, the same pipeline end to end (its rates are noise: it checks the pipeline, not the result):
 #   DEMOS=27 STEPS=120 SEEDS="0" VAL_PER_CELL=1 PER_CELL=1 EPISODE_LENGTH=200 bash scripts/joints_ablation.sh \
 #     experiments/joints-small
-# STAGES picks the stages (default "data train val test"). Every choice is made on the validation split; the test
+# STAGES picks the stages (default "data train val test"). The val stage evaluates each run as soon as its training
+# has finished (so it may run beside the last trainings) and makes the choice once every run is evaluated.
+# Every choice is made on the validation split; the test
 # stage refuses to run before the choice is written (chosen.txt) and runs each evaluation once (it skips a folder
 # that holds one); at full size it runs the committed protocols (protocols/fronts-measured-test-v1.yaml and
 # fronts-paper-test-v1.yaml) with rik eval --protocol.
@@ -62,6 +64,12 @@ policy() {  # policy RUN CANDIDATE: the folder of a candidate's weights, with n_
   fi
   echo "$out"
 }
+trained() {  # trained RUN: whether the run has trained its STEPS (a checkpoint at the last step)
+  local last="runs/$1/checkpoints/last/pretrained_model"
+  [ -f "$last/train_config.json" ] && [ -f "runs/$1/checkpoints/$(printf '%06d' "$STEPS")/pretrained_model/model.safetensors" ] \
+    && [ "$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["steps"])' "$last/train_config.json")" \
+      -ge "$STEPS" ]
+}
 evaluate() {  # evaluate SPLIT SEED PER_CELL JOINTS OUT POLICY...: one rik eval of several policies on one draw
   local split=$1 seed=$2 per_cell=$3 joints=$4 out=$5 labels=() p
   shift 5
@@ -88,9 +96,7 @@ if stage train; then
       run="act-$arm-s$seed"
       last="runs/$run/checkpoints/last/pretrained_model"
       if [ -f "$last/model.safetensors" ]; then
-        [ "$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["steps"])' "$last/train_config.json")" \
-          -ge "$STEPS" ] && [ -f "runs/$run/checkpoints/$(printf '%06d' "$STEPS")/pretrained_model/model.safetensors" ] \
-          && continue
+        trained "$run" && continue
         while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do sleep 1; done
         # a run a session left unfinished: on from its last checkpoint (its optimizer state, data order and flags)
         uv run --project "$REPO" --locked lerobot-train --config_path="$last/train_config.json" --resume=true \
@@ -116,14 +122,25 @@ RUNS=()
 for arm in "${ARMS[@]}"; do for seed in $SEEDS; do RUNS+=("act-$arm-s$seed"); done; done
 
 if stage val; then
-  mkdir -p eval/val
-  for candidate in $(candidates); do
-    folders=()
-    for run in "${RUNS[@]}"; do folders+=("$(policy "$run" "$candidate")"); done
-    for joints in paper measured; do
-      evaluate val 3000 "$VAL_PER_CELL" "$joints" "eval/val/$candidate-$joints" "${folders[@]}"
+  # run by run, each candidate on both draws into eval/val/CANDIDATE-JOINTS/RUN-CANDIDATE: a run is evaluated as soon
+  # as its training has finished (the same episodes as evaluated beside the other runs: the draw fixes them), so the
+  # stage may run while the last trainings go on; the choice waits for every run
+  waiting=()
+  for run in "${RUNS[@]}"; do
+    trained "$run" || { waiting+=("$run"); continue; }
+    for candidate in $(candidates); do
+      folder=$(policy "$run" "$candidate")
+      for joints in paper measured; do
+        mkdir -p "eval/val/$candidate-$joints"
+        evaluate val 3000 "$VAL_PER_CELL" "$joints" "eval/val/$candidate-$joints/$run-$candidate" "$folder"
+      done
     done
   done
+  if [ ${#waiting[@]} -gt 0 ]; then
+    echo "joints_ablation.sh: not trained yet: ${waiting[*]}; the choice waits for their validation (run STAGES=val" \
+      "again when they have finished)" >&2
+    exit 1
+  fi
   # the choice: the candidate with the most successes over every run and both joints; ties to the earlier listed
   python3 - $(candidates) > chosen.txt <<'PY'
 import csv, glob, sys
