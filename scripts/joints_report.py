@@ -9,7 +9,9 @@ training; jm: the train split's real doors) and each test draw: successes pooled
 interval, each seed's rate, and a 95 % interval resampling seeds and handles; per front layout the pooled counts.
 The primary comparison: on the measured draw, the doors' S of jm against jp, the difference of the pooled rates
 with Newcombe's interval and the paired seed differences. Secondary: every front; each arm's doors on the paper
-draw against the measured one. Writes nothing but ``--out``; prints the report.
+draw against the measured one; the misses on the real test doors by the door's mechanism class (catch,
+self-closing, tilted, plain) and by what the opening did (:func:`miss`). Writes nothing but ``--out``; prints the
+report.
 """
 
 from __future__ import annotations
@@ -22,6 +24,19 @@ from pathlib import Path
 ARMS = {"jp": "(a) paper presets in training", "jm": "(b) real doors in training"}
 DRAWS = ("measured", "paper")
 LAYOUTS = ("drawer", "door-left", "door-right", "flap-lift-up", "flap-drop-down")
+MISSES = ("fell back", "stalled", "never opened")
+FELL_BACK = 0.10
+"""A miss whose front was at some point this much further open (a fraction of its range) than where it ended."""
+
+
+def miss(row: dict[str, str]) -> str:
+    """What a missed episode's opening did (every miss runs to the episode's limit, so a time out says nothing):
+    ``fell back`` (the front opened at least :data:`FELL_BACK` of its range further than where it ended: the
+    grasp let go and the front went back), ``stalled`` (it ended partly open, P, near the furthest it got) or
+    ``never opened`` (F: under 5 % of its range)."""
+    if round(float(row["max_opening"]) - float(row["final_opening"]), 4) >= FELL_BACK:  # as written: 4 decimals
+        return "fell back"
+    return "stalled" if row["outcome"] == "P" else "never opened"
 
 
 def _runs(folder: Path, arm: str, chosen: str) -> list[list[dict[str, str]]]:
@@ -96,6 +111,23 @@ def main(argv: list[str] | None = None) -> int:
         on = {draw: [r["outcome"] == "S" for run in runs[(arm, draw)] for r in doors(run)] for draw in DRAWS}
         lines.append(f"- {name}, doors: paper draw {rate_text(sum(on['paper']), len(on['paper']))}, measured draw "
                      f"{rate_text(sum(on['measured']), len(on['measured']))}.")
+    from rik.schemas.joints import MECHANISMS
+
+    lines += ["", "## Misses on the real test doors, by mechanism class (the measured draw)", "",
+              "| arm | class | episodes | S | " + " | ".join(MISSES) + " |",
+              "|---|---|---:|---:|" + "---:|" * len(MISSES)]
+    for arm, name in ARMS.items():
+        by_class: dict[str, list[dict[str, str]]] = {m: [] for m in MECHANISMS}
+        for run in runs[(arm, "measured")]:
+            for r in doors(run):
+                preset = parse_variant_id(catalog, r["variant"]).preset
+                if preset in catalog.preset_splits:  # a real door (the draw's doors all are)
+                    by_class[catalog.presets[preset].hinge.mechanism()].append(r)
+        for mechanism, rows in by_class.items():
+            missed = [miss(r) for r in rows if r["outcome"] != "S"]
+            lines.append(f"| {name} | {mechanism} | {len(rows)} | {len(rows) - len(missed)} | "
+                         + " | ".join(str(missed.count(m)) for m in MISSES) + " |")
+    lines.append("")
     planned = args.work / "eval" / "test" / f"{chosen}-measured" / "strategy-planned" / "episodes.csv"
     if planned.is_file():
         rows = list(csv.DictReader(planned.open(encoding="utf-8")))

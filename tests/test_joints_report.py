@@ -39,9 +39,10 @@ def _episodes(path: Path, outcomes: list[str]) -> None:
     path.parent.mkdir(parents=True)
     with path.open("w", newline="") as handle:
         out = csv.writer(handle)
-        out.writerow(["seed", "variant", "front", "outcome"])
+        out.writerow(["seed", "variant", "front", "outcome", "final_opening", "max_opening"])
         for i, ((variant, front), outcome) in enumerate(zip(rows, outcomes, strict=True)):
-            out.writerow([1000 + i, variant, front, outcome])
+            final, peak = {"S": (0.95, 0.95), "P": (0.3, 0.32), "F": (0.01, 0.4)}[outcome]  # F: it fell back
+            out.writerow([1000 + i, variant, front, outcome, final, peak])
 
 
 def test_the_report_computes_the_planned_comparison(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -62,3 +63,10 @@ def test_the_report_computes_the_planned_comparison(tmp_path: Path, capsys: pyte
     assert "| 2/2 | 0/2 | 0/2 | 2/2 | - |" in text  # (a) on the measured draw: drawer, door-left, door-right, lift-up
     assert ("Doors of the measured test draw: (a) 0 of 4: 0% [0%, 49%], (b) 4 of 4: 100% [51%, 100%]; difference "
             "(b) - (a) +100%") in text and "paired by training seed: +100%, +100%" in text
+    # the misses on the real doors (both are a catch: the freezer of the test split), each one that fell back
+    assert "| (a) paper presets in training | catch | 4 | 0 | 4 | 0 | 0 |" in text
+    assert "| (b) real doors in training | catch | 4 | 4 | 0 | 0 | 0 |" in text
+    assert "| (a) paper presets in training | self-closing | 0 | 0 | 0 | 0 | 0 |" in text
+    assert [report.miss({"outcome": o, "final_opening": str(f), "max_opening": str(m)})
+            for o, f, m in (("P", 0.5, 0.55), ("F", 0.0, 0.04), ("P", 0.2, 0.3), ("F", 0.01, 0.11))] == [
+        "stalled", "never opened", "fell back", "fell back"]
