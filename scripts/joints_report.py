@@ -2,6 +2,11 @@
 paper's presets"), exactly the comparisons its plan names, from the test stage's evaluations.
 
     uv run python scripts/joints_report.py experiments/joints [--out docs/policies/joints/report.md]
+    uv run python scripts/joints_report.py experiments/joints --validation [--out docs/policies/joints/val.md]
+
+``--validation``: the validation stage's successes instead (every run's candidates on both draws, from
+``eval/val/<candidate>-<draw>/<run>-<candidate>/episodes.csv``, and each candidate's sum, which the choice is
+made by), before or after the choice.
 
 Reads ``chosen.txt`` and ``eval/test/<chosen>-measured`` and ``-paper`` (each holding one folder per run,
 ``act-<arm>-s<seed>-<chosen>/episodes.csv``, and ``strategy-planned``). For each arm (jp: the paper's presets in
@@ -45,13 +50,53 @@ def _runs(folder: Path, arm: str, chosen: str) -> list[list[dict[str, str]]]:
     return [list(csv.DictReader(path.open(encoding="utf-8"))) for path in runs]
 
 
+def validation_report(work: Path) -> str:
+    """The validation stage's table: each run's successes of each candidate on each draw, and each candidate's
+    sum over every run and both draws (the rule's count); candidates and runs as the folders hold them."""
+    val = work / "eval" / "val"
+    found = sorted(val.glob("*-*/*/episodes.csv"))
+    cells: dict[tuple[str, str, str], tuple[int, int]] = {}
+    for path in found:
+        candidate, draw = path.parent.parent.name.rsplit("-", 1)
+        run = path.parent.name.removesuffix(f"-{candidate}")
+        rows = list(csv.DictReader(path.open(encoding="utf-8")))
+        cells[(run, candidate, draw)] = (sum(r["outcome"] == "S" for r in rows), len(rows))
+    candidates = sorted({c for _, c, _ in cells}, key=lambda c: (c != "mean", -int(c) if c.isdigit() else 0))
+    runs = sorted({r for r, _, _ in cells})
+    head = [f"{c} {d}" for c in candidates for d in DRAWS]
+    lines = ["# The joints ablation: the validation split (every candidate of every run, both draws)", "",
+             "Successes of the episodes evaluated (`S/n`); the rule picks the candidate with the most successes "
+             "summed over every run and both draws (ties to the one listed first: the mean, then 40k, 30k, 20k).", "",
+             "| run | " + " | ".join(head) + " |", "|---|" + "---:|" * len(head)]
+    for run in runs:
+        row = [cells.get((run, c, d)) for c in candidates for d in DRAWS]
+        lines.append(f"| {run} | " + " | ".join(f"{x[0]}/{x[1]}" if x else "-" for x in row) + " |")
+    sums = {c: [cells[k] for k in cells if k[1] == c] for c in candidates}
+    lines += ["", "| candidate | S over every run and both draws | evaluations |", "|---|---:|---:|"]
+    for c in candidates:
+        lines.append(f"| {c} | {sum(x[0] for x in sums[c])}/{sum(x[1] for x in sums[c])} | {len(sums[c])} |")
+    chosen = work / "chosen.txt"
+    lines += ["", f"Chosen: `{chosen.read_text().strip()}` (chosen.txt)." if chosen.is_file() else
+              "No choice yet: the stage chooses once every run is evaluated."]
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("work", type=Path, help="the ablation's folder (scripts/joints_ablation.sh WORK_DIR)")
     parser.add_argument("--out", type=Path, help="write the report (markdown) here")
+    parser.add_argument("--validation", action="store_true", help="the validation stage's table instead")
     args = parser.parse_args(argv)
 
     from rik.outputs import RECORDED, write_text
+
+    if args.validation:
+        text = validation_report(args.work)
+        print(text)
+        if args.out:
+            write_text(args.out, text, RECORDED)
+        return 0
+
     from rik.registry.ids import parse_variant_id
     from rik.registry.load import load_catalog
     from rik.tables import newcombe, rate_text, seed_handle_interval

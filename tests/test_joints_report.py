@@ -70,3 +70,24 @@ def test_the_report_computes_the_planned_comparison(tmp_path: Path, capsys: pyte
     assert [report.miss({"outcome": o, "final_opening": str(f), "max_opening": str(m)})
             for o, f, m in (("P", 0.5, 0.55), ("F", 0.0, 0.04), ("P", 0.2, 0.3), ("F", 0.01, 0.11))] == [
         "stalled", "never opened", "fell back", "fell back"]
+
+
+def test_the_validation_table_sums_what_the_rule_counts(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Each run's candidates on both draws, and each candidate's sum over runs and draws; a run not yet evaluated
+    shows as missing, and no choice is claimed before chosen.txt."""
+    spec = importlib.util.spec_from_file_location("joints_report", ROOT / "scripts" / "joints_report.py")
+    report = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(report)
+    for run, outcomes in (("act-jp-s0", ["S", "S", "F", "P"]), ("act-jm-s0", ["S", "F", "F", "F"])):
+        for candidate in ("mean", "40000"):
+            for draw in ("measured", "paper"):
+                _episodes(tmp_path / f"eval/val/{candidate}-{draw}/{run}-{candidate}/episodes.csv", outcomes)
+    _episodes(tmp_path / "eval/val/mean-paper/act-jp-s1-mean/episodes.csv", ["S"] * 4)
+    assert report.main([str(tmp_path), "--validation", "--out", str(tmp_path / "val.md")]) == 0
+    text = (tmp_path / "val.md").read_text()
+    assert "| act-jp-s0 | 2/4 | 2/4 | 2/4 | 2/4 |" in text and "| act-jm-s0 | 1/4 | 1/4 | 1/4 | 1/4 |" in text
+    assert "| act-jp-s1 | - | 4/4 | - | - |" in text
+    assert "| mean | 10/20 | 5 |" in text and "| 40000 | 6/16 | 4 |" in text and "No choice yet" in text
+    (tmp_path / "chosen.txt").write_text("mean\n")
+    assert report.main([str(tmp_path), "--validation"]) == 0
+    assert "Chosen: `mean`" in capsys.readouterr().out
