@@ -15,8 +15,8 @@ interval, each seed's rate, and a 95 % interval resampling seeds and handles; pe
 The primary comparison: on the measured draw, the doors' S of jm against jp, the difference of the pooled rates
 with Newcombe's interval and the paired seed differences. Secondary: every front; each arm's doors on the paper
 draw against the measured one; the misses on the real test doors by the door's mechanism class (catch,
-self-closing, tilted, plain) and by what the opening did (:func:`miss`). Writes nothing but ``--out``; prints the
-report.
+self-closing, tilted, plain) and by what the opening did (:func:`miss`), and the same per front layout. Writes
+nothing but ``--out``; prints the report.
 """
 
 from __future__ import annotations
@@ -171,6 +171,15 @@ def main(argv: list[str] | None = None) -> int:
         for mechanism, rows in by_class.items():
             missed = [miss(r) for r in rows if r["outcome"] != "S"]
             lines.append(f"| {name} | {mechanism} | {len(rows)} | {len(rows) - len(missed)} | "
+                         + " | ".join(str(missed.count(m)) for m in MISSES) + " |")
+    lines += ["", "## Misses by front layout (the measured draw, every front kind)", "",
+              "| arm | layout | episodes | S | " + " | ".join(MISSES) + " |",
+              "|---|---|---:|---:|" + "---:|" * len(MISSES)]
+    for arm, name in ARMS.items():
+        for lay in LAYOUTS:
+            rows = [r for run in runs[(arm, "measured")] for r in run if layout(r) == lay]
+            missed = [miss(r) for r in rows if r["outcome"] != "S"]
+            lines.append(f"| {name} | {lay} | {len(rows)} | {len(rows) - len(missed)} | "
                          + " | ".join(str(missed.count(m)) for m in MISSES) + " |")
     lines.append("")
     planned = args.work / "eval" / "test" / f"{chosen}-measured" / "strategy-planned" / "episodes.csv"

@@ -67,6 +67,8 @@ def test_the_report_computes_the_planned_comparison(tmp_path: Path, capsys: pyte
     assert "| (a) paper presets in training | catch | 4 | 0 | 4 | 0 | 0 |" in text
     assert "| (b) real doors in training | catch | 4 | 4 | 0 | 0 | 0 |" in text
     assert "| (a) paper presets in training | self-closing | 0 | 0 | 0 | 0 | 0 |" in text
+    assert "| (a) paper presets in training | door-left | 2 | 0 | 2 | 0 | 0 |" in text  # per layout, every kind
+    assert "| (b) real doors in training | flap-lift-up | 2 | 2 | 0 | 0 | 0 |" in text
     assert [report.miss({"outcome": o, "final_opening": str(f), "max_opening": str(m)})
             for o, f, m in (("P", 0.5, 0.55), ("F", 0.0, 0.04), ("P", 0.2, 0.3), ("F", 0.01, 0.11))] == [
         "stalled", "never opened", "fell back", "fell back"]
