@@ -50,6 +50,12 @@ def _runs(folder: Path, arm: str, chosen: str) -> list[list[dict[str, str]]]:
     return [list(csv.DictReader(path.open(encoding="utf-8"))) for path in runs]
 
 
+def _miss_cells(rows: list[dict[str, str]]) -> str:
+    """A miss table's cells for some episodes: their number, the successes and each :data:`MISSES` class's count."""
+    missed = [miss(r) for r in rows if r["outcome"] != "S"]
+    return f"{len(rows)} | {len(rows) - len(missed)} | " + " | ".join(str(missed.count(m)) for m in MISSES)
+
+
 def validation_report(work: Path) -> str:
     """The validation stage's table: each run's successes of each candidate on each draw, and each candidate's
     sum over every run and both draws (the rule's count); candidates and runs as the folders hold them."""
@@ -169,18 +175,14 @@ def main(argv: list[str] | None = None) -> int:
                 if preset in catalog.preset_splits:  # a real door (the draw's doors all are)
                     by_class[catalog.presets[preset].hinge.mechanism()].append(r)
         for mechanism, rows in by_class.items():
-            missed = [miss(r) for r in rows if r["outcome"] != "S"]
-            lines.append(f"| {name} | {mechanism} | {len(rows)} | {len(rows) - len(missed)} | "
-                         + " | ".join(str(missed.count(m)) for m in MISSES) + " |")
+            lines.append(f"| {name} | {mechanism} | {_miss_cells(rows)} |")
     lines += ["", "## Misses by front layout (the measured draw, every front kind)", "",
               "| arm | layout | episodes | S | " + " | ".join(MISSES) + " |",
               "|---|---|---:|---:|" + "---:|" * len(MISSES)]
     for arm, name in ARMS.items():
         for lay in LAYOUTS:
             rows = [r for run in runs[(arm, "measured")] for r in run if layout(r) == lay]
-            missed = [miss(r) for r in rows if r["outcome"] != "S"]
-            lines.append(f"| {name} | {lay} | {len(rows)} | {len(rows) - len(missed)} | "
-                         + " | ".join(str(missed.count(m)) for m in MISSES) + " |")
+            lines.append(f"| {name} | {lay} | {_miss_cells(rows)} |")
     lines.append("")
     planned = args.work / "eval" / "test" / f"{chosen}-measured" / "strategy-planned" / "episodes.csv"
     if planned.is_file():
