@@ -30,6 +30,9 @@ resolution: 64
 shard_episodes: 2
 """
 BUILD_META = "meta/rik_build.json"
+RAY_PROBE = ("import sys\nfrom rik.cli.app import main\nsys.argv = ['rik', *sys.argv[1:]]\n"
+             "try:\n    main()\nfinally:\n    print('RAY' if 'ray' in sys.modules else 'NO-RAY')\n")
+"""``python -c RAY_PROBE ARGS``: ``rik ARGS``, then a last line on stdout saying whether Ray was imported."""
 
 
 def rik_cmd(*args: str) -> list[str]:
@@ -67,14 +70,22 @@ def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory: pytest.TempPathFactory, spec_file: Path, variants: Path) -> tuple[Path, str]:
-    """The spec built once with two local worker processes: (dataset folder, the build's stdout)."""
+    """The spec built once with two local worker processes: (dataset folder, the build's stdout, whose last line
+    says whether the build's process imported Ray: :data:`RAY_PROBE`)."""
     out = tmp_path_factory.mktemp("build") / "ds"
-    r = subprocess.run(rik_cmd("dataset", "build", str(spec_file), "--out", str(out), "-j", "2", "--variants",
-                               str(variants)), capture_output=True, text=True, timeout=900)
+    r = subprocess.run([sys.executable, "-c", RAY_PROBE, "dataset", "build", str(spec_file), "--out", str(out), "-j",
+                        "2", "--variants", str(variants)], capture_output=True, text=True, timeout=900,
+                       env={**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")})
     assert r.returncode == 0, r.stdout + r.stderr
     assert "Traceback" not in r.stderr
     assert "Copy data and videos" not in r.stderr and "Map:" not in r.stderr  # lerobot's bars stay off rik's
     return out, r.stdout
+
+
+def test_a_local_build_never_imports_ray(built) -> None:
+    """Ray is optional: a build on local processes (its record, render and shard stages) never imports it (this
+    module's build, run by :data:`RAY_PROBE`; the Ray engine's own test is tests/test_dataset_ray.py)."""
+    assert built[1].strip().splitlines()[-1] == "NO-RAY"
 
 
 def test_the_web_apps_episodes_page_lists_the_built_dataset_with_its_numbers(built, tmp_path: Path) -> None:

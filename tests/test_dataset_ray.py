@@ -122,21 +122,3 @@ def test_ray_build_survives_a_lost_node_and_equals_the_local_build(cluster, tmp_
 
     ds = LeRobotDataset("local/rik-ray", root=tmp_path / "ray", video_backend="pyav")
     assert ds.meta.total_episodes == 4 and "observation.images.front" in ds.meta.features
-
-
-def test_no_ray_import_without_ray(tmp_path: Path) -> None:
-    """Ray is optional: a plan with its timed sample (record, render and a shard, as a build runs them) never
-    imports it."""
-    import subprocess
-    import sys
-
-    (tmp_path / "spec.yaml").write_text(SPEC)
-    probe = ("import sys\nfrom rik.cli.app import main\nsys.argv = ['rik', *sys.argv[1:]]\n"
-             "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
-             "print('RAY' if 'ray' in sys.modules else 'NO-RAY')\n")
-    run = subprocess.run([sys.executable, "-c", probe, "dataset", "plan", "spec.yaml", "--sample", "1",
-                          "--variants", str(tmp_path / "variants")], cwd=tmp_path, capture_output=True, text=True,
-                         env={**os.environ, "MUJOCO_GL": "egl"})
-    assert run.returncode == 0, run.stderr[-2000:]
-    assert "render:sim" in run.stdout
-    assert run.stdout.strip().splitlines()[-1] == "NO-RAY"

@@ -49,7 +49,7 @@ def loop(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
                '"ACTION": "MEAN_STD"}',
                "--env.type=rik", "--env.split=val", "--env.handle_types=knob", "--env.presets=smooth",
                f"--env.episode_length={EPISODE_LENGTH}", f"--env.variants_dir={variants}",
-               "--steps=4", "--batch_size=4", "--env_eval_freq=2", "--eval.n_episodes=1", "--eval.batch_size=1",
+               "--steps=4", "--batch_size=4", "--env_eval_freq=4", "--eval.n_episodes=1", "--eval.batch_size=1",
                "--save_freq=4", "--log_freq=2", "--output_dir=train", "--wandb.enable=false", "--num_workers=0",
                cwd=root)
     assert res.returncode == 0, res.stderr[-3000:]
