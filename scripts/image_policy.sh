@@ -22,7 +22,7 @@
 set -euo pipefail
 WORK=${1:-experiments/pixels}
 DEMOS=${DEMOS:-360}            # drawn demonstrations (seeds 0..DEMOS-1)
-STEPS=${STEPS:-20000}          # training steps; a checkpoint every STEPS/5
+STEPS=${STEPS:-20000}          # training steps; the candidates are every STEPS/5 (save_every saves more often)
 SEEDS=${SEEDS:-0 1}            # training seeds
 BATCH=${BATCH:-32}
 VAL_PER_CELL=${VAL_PER_CELL:-5}  # validation episodes per handle type x preset cell (seeds 3000..)
@@ -43,6 +43,11 @@ mkdir -p "$WORK/specs"
 cd "$WORK"
 stage() { [[ " $STAGES " == *" $1 "* ]]; }
 steps() { local k; for k in 1 2 3 4 5; do echo $(( STEPS * k / 5 )); done; }  # the candidates: each saved fifth
+save_every() {  # lerobot-train's --save_freq: a quarter of a fifth where that divides (a session that ends mid-run
+  # loses less; resuming starts at the last save), else the fifth; the candidates stay the fifths
+  local fifth=$(( STEPS / 5 > 1 ? STEPS / 5 : 1 ))
+  if [ $(( fifth % 4 )) -eq 0 ]; then echo $(( fifth / 4 )); else echo "$fifth"; fi
+}
 runs() { local seed; for seed in $SEEDS; do echo "act-${1:-$ARM}-s$seed"; done; }  # runs [ARM]
 eval_dir() { case ${1:-$ARM} in px) echo eval ;; px-rr) echo eval-rr ;; esac; }  # eval_dir [ARM]: an arm's evaluations
 chosen_file() { case ${1:-$ARM} in px) echo chosen.txt ;; px-rr) echo chosen-rr.txt ;; esac; }
@@ -111,7 +116,7 @@ if stage train; then
     rm -rf "runs/$run"
     uv run --project "$REPO" --locked lerobot-train --dataset.repo_id="local/rik-$ARM" --dataset.root="ds-$ARM" \
       --policy.push_to_hub=false --policy.device="$DEVICE" --steps="$STEPS" --batch_size="$BATCH" --log_freq=100 \
-      --save_freq=$(( STEPS / 5 > 1 ? STEPS / 5 : 1 )) --env_eval_freq=1000000 --output_dir="runs/$run" \
+      --save_freq="$(save_every)" --env_eval_freq=1000000 --output_dir="runs/$run" \
       --wandb.enable=false --num_workers="$LOADERS" --seed="$seed" "${ACT[@]}" \
       --policy.pretrained_backbone_weights=null --dataset.image_transforms.enable=true > "train-$run.log" 2>&1 \
       || failed "train-$run.log"
