@@ -44,6 +44,32 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     faulthandler.cancel_dump_traceback_later()
 
 
+CPU_LOG = os.environ.get("RIK_TEST_CPU_LOG")
+"""A folder (optional) where each test process appends a line per test: its node id, the CPU-s of the test process
+itself (every thread) and of the child processes it waited for, and the wall-clock s; one file per process. Where
+the suite's CPU goes (docs/benchmarks.md, "The test suite's CPU"): ``RIK_TEST_CPU_LOG=/tmp/cpu bash scripts/test.sh``."""
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None):
+    if not CPU_LOG:
+        yield
+        return
+    import resource
+    import time
+
+    def cpu() -> tuple[float, float]:
+        own, waited = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+        return own.ru_utime + own.ru_stime, waited.ru_utime + waited.ru_stime
+
+    (own0, waited0), start = cpu(), time.monotonic()
+    yield
+    (own1, waited1), wall = cpu(), time.monotonic() - start
+    Path(CPU_LOG).mkdir(parents=True, exist_ok=True)
+    with open(Path(CPU_LOG) / f"{os.getpid()}.tsv", "a") as log:
+        log.write(f"{item.nodeid}\t{own1 - own0:.2f}\t{waited1 - waited0:.2f}\t{wall:.2f}\n")
+
+
 BROWSER_TEST_S = 600
 """Bound of a test that drives a browser or a window, s (they take 3-30 s on an idle 2-core machine): past it the
 test fails with every thread's stack (pytest-timeout), also where a call of Playwright's has no timeout of its
