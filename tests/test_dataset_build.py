@@ -30,9 +30,25 @@ resolution: 64
 shard_episodes: 2
 """
 BUILD_META = "meta/rik_build.json"
-RAY_PROBE = ("import sys\nfrom rik.cli.app import main\nsys.argv = ['rik', *sys.argv[1:]]\n"
-             "try:\n    main()\nfinally:\n    print('RAY' if 'ray' in sys.modules else 'NO-RAY')\n")
-"""``python -c RAY_PROBE ARGS``: ``rik ARGS``, then a last line on stdout saying whether Ray was imported."""
+RAY_WATCH = """import os, sys
+mark = os.environ["RIK_TEST_RAY_MARK"]
+with open(mark + ".started", "a") as log:
+    log.write(f"{os.getpid()}\\n")
+
+
+class RayWatch:
+    def find_spec(self, name, path=None, target=None):
+        if name == "ray" or name.startswith("ray."):
+            with open(mark, "a") as log:
+                log.write(f"{os.getpid()} {name}\\n")
+        return None
+
+
+sys.meta_path.insert(0, RayWatch())
+"""
+"""A ``sitecustomize`` for the build's processes (on ``PYTHONPATH``, so the spawned workers start it too): each notes
+its pid in ``$RIK_TEST_RAY_MARK.started`` and, if it ever imports Ray, its pid and the module in
+``$RIK_TEST_RAY_MARK`` (an import hook: a worker that ends without running exit handlers is still seen)."""
 
 
 def rik_cmd(*args: str) -> list[str]:
@@ -69,23 +85,38 @@ def variants(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory: pytest.TempPathFactory, spec_file: Path, variants: Path) -> tuple[Path, str]:
-    """The spec built once with two local worker processes: (dataset folder, the build's stdout, whose last line
-    says whether the build's process imported Ray: :data:`RAY_PROBE`)."""
+def ray_watch(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder holding :data:`RAY_WATCH` as ``sitecustomize.py``, where :func:`built`'s processes note themselves
+    (``imported.started``) and any import of Ray (``imported``)."""
+    watch = tmp_path_factory.mktemp("ray-watch")
+    (watch / "sitecustomize.py").write_text(RAY_WATCH)
+    return watch
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory: pytest.TempPathFactory, spec_file: Path, variants: Path, ray_watch: Path
+          ) -> tuple[Path, str]:
+    """The spec built once with two local worker processes: (dataset folder, the build's stdout). Its processes run
+    :data:`RAY_WATCH` from :func:`ray_watch`."""
     out = tmp_path_factory.mktemp("build") / "ds"
-    r = subprocess.run([sys.executable, "-c", RAY_PROBE, "dataset", "build", str(spec_file), "--out", str(out), "-j",
-                        "2", "--variants", str(variants)], capture_output=True, text=True, timeout=900,
-                       env={**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")})
+    watch = ray_watch
+    path = os.pathsep.join([str(watch), *filter(None, [os.environ.get("PYTHONPATH")])])
+    r = subprocess.run(rik_cmd("dataset", "build", str(spec_file), "--out", str(out), "-j", "2", "--variants",
+                               str(variants)), capture_output=True, text=True, timeout=900,
+                       env={**os.environ, "PYTHONPATH": path, "RIK_TEST_RAY_MARK": str(watch / "imported")})
     assert r.returncode == 0, r.stdout + r.stderr
     assert "Traceback" not in r.stderr
     assert "Copy data and videos" not in r.stderr and "Map:" not in r.stderr  # lerobot's bars stay off rik's
     return out, r.stdout
 
 
-def test_a_local_build_never_imports_ray(built) -> None:
-    """Ray is optional: a build on local processes (its record, render and shard stages) never imports it (this
-    module's build, run by :data:`RAY_PROBE`; the Ray engine's own test is tests/test_dataset_ray.py)."""
-    assert built[1].strip().splitlines()[-1] == "NO-RAY"
+def test_a_local_build_never_imports_ray(built, ray_watch: Path) -> None:
+    """Ray is optional: a build on local processes never imports it, neither the command's process nor the workers
+    that record, render and shard (this module's build, watched by :data:`RAY_WATCH`; the Ray engine's own test is
+    tests/test_dataset_ray.py)."""
+    started = (ray_watch / "imported.started").read_text().split()
+    assert len(set(started)) >= 3, started  # the command and its two workers ran the watch
+    assert not (ray_watch / "imported").exists(), (ray_watch / "imported").read_text()
 
 
 def test_the_web_apps_episodes_page_lists_the_built_dataset_with_its_numbers(built, tmp_path: Path) -> None:
