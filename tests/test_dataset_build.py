@@ -99,11 +99,10 @@ def built(tmp_path_factory: pytest.TempPathFactory, spec_file: Path, variants: P
     """The spec built once with two local worker processes: (dataset folder, the build's stdout). Its processes run
     :data:`RAY_WATCH` from :func:`ray_watch`."""
     out = tmp_path_factory.mktemp("build") / "ds"
-    watch = ray_watch
-    path = os.pathsep.join([str(watch), *filter(None, [os.environ.get("PYTHONPATH")])])
+    path = os.pathsep.join([str(ray_watch), *filter(None, [os.environ.get("PYTHONPATH")])])
     r = subprocess.run(rik_cmd("dataset", "build", str(spec_file), "--out", str(out), "-j", "2", "--variants",
                                str(variants)), capture_output=True, text=True, timeout=900,
-                       env={**os.environ, "PYTHONPATH": path, "RIK_TEST_RAY_MARK": str(watch / "imported")})
+                       env={**os.environ, "PYTHONPATH": path, "RIK_TEST_RAY_MARK": str(ray_watch / "imported")})
     assert r.returncode == 0, r.stdout + r.stderr
     assert "Traceback" not in r.stderr
     assert "Copy data and videos" not in r.stderr and "Map:" not in r.stderr  # lerobot's bars stay off rik's
