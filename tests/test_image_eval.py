@@ -145,8 +145,9 @@ def image_policy(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_rik_eval_renders_only_the_frames_an_image_policy_reads(image_policy: Path, bow_variants: Path,
                                                                  tmp_path: Path) -> None:
     """One 20-step episode of rik eval (the train split's draw of seed 22 is the bow drawer), rendered every step
-    and then only where the policy reads: 22 observations rendered against 6 (the start, every fifth step, and the
-    vector environment's reset after the last step, in both), and the same episode to the last joint of the robot."""
+    and then only where the policy reads: 21 observations rendered against 5 (the start and every fifth step; the
+    vector environment resets a finished episode on its next step, which never comes, so no variant is drawn or
+    rendered after the last step: RikEnvConfig.create_envs), and the same episode to the last joint of the robot."""
     from rik.evaluation import evaluate
 
     variants = tmp_path / "variants"
@@ -169,7 +170,12 @@ def test_rik_eval_renders_only_the_frames_an_image_policy_reads(image_policy: Pa
         ends[mode] = (env.scene.data.qpos.copy(), row["final_opening"], row["sum_reward"])
         evaluate._CONTEXT.clear()  # the next mode's environment and policy made anew
         vec.close()
-    assert rendered == {"every step": 22, "read only": 6}
+    assert rendered == {"every step": 21, "read only": 5}
+    # and no variant drawn beyond the environment's first (seed 0 of its draw, built as it is made) and the episode's
+    from rik.episodes.draw import Draw
+
+    first = Draw("train", ("two_point",), ("normal",), ("drawer",), "paper").episode(builtin_catalog(), 0).variant
+    assert {p.name for p in variants.iterdir() if p.is_dir() and not p.name.startswith(".")} == {BOW, first}
     np.testing.assert_array_equal(ends["every step"][0], ends["read only"][0])
     assert ends["every step"][1:] == ends["read only"][1:]
 

@@ -194,6 +194,20 @@ def test_gymnasium_env_passes_the_checker(variants: Path) -> None:
     env.close()
 
 
+def test_an_environment_that_draws_builds_no_variant_before_its_first_reset(tmp_path: Path) -> None:
+    """A state-only environment drawing from a split builds the variant of each episode at its reset, none as it is
+    made (it used to build its draw's seed 0, which no episode need use); asked for its scene before, it says why."""
+    from rik.envs.open_front import OpenFrontEnv
+
+    variants = tmp_path / "variants"
+    env = OpenFrontEnv(split="train", handle_types=("two_point",), presets=("normal",), variants_dir=str(variants))
+    assert not variants.exists() or not [p for p in variants.iterdir() if p.is_dir() and p.name[0] != "."]
+    with pytest.raises(RikError, match=r"no scene before its first reset\(\)"):
+        env.scene  # noqa: B018
+    assert env.observation_space["agent_pos"].shape == (11,)
+    env.close()
+
+
 def test_policy_operator_plugs_into_the_recorder(variants: Path) -> None:
     from rik.episodes.operators import PolicyOperator
 

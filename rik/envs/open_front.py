@@ -142,8 +142,12 @@ class OpenFrontEnv(gym.Env):
         """Observations whose images were rendered (every camera and stream of the contract), since the start."""
         self.last_result: dict[str, Any] | None = None
         self._episode: dict[str, Any] = {"seed": -1}
-        first = variant if variant is not None else self._draw.episode(self._catalog, 0).variant  # type: ignore[union-attr]
-        self.scene = self._scene(first, front)
+        self._current: SimScene | None = None
+        if self._draw is None or self.io.streams:  # a fixed variant, or the first of the draw to check the cameras
+            first = self._draw.episode(self._catalog, 0).variant if self._draw is not None else str(variant)
+            self.scene = self._scene(first, front)
+        # else the first reset builds the variant it draws: one built now (the draw's seed 0) served no episode, and
+        # cost each evaluation worker a variant and perhaps a handle's CoACD decomposition (2026-11-29)
         if self.io.streams:
             import mujoco
 
@@ -188,6 +192,18 @@ class OpenFrontEnv(gym.Env):
         return self.io.action_frame == "gripper"
 
     # ---- scenes and images ----------------------------------------------------------------------------------
+    @property
+    def scene(self) -> SimScene:
+        """The scene of the current episode (of the fixed variant before the first reset; an environment that draws
+        its variants has none before it)."""
+        if self._current is None:
+            raise RikError("the environment has no scene before its first reset(): it draws each episode's variant")
+        return self._current
+
+    @scene.setter
+    def scene(self, scene: SimScene) -> None:
+        self._current = scene
+
     def _scene(self, variant: str, front: str | None) -> SimScene:
         from rik.combinator.build import ensure_variant
         from rik.sim.build import build_scene

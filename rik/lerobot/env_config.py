@@ -164,6 +164,26 @@ class RikEnvConfig(EnvConfig):
     def gym_kwargs(self) -> dict:
         return {**env_kwargs(self), "max_episode_steps": self.episode_length}
 
+    def create_envs(self, n_envs: int, use_async_envs: bool = False) -> dict[str, dict[int, gym.vector.VectorEnv]]:
+        """The vector environment of ``lerobot-eval`` and ``lerobot-train``'s evaluation, as LeRobot's default but
+        with Gymnasium's autoreset on the next step and each environment frozen once its episode ends
+        (:class:`lerobot.envs.utils.FreezeAfterEpisodeEnd`, LeRobot's own, as its LIBERO environment has it).
+        LeRobot's default resets a finished environment in the same step, without a seed: rik's environment then
+        drew and built a variant that no episode used (for 4 episodes, 5 unused variants and a handle's CoACD
+        decomposition, 2026-11-29). A rollout's explicit reset still starts each episode."""
+        from lerobot.envs.utils import freeze_after_episode_end
+
+        def make_one() -> gym.Env:
+            return gym.make(self.gym_id, disable_env_checker=self.disable_env_checker, **self.gym_kwargs)
+
+        make = [freeze_after_episode_end(make_one) for _ in range(n_envs)]
+        mode = gym.vector.AutoresetMode.NEXT_STEP
+        if use_async_envs and n_envs > 1:
+            vec: gym.vector.VectorEnv = gym.vector.AsyncVectorEnv(make, autoreset_mode=mode, context="forkserver")
+        else:
+            vec = gym.vector.SyncVectorEnv(make, autoreset_mode=mode)
+        return {self.type: {0: vec}}
+
 
 def _catalog() -> Any:
     from rik.registry.load import load_catalog
