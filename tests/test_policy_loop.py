@@ -23,6 +23,10 @@ CAT = builtin_catalog()
 BIN = Path(sys.executable).parent
 DRAW = ("--types", "knob", "--presets", "smooth")
 EPISODE_LENGTH = "30"
+EVAL_SEED = 1016
+"""The first seed of the episodes both tools run on the test split's knobs: seeds 1016-1019 draw the knobs
+``bell-34`` and ``hexagon-28``; from 1000 they drew ``fluted-34`` too, whose CoACD decomposition (7 CPU-s) no other
+test needs."""
 
 
 def _run(*cmd: str, cwd: Path) -> subprocess.CompletedProcess[str]:
@@ -76,14 +80,14 @@ def test_rik_eval_and_lerobot_eval_run_the_same_episodes(loop: dict[str, Path], 
     res = _run(str(BIN / "lerobot-eval"), f"--policy.path={policy}", "--env.type=rik", "--env.split=test",
                "--env.handle_types=knob", "--env.presets=smooth,high", f"--env.episode_length={EPISODE_LENGTH}",
                f"--env.variants_dir={loop['variants']}", "--eval.n_episodes=4", "--eval.batch_size=1",
-               "--seed=1000", "--output_dir=lerobot-eval", "--policy.device=cpu", cwd=root)
+               f"--seed={EVAL_SEED}", "--output_dir=lerobot-eval", "--policy.device=cpu", cwd=root)
     assert res.returncode == 0, res.stderr[-3000:]
     assert "guessed" not in res.stderr  # the contract was read from the policy folder
     theirs = json.loads((root / "lerobot-eval" / "eval_info.json").read_text())
     out = root / "rik-eval"
     r = rik("eval", str(policy), "--split", "test", *DRAW[:2], "--presets", "smooth,high", "-n", "2",
-            "--episode-length", EPISODE_LENGTH, "--seed", "1000", "--workers", "1", "--videos", "1", "--out", str(out),
-            "--variants", str(loop["variants"]))
+            "--episode-length", EPISODE_LENGTH, "--seed", str(EVAL_SEED), "--workers", "1", "--videos", "1", "--out",
+            str(out), "--variants", str(loop["variants"]))
     assert r.code == 0, r.err
     assert "note:" not in r.out
     ours = json.loads((out / "eval_info.json").read_text())
@@ -93,7 +97,7 @@ def test_rik_eval_and_lerobot_eval_run_the_same_episodes(loop: dict[str, Path], 
     assert ours["overall"]["n_episodes"] == theirs["overall"]["n_episodes"] == 4
     assert set(theirs["overall"]) - {"predicted_video_paths"} <= set(ours["overall"])
     rows = ours["rik"]["per_episode"]
-    assert [r["seed"] for r in rows] == [1000, 1001, 1002, 1003]
+    assert [r["seed"] for r in rows] == [EVAL_SEED + k for k in range(4)]
     assert [r["preset"] for r in rows] == ["smooth", "high", "smooth", "high"]  # seeds cycle through the cells
     from rik.registry.splits import split_handles
 
