@@ -45,6 +45,16 @@ def work(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root
 
 
+def _export_script(work: Path, out: Path, shard_episodes: int) -> str:
+    """``python -c`` code exporting :func:`work`'s episodes to ``out`` with :data:`SPEC` in ``shard_episodes``-episode
+    shards, as :func:`dataset` does in this process."""
+    return (f"from pathlib import Path; from rik.registry import load_catalog; "
+            f"from rik.exporters.lerobot_export import export_lerobot; from rik.exporters.spec import ExportSpec; "
+            f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(out)!r}), "
+            f"ExportSpec({REPO!r}, shard_episodes={shard_episodes}, **{SPEC!r}), "
+            f"renders=Path({str(work / 'renders')!r}), variants=Path({str(work / 'variants')!r}))")
+
+
 @pytest.fixture(scope="module")
 def dataset(work: Path) -> Path:
     out = work / "ds"
@@ -153,12 +163,7 @@ def _frames(root: Path) -> dict[str, np.ndarray]:
 @slow
 def test_killed_export_resumes_to_the_same_dataset(dataset: Path, work: Path, tmp_path: Path) -> None:
     killed = tmp_path / "killed"
-    script = (f"from pathlib import Path; from rik.registry import load_catalog; "
-              f"from rik.exporters.lerobot_export import export_lerobot; from rik.exporters.spec import ExportSpec; "
-              f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(killed)!r}), "
-              f"ExportSpec({REPO!r}, shard_episodes=1, **{SPEC!r}), renders=Path({str(work / 'renders')!r}), "
-              f"variants=Path({str(work / 'variants')!r}))")
-    proc = subprocess.Popen([sys.executable, "-c", script], env=os.environ.copy())
+    proc = subprocess.Popen([sys.executable, "-c", _export_script(work, killed, 1)], env=os.environ.copy())
     first = tmp_path / "killed.partial" / "shards" / "shard-0000" / "DONE"
     deadline = time.time() + 300
     while not first.exists() and proc.poll() is None and time.time() < deadline:
@@ -316,11 +321,7 @@ def fresh_export(dataset: Path, work: Path, tmp_path_factory: pytest.TempPathFac
     it differs in what could leak into the bytes: the hash seed (this process's is random; set orders differ) and
     the leftovers in freshly allocated memory (``MALLOC_PERTURB_``; x264's macroblock tree once read them)."""
     out = tmp_path_factory.mktemp("fresh-export") / "ds"
-    script = (f"import sys; from pathlib import Path; from rik.registry import load_catalog; "
-              f"from rik.exporters.lerobot_export import export_lerobot; from rik.exporters.spec import ExportSpec; "
-              f"export_lerobot(load_catalog(), [Path({str(work / 'episodes')!r})], Path({str(out)!r}), "
-              f"ExportSpec({REPO!r}, shard_episodes=2, **{SPEC!r}), renders=Path({str(work / 'renders')!r}), "
-              f"variants=Path({str(work / 'variants')!r})); import gymnasium; "
+    script = (_export_script(work, out, 2) + "; import sys, gymnasium; "
               "print('rik.envs.open_front' in sys.modules, 'rik/OpenFront-v0' in gymnasium.registry)")
     env = {**os.environ, "PYTHONHASHSEED": "1", "MALLOC_PERTURB_": "85"}
     done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=600)
