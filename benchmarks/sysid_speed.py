@@ -8,7 +8,10 @@ one warm-up, in one process:
 - preprocess: window choice, delay estimate and the final smoothing of every trial
   (:func:`rik.sysid.discover.prepare_all`);
 - fit and select, singles: the baseline and the 9 effect families (grid and refinement each) and the selection;
-- fit and select, with pairs: the above plus the round of pairs of effects;
+- fit and select, with pairs: the above plus the round of pairs of effects; and the same again with each
+  candidate shape of the hyperparameter search solved as one whole weighted least-squares problem (how it was
+  before 2026-11-29) instead of fitted to what the fixed columns leave over (one QR of them per search,
+  :func:`rik.sysid.fit._projected_rss`), side by side: the ratio is that change's speed-up;
 - discover without and with re-simulation (MuJoCo multiple shooting of the held-out trial with the baseline and
   the extended joint), the difference being the re-simulation (small: below the timing noise when nothing is
   found, since then only the baseline is re-simulated);
@@ -22,6 +25,7 @@ Run: ``uv run python benchmarks/sysid_speed.py [--repeats 3]``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import tempfile
 import time
 from pathlib import Path
@@ -36,6 +40,19 @@ def _best(fn, repeats: int) -> tuple[float, object]:
         out = fn()
         best = min(best, time.perf_counter() - start)
     return best, out
+
+
+@contextlib.contextmanager
+def _whole_solves():
+    """Within it, the hyperparameter search solves each candidate's whole system (the former way)."""
+    from rik.sysid import fit
+
+    projected = fit._projected_rss
+    fit._projected_rss = lambda base, y, w: (lambda z: fit._solve(np.hstack([base, z]), y, w)[1])
+    try:
+        yield
+    finally:
+        fit._projected_rss = projected
 
 
 def main() -> None:
@@ -72,6 +89,9 @@ def main() -> None:
                 return select_effects(split_rows(rows, prepared))
 
             t_pairs, selection = _best(with_pairs, args.repeats)
+            with _whole_solves():
+                t_whole, whole = _best(with_pairs, args.repeats)
+            same = whole.final.kinds == selection.final.kinds if selection.found else not whole.found
             t_all, found = _best(lambda t=trials: discover(t), args.repeats)
             t_plain, _ = _best(lambda t=trials: discover(t, resimulate=False), args.repeats)
             t_report, _ = _best(lambda f=found, k=name: write_report(f, Path(tmp) / f"report-{k}"), args.repeats)
@@ -83,6 +103,8 @@ def main() -> None:
             print(f"  preprocess      {t_prep:7.3f} s")
             print(f"  fit and select  {t_fit:7.3f} s   (single effects)")
             print(f"  ... with pairs  {t_pairs:7.3f} s   (single effects, then pairs)")
+            print(f"  ... whole solves {t_whole:6.3f} s   (each candidate's whole system: {t_whole / t_pairs:.1f}x "
+                  f"the time; same choice: {same})")
             print(f"  discover, no re-simulation {t_plain:7.3f} s")
             print(f"  discover total  {t_all:7.3f} s   (preprocess + fit + select + re-simulate)")
             print(f"  report          {t_report:7.3f} s")

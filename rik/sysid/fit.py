@@ -29,7 +29,7 @@ value the coefficients are a linear least-squares solution).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -309,15 +309,45 @@ def _solve(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, flo
     return theta, float(r @ r)
 
 
+def _projected_rss(base: np.ndarray, y: np.ndarray, w: np.ndarray) -> Callable[[np.ndarray], float]:
+    """``rss(z)``: the weighted residual sum of squares of ``y`` on the columns of ``base`` and ``z``, as
+    :func:`_solve` gives it, for many ``z`` beside one ``base``: ``base`` is factorised once (QR of its weighted,
+    scaled columns) and each ``z`` fitted to what ``base`` leaves over. A column of ``z`` that ``base`` already
+    spans (a remainder below 1e-9 of its size) adds nothing, as :func:`_solve`'s rank cut-off has it. Where ``base``
+    itself is rank-deficient, each call solves the whole system."""
+    root = np.sqrt(w)
+    bw, yw = base * root[:, None], y * root
+    scale = np.maximum(np.abs(bw).max(axis=0), 1e-12)
+    q, r = np.linalg.qr(bw / scale)
+    diagonal = np.abs(np.diag(r))
+    if diagonal.size and diagonal.min() <= 1e-9 * diagonal.max():
+        return lambda z: _solve(np.hstack([base, z]), y, w)[1]
+    y_rest = yw - q @ (q.T @ yw)
+
+    def rss(z: np.ndarray) -> float:
+        zw = z * root[:, None]
+        z_rest = zw - q @ (q.T @ zw)
+        size = np.linalg.norm(zw, axis=0)
+        z_rest = z_rest[:, np.linalg.norm(z_rest, axis=0) > 1e-9 * np.maximum(size, 1e-300)]
+        if z_rest.shape[1] == 0:
+            return float(y_rest @ y_rest)
+        z_scale = np.abs(z_rest).max(axis=0)
+        coef, *_ = np.linalg.lstsq(z_rest / z_scale, y_rest, rcond=None)
+        rest = y_rest - (z_rest / z_scale) @ coef
+        return float(rest @ rest)
+
+    return rss
+
+
 def best_hyper(rows: Rows, family: Family, fixed: Sequence[Term] = ()) -> float:
     """The hyperparameter of ``family`` (added to the ``fixed`` terms) minimising the training RSS: grid, then
     bounded refinement in log space."""
     from scipy.optimize import minimize_scalar
 
-    base = design(rows, fixed)
+    rss_with = _projected_rss(design(rows, fixed), rows.f, rows.weights)
 
     def rss_at(h: float) -> float:
-        return _solve(np.hstack([base, family.features(rows.motion, h, rows.joint)]), rows.f, rows.weights)[1]
+        return rss_with(family.features(rows.motion, h, rows.joint))
 
     if family.grid is None:
         raise ValueError(f"effect family {family.kind} has no hyperparameter to search")

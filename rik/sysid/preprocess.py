@@ -205,8 +205,13 @@ def best_lag(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, f: np.ndarray, movi
     x = _regressors(q[rows], qd[rows], qdd[rows])
     lags = np.arange(-max_lag, max_lag + 1)
     y = f[rows[:, None] - lags[None, :]]
-    coef, *_ = np.linalg.lstsq(x, y, rcond=None)
-    rss = np.sum((y - x @ coef) ** 2, axis=0)
+    basis, r = np.linalg.qr(x)
+    diagonal = np.abs(np.diag(r))
+    if diagonal.min() > 1e-9 * diagonal.max():  # each lag's least-squares residual: y less its projection on x
+        rss = np.sum((y - basis @ (basis.T @ y)) ** 2, axis=0)
+    else:  # x's columns are dependent (one direction of motion: the sign is the constant)
+        coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+        rss = np.sum((y - x @ coef) ** 2, axis=0)
     return int(lags[int(np.argmin(rss))]), len(rows)
 
 
