@@ -99,30 +99,6 @@ suite and one of the everyday tier with three workers on an idle 2-core machine 
 (a few seconds) runs after these, slow files first."""
 
 
-PACED_FILES = frozenset({"test_web_teleop.py", "test_teleop_viewer.py", "test_web_viewer3d.py", "test_web_catalog.py",
-                         "test_web_security.py", "test_web_episodes.py", "test_web_hostile.py"})
-"""The files with tests that drive a browser or a window (marked ``browser`` or ``display``; tests/test_suite_order.py
-holds this list to the marks). Such a test spends much of its time waiting on a page or an X server at a person's
-pace, which leaves a core idle: under pytest-xdist the files run one after another on one worker
-(:func:`pytest_xdist_make_scheduler`), beside the others, which keep both cores busy."""
-
-
-def pytest_xdist_make_scheduler(config: pytest.Config, log):  # noqa: ANN201 - xdist's scheduler class
-    """With ``--dist loadfile`` (scripts/test.sh), xdist's file scheduler with :data:`PACED_FILES` as one unit of
-    work (they run in a row on one worker), every other file a unit of its own, in the order
-    :func:`pytest_collection_modifyitems` gives: the paced files start first, with the longest of them."""
-    if config.getoption("dist") != "loadfile":
-        return None
-    from xdist.scheduler import LoadFileScheduling
-
-    class PacedInOneRow(LoadFileScheduling):
-        def _split_scope(self, nodeid: str) -> str:
-            file = nodeid.split("::", 1)[0]
-            return "paced files" if Path(file).name in PACED_FILES else file
-
-    return PacedInOneRow(config, log)
-
-
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """A test that drives a browser or opens a window is also ``slow`` (out of the everyday tier) and bounded by
     :data:`BROWSER_TEST_S`. The longest files run first (:data:`FILE_SECONDS`, counting only the part of a file that
