@@ -219,3 +219,19 @@ def test_worker_processes_build_the_same_assets(catalog, tmp_path):
     assert [r.status for r in pooled] == ["built", "built"]
     assert [(r.id, r.key, r.hulls, r.collision_vertices) for r in pooled] == \
         [(r.id, r.key, r.hulls, r.collision_vertices) for r in alone]
+
+
+def test_distances_to_samples_are_the_exact_nearest_ones() -> None:
+    """The metric's nearest-sample distances (a k-d tree split at sliding midpoints) are the brute-force minimum,
+    also for points far from every sample, for duplicate samples, and for a single sample."""
+    from rik.assets.fidelity import distance_to_samples
+
+    rng = np.random.default_rng(7)
+    samples = rng.normal(size=(3000, 3)) * [0.02, 0.005, 0.04]
+    samples = np.vstack([samples, samples[:50]])  # duplicates
+    points = np.vstack([rng.normal(size=(400, 3)) * 0.03, rng.normal(size=(100, 3)) + 5.0])  # near, and far away
+    brute = np.sqrt(((points[:, None, :] - samples[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+    np.testing.assert_allclose(distance_to_samples(points, samples), brute, rtol=1e-12, atol=0)
+    one = samples[:1]
+    np.testing.assert_allclose(distance_to_samples(points, one), np.linalg.norm(points - one, axis=1), rtol=1e-12,
+                               atol=0)

@@ -147,10 +147,13 @@ def sample_shell(hulls: Hulls, count: int, seed: int) -> np.ndarray:
 
 
 def distance_to_samples(points: np.ndarray, samples: np.ndarray) -> np.ndarray:
-    """Distance from each point to its nearest sample, m."""
+    """Distance from each point to its nearest sample, m (exact). The k-d tree splits at sliding midpoints, not at
+    medians (``balanced_tree=False``): on the metric's shells, whose points partly lie far from the other surface
+    (a convex hull over a handle's hollows), its queries took a third of the balanced tree's time for the same
+    distances (benchmarks/fidelity_speed.py)."""
     from scipy.spatial import cKDTree
 
-    return cKDTree(samples).query(points)[0]
+    return cKDTree(samples, balanced_tree=False, compact_nodes=False).query(points)[0]
 
 
 def measure(visual: trimesh.Trimesh, hulls: Hulls, baseline: Hulls, points: int = DEFAULT_POINTS,
