@@ -110,7 +110,7 @@ def _run(args: list[str]) -> None:
 
     command = finite_floats(get_command(_app_for(args)))
     try:
-        code = command.main(args, standalone_mode=False)
+        code = command.main(args, prog_name="rik", standalone_mode=False)  # also under `python -m`
     except NoArgsIsHelpError as exc:  # ``rik`` or a group alone: its help (rich printed it already), exit 2
         if exc.format_message().strip():
             exc.show()
