@@ -37,7 +37,7 @@ import numpy as np
 from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.sysid.effects import FAMILY, Baseline, Effect, Family, Motion
-from rik.sysid.fit import Fit, Term, heldout_trials
+from rik.sysid.fit import Fit, Term, _projected_rss, _solve, heldout_trials
 from rik.sysid.profile import ProfileGroup
 from rik.sysid.select import Selection, pair_allowed, select, select_pair
 
@@ -161,22 +161,14 @@ def predict(fit: Fit, q: np.ndarray, joint: JointType) -> np.ndarray:
     return design(np.asarray(q, dtype=np.float64), fit.terms, joint) @ fit.theta
 
 
-def _solve(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
-    scale = np.maximum(np.abs(x).max(axis=0), 1e-12)
-    theta, *_ = np.linalg.lstsq(x / scale, y, rcond=None)
-    theta = theta / scale
-    r = y - x @ theta
-    return theta, float(r @ r)
-
-
 def _best_hyper(rows: ProfileRows, family: Family, fixed: Sequence[Term], joint: JointType) -> float:
     from scipy.optimize import minimize_scalar
 
     assert family.grid is not None
-    base = design(rows.q, fixed, joint)
+    rss_with = _projected_rss(design(rows.q, fixed, joint), rows.f, np.ones(len(rows.f)))  # one QR per search
 
     def rss_at(h: float) -> float:
-        return _solve(np.hstack([base, features(family, rows.q, h, joint)]), rows.f)[1]
+        return rss_with(features(family, rows.q, h, joint))
 
     grid = family.grid(joint)
     rss = np.array([rss_at(h) for h in grid])
@@ -216,7 +208,7 @@ def fit_terms(train: ProfileRows, heldout: ProfileRows, joint: JointType, family
         hyper = _best_hyper(train, family, terms, joint) if family.grid is not None else None
         terms = (*terms, (family, hyper))
     x = design(train.q, terms, joint)
-    theta, rss = _solve(x, train.f)
+    theta, rss = _solve(x, train.f, np.ones(len(train.f)))  # unweighted
     effects, problem = _reading(theta, terms, joint)
     r_train = train.f - x @ theta
     r_held = heldout.f - design(heldout.q, terms, joint) @ theta
