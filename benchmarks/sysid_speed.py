@@ -11,7 +11,7 @@ one warm-up, in one process:
 - fit and select, with pairs: the above plus the round of pairs of effects; and the same again with each
   candidate shape of the hyperparameter search solved as one whole weighted least-squares problem (how it was
   before 2026-11-29) instead of fitted to what the fixed columns leave over (one QR of them per search,
-  :func:`rik.sysid.fit._projected_rss`), side by side: the ratio is that change's speed-up;
+  :func:`rik.sysid.fit.projected_rss`), side by side: the ratio is that change's speed-up;
 - discover without and with re-simulation (MuJoCo multiple shooting of the held-out trial with the baseline and
   the extended joint), the difference being the re-simulation (small: below the timing noise when nothing is
   found, since then only the baseline is re-simulated);
@@ -47,12 +47,12 @@ def _whole_solves():
     """Within it, the hyperparameter search solves each candidate's whole system (the former way)."""
     from rik.sysid import fit
 
-    projected = fit._projected_rss
-    fit._projected_rss = lambda base, y, w: (lambda z: fit._solve(np.hstack([base, z]), y, w)[1])
+    projected = fit.projected_rss
+    fit.projected_rss = lambda base, y, w: (lambda z: fit.weighted_solve(np.hstack([base, z]), y, w)[1])
     try:
         yield
     finally:
-        fit._projected_rss = projected
+        fit.projected_rss = projected
 
 
 def main() -> None:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rik.sysid.fit import _projected_rss, _solve
+from rik.sysid.fit import projected_rss, weighted_solve
 from rik.sysid.preprocess import _regressors, best_lag
 
 
@@ -34,9 +34,9 @@ def _candidates(base: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndar
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_projected_residual_equals_the_full_weighted_solve(seed: int) -> None:
     base, y, w = _problem(seed)
-    rss = _projected_rss(base, y, w)
+    rss = projected_rss(base, y, w)
     for name, z in _candidates(base, np.random.default_rng(100 + seed)).items():
-        full = _solve(np.hstack([base, z]), y, w)[1]
+        full = weighted_solve(np.hstack([base, z]), y, w)[1]
         assert rss(z) == pytest.approx(full, rel=1e-9, abs=1e-12), name
 
 
@@ -44,7 +44,7 @@ def test_projected_residual_with_dependent_fixed_columns_solves_in_full() -> Non
     base, y, w = _problem(3)
     dependent = np.column_stack([base, base[:, 0] - base[:, 2]])  # a fourth column the first three span
     z = np.random.default_rng(4).normal(size=(len(y), 1))
-    assert _projected_rss(dependent, y, w)(z) == pytest.approx(_solve(np.hstack([dependent, z]), y, w)[1], rel=1e-9)
+    assert projected_rss(dependent, y, w)(z) == pytest.approx(weighted_solve(np.hstack([dependent, z]), y, w)[1], rel=1e-9)
 
 
 def _lstsq_lag(q, qd, qdd, f, moving, max_lag) -> int:

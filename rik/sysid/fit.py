@@ -298,7 +298,7 @@ def design(rows: Rows, terms: Sequence[Term] = ()) -> np.ndarray:
     return np.hstack([base, *(family.features(rows.motion, hyper, rows.joint) for family, hyper in terms)])
 
 
-def _solve(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, float]:
+def weighted_solve(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, float]:
     """Weighted least squares (weights ``w`` per row): the coefficients and the weighted residual sum of squares."""
     root = np.sqrt(w)
     xw, yw = x * root[:, None], y * root
@@ -309,19 +309,19 @@ def _solve(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, flo
     return theta, float(r @ r)
 
 
-def _projected_rss(base: np.ndarray, y: np.ndarray, w: np.ndarray) -> Callable[[np.ndarray], float]:
+def projected_rss(base: np.ndarray, y: np.ndarray, w: np.ndarray) -> Callable[[np.ndarray], float]:
     """``rss(z)``: the weighted residual sum of squares of ``y`` on the columns of ``base`` and ``z``, as
-    :func:`_solve` gives it, for many ``z`` beside one ``base``: ``base`` is factorised once (QR of its weighted,
-    scaled columns) and each ``z`` fitted to what ``base`` leaves over. A column of ``z`` that ``base`` already
-    spans (a remainder below 1e-9 of its size) adds nothing, as :func:`_solve`'s rank cut-off has it. Where ``base``
-    itself is rank-deficient, each call solves the whole system."""
+    :func:`weighted_solve` gives it, for many ``z`` beside one ``base``: ``base`` is factorised once (QR of its
+    weighted, scaled columns) and each ``z`` fitted to what ``base`` leaves over. A column of ``z`` that ``base``
+    already spans (a remainder below 1e-9 of its size) adds nothing, as :func:`weighted_solve`'s rank cut-off has
+    it. Where ``base`` itself is rank-deficient, each call solves the whole system."""
     root = np.sqrt(w)
     bw, yw = base * root[:, None], y * root
     scale = np.maximum(np.abs(bw).max(axis=0), 1e-12)
     q, r = np.linalg.qr(bw / scale)
     diagonal = np.abs(np.diag(r))
     if diagonal.size and diagonal.min() <= 1e-9 * diagonal.max():
-        return lambda z: _solve(np.hstack([base, z]), y, w)[1]
+        return lambda z: weighted_solve(np.hstack([base, z]), y, w)[1]
     y_rest = yw - q @ (q.T @ yw)
 
     def rss(z: np.ndarray) -> float:
@@ -344,7 +344,7 @@ def best_hyper(rows: Rows, family: Family, fixed: Sequence[Term] = ()) -> float:
     bounded refinement in log space."""
     from scipy.optimize import minimize_scalar
 
-    rss_with = _projected_rss(design(rows, fixed), rows.f, rows.weights)
+    rss_with = projected_rss(design(rows, fixed), rows.f, rows.weights)
 
     def rss_at(h: float) -> float:
         return rss_with(family.features(rows.motion, h, rows.joint))
@@ -401,7 +401,7 @@ def fit_model(split: Split, family: Family | None, base: Fit | None = None) -> F
         hyper = best_hyper(rows, family, terms) if family.grid is not None else None
         terms = (*terms, (family, hyper))
     x = design(rows, terms)
-    theta, rss = _solve(x, rows.f, rows.weights)
+    theta, rss = weighted_solve(x, rows.f, rows.weights)
     baseline, effects, problem = _reading(theta, terms, rows.joint, _damping_se(x, rss, split.window_samples))
     residual_train = rows.f - x @ theta
     residual_heldout = split.heldout.f - design(split.heldout, terms) @ theta

@@ -37,7 +37,7 @@ import numpy as np
 from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.sysid.effects import FAMILY, Baseline, Effect, Family, Motion
-from rik.sysid.fit import Fit, Term, _projected_rss, _solve, heldout_trials
+from rik.sysid.fit import Fit, Term, heldout_trials, projected_rss, weighted_solve
 from rik.sysid.profile import ProfileGroup
 from rik.sysid.select import Selection, pair_allowed, select, select_pair
 
@@ -165,7 +165,7 @@ def _best_hyper(rows: ProfileRows, family: Family, fixed: Sequence[Term], joint:
     from scipy.optimize import minimize_scalar
 
     assert family.grid is not None
-    rss_with = _projected_rss(design(rows.q, fixed, joint), rows.f, np.ones(len(rows.f)))  # one QR per search
+    rss_with = projected_rss(design(rows.q, fixed, joint), rows.f, np.ones(len(rows.f)))  # one QR per search
 
     def rss_at(h: float) -> float:
         return rss_with(features(family, rows.q, h, joint))
@@ -208,7 +208,7 @@ def fit_terms(train: ProfileRows, heldout: ProfileRows, joint: JointType, family
         hyper = _best_hyper(train, family, terms, joint) if family.grid is not None else None
         terms = (*terms, (family, hyper))
     x = design(train.q, terms, joint)
-    theta, rss = _solve(x, train.f, np.ones(len(train.f)))  # unweighted
+    theta, rss = weighted_solve(x, train.f, np.ones(len(train.f)))  # unweighted
     effects, problem = _reading(theta, terms, joint)
     r_train = train.f - x @ theta
     r_held = heldout.f - design(heldout.q, terms, joint) @ theta
