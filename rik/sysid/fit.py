@@ -331,27 +331,19 @@ def projected_rss(base: np.ndarray, y: np.ndarray, w: np.ndarray) -> Callable[[n
         z_rest = z_rest[:, np.linalg.norm(z_rest, axis=0) > 1e-9 * np.maximum(size, 1e-300)]
         if z_rest.shape[1] == 0:
             return float(y_rest @ y_rest)
-        z_scale = np.abs(z_rest).max(axis=0)
-        coef, *_ = np.linalg.lstsq(z_rest / z_scale, y_rest, rcond=None)
-        rest = y_rest - (z_rest / z_scale) @ coef
+        z_rest = z_rest / np.abs(z_rest).max(axis=0)
+        coef, *_ = np.linalg.lstsq(z_rest, y_rest, rcond=None)
+        rest = y_rest - z_rest @ coef
         return float(rest @ rest)
 
     return rss
 
 
-def best_hyper(rows: Rows, family: Family, fixed: Sequence[Term] = ()) -> float:
-    """The hyperparameter of ``family`` (added to the ``fixed`` terms) minimising the training RSS: grid, then
-    bounded refinement in log space."""
+def grid_then_refine(rss_at: Callable[[float], float], grid: np.ndarray) -> float:
+    """The hyperparameter minimising ``rss_at`` over ``grid`` (ascending, positive), refined by a bounded 1-D search
+    in log space between the best grid point's neighbours; the grid point where the refinement is no better."""
     from scipy.optimize import minimize_scalar
 
-    rss_with = projected_rss(design(rows, fixed), rows.f, rows.weights)
-
-    def rss_at(h: float) -> float:
-        return rss_with(family.features(rows.motion, h, rows.joint))
-
-    if family.grid is None:
-        raise ValueError(f"effect family {family.kind} has no hyperparameter to search")
-    grid = family.grid(rows.joint)
     rss = np.array([rss_at(h) for h in grid])
     k = int(np.argmin(rss))
     lo, hi = np.log(grid[max(k - 1, 0)]), np.log(grid[min(k + 1, len(grid) - 1)])
@@ -359,6 +351,15 @@ def best_hyper(rows: Rows, family: Family, fixed: Sequence[Term] = ()) -> float:
         return float(grid[k])
     res = minimize_scalar(lambda u: rss_at(math.exp(u)), bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})
     return float(math.exp(res.x)) if res.fun <= rss[k] else float(grid[k])
+
+
+def best_hyper(rows: Rows, family: Family, fixed: Sequence[Term] = ()) -> float:
+    """The hyperparameter of ``family`` (added to the ``fixed`` terms) minimising the training RSS
+    (:func:`grid_then_refine`)."""
+    if family.grid is None:
+        raise ValueError(f"effect family {family.kind} has no hyperparameter to search")
+    rss_with = projected_rss(design(rows, fixed), rows.f, rows.weights)
+    return grid_then_refine(lambda h: rss_with(family.features(rows.motion, h, rows.joint)), family.grid(rows.joint))
 
 
 def _damping_se(x: np.ndarray, rss: float, correlated: int) -> float:

@@ -37,7 +37,7 @@ import numpy as np
 from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.sysid.effects import FAMILY, Baseline, Effect, Family, Motion
-from rik.sysid.fit import Fit, Term, heldout_trials, projected_rss, weighted_solve
+from rik.sysid.fit import Fit, Term, grid_then_refine, heldout_trials, projected_rss, weighted_solve
 from rik.sysid.profile import ProfileGroup
 from rik.sysid.select import Selection, pair_allowed, select, select_pair
 
@@ -162,20 +162,9 @@ def predict(fit: Fit, q: np.ndarray, joint: JointType) -> np.ndarray:
 
 
 def _best_hyper(rows: ProfileRows, family: Family, fixed: Sequence[Term], joint: JointType) -> float:
-    from scipy.optimize import minimize_scalar
-
     assert family.grid is not None
     rss_with = projected_rss(design(rows.q, fixed, joint), rows.f, np.ones(len(rows.f)))  # one QR per search
-
-    def rss_at(h: float) -> float:
-        return rss_with(features(family, rows.q, h, joint))
-
-    grid = family.grid(joint)
-    rss = np.array([rss_at(h) for h in grid])
-    k = int(np.argmin(rss))
-    lo, hi = math.log(grid[max(k - 1, 0)]), math.log(grid[min(k + 1, len(grid) - 1)])
-    res = minimize_scalar(lambda u: rss_at(math.exp(u)), bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})
-    return float(math.exp(res.x)) if res.fun <= rss[k] else float(grid[k])
+    return grid_then_refine(lambda h: rss_with(features(family, rows.q, h, joint)), family.grid(joint))
 
 
 def _reading(theta: np.ndarray, terms: Sequence[Term], joint: JointType) -> tuple[tuple[Effect, ...], str | None]:
