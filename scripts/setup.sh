@@ -33,6 +33,13 @@ if ! uv --version >/dev/null 2>&1; then
 fi
 
 # The locked environment, with bytecode compiled (start-up time of `rik` depends on it). uv uses a
-# Python 3.12 found on the machine and downloads one only if none is.
+# Python 3.12 found on the machine (.python-version) and downloads one only if none is; where that download
+# fails too (no access to github.com), one line says what to do instead of uv's chain of causes.
 cd "$root"
+if ! uv python find >/dev/null 2>&1 && ! uv python install --quiet >/dev/null 2>&1; then
+  echo "setup: error: no Python $(cat .python-version) on this machine, and uv could not download one (is github.com" \
+    "reachable?): install Python $(cat .python-version) (pyenv, or your distribution's python$(cat .python-version))" \
+    "so that it is on PATH, and run this again" >&2
+  exit 1
+fi
 uv sync --locked --compile-bytecode --quiet
