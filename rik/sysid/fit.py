@@ -38,7 +38,7 @@ from rik.errors import RikError
 from rik.schemas.joints import JointType
 from rik.sysid.breakaway import CREEP_SPAN_S, STEP, creeping, find_breakaways
 from rik.sysid.effects import FAMILIES, Baseline, Effect, Family, Motion, baseline_features
-from rik.sysid.preprocess import CONTACT_MARGIN, Prepared, smoothing_noise, touching
+from rik.sysid.preprocess import CONTACT_MARGIN, RANK_TOLERANCE, Prepared, orthonormal_basis, smoothing_noise, touching
 
 FIT_VELOCITY = {JointType.slide: 0.004, JointType.hinge: 0.01}
 """Lowest speed from which a sample enters the fit: m/s (4 mm/s) or rad/s (about 0.6°/s); raised to
@@ -313,14 +313,14 @@ def projected_rss(base: np.ndarray, y: np.ndarray, w: np.ndarray) -> Callable[[n
     """``rss(z)``: the weighted residual sum of squares of ``y`` on the columns of ``base`` and ``z``, as
     :func:`weighted_solve` gives it, for many ``z`` beside one ``base``: ``base`` is factorised once (QR of its
     weighted, scaled columns) and each ``z`` fitted to what ``base`` leaves over. A column of ``z`` that ``base``
-    already spans (a remainder below 1e-9 of its size) adds nothing, as :func:`weighted_solve`'s rank cut-off has
-    it. Where ``base`` itself is rank-deficient, each call solves the whole system."""
+    already spans (a remainder below :data:`~rik.sysid.preprocess.RANK_TOLERANCE` of its size) adds nothing, as
+    :func:`weighted_solve`'s rank cut-off has it. Where ``base`` itself is rank-deficient, each call solves the
+    whole system."""
     root = np.sqrt(w)
     bw, yw = base * root[:, None], y * root
     scale = np.maximum(np.abs(bw).max(axis=0), 1e-12)
-    q, r = np.linalg.qr(bw / scale)
-    diagonal = np.abs(np.diag(r))
-    if diagonal.size and diagonal.min() <= 1e-9 * diagonal.max():
+    q = orthonormal_basis(bw / scale)
+    if q is None:
         return lambda z: weighted_solve(np.hstack([base, z]), y, w)[1]
     y_rest = yw - q @ (q.T @ yw)
 
@@ -328,7 +328,7 @@ def projected_rss(base: np.ndarray, y: np.ndarray, w: np.ndarray) -> Callable[[n
         zw = z * root[:, None]
         z_rest = zw - q @ (q.T @ zw)
         size = np.linalg.norm(zw, axis=0)
-        z_rest = z_rest[:, np.linalg.norm(z_rest, axis=0) > 1e-9 * np.maximum(size, 1e-300)]
+        z_rest = z_rest[:, np.linalg.norm(z_rest, axis=0) > RANK_TOLERANCE * np.maximum(size, 1e-300)]
         if z_rest.shape[1] == 0:
             return float(y_rest @ y_rest)
         z_rest = z_rest / np.abs(z_rest).max(axis=0)

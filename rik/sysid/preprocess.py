@@ -193,6 +193,21 @@ def _regressors(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
     return np.column_stack([qdd, qd, np.sign(qd), q, np.ones_like(q)])
 
 
+RANK_TOLERANCE = 1e-9
+"""Columns count as dependent where QR's diagonal holds an entry below this fraction of its largest (or a column's
+remainder, after projecting out others, falls below this fraction of its size)."""
+
+
+def orthonormal_basis(x: np.ndarray) -> np.ndarray | None:
+    """An orthonormal basis of the columns of ``x`` (QR's Q), or None where they are dependent
+    (:data:`RANK_TOLERANCE`): least-squares residuals are then ``y`` less its projection on the basis."""
+    q, r = np.linalg.qr(x)
+    diagonal = np.abs(np.diag(r))
+    if diagonal.size and diagonal.min() <= RANK_TOLERANCE * diagonal.max():
+        return None
+    return q
+
+
 def best_lag(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, f: np.ndarray, moving: np.ndarray,
              max_lag: int) -> tuple[int, int]:
     """(lag in samples within ±``max_lag`` that best explains ``f[i − lag]`` by the baseline regressors at the
@@ -205,9 +220,8 @@ def best_lag(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, f: np.ndarray, movi
     x = _regressors(q[rows], qd[rows], qdd[rows])
     lags = np.arange(-max_lag, max_lag + 1)
     y = f[rows[:, None] - lags[None, :]]
-    basis, r = np.linalg.qr(x)
-    diagonal = np.abs(np.diag(r))
-    if diagonal.min() > 1e-9 * diagonal.max():  # each lag's least-squares residual: y less its projection on x
+    basis = orthonormal_basis(x)
+    if basis is not None:  # each lag's least-squares residual: y less its projection on x
         rss = np.sum((y - basis @ (basis.T @ y)) ** 2, axis=0)
     else:  # x's columns are dependent (one direction of motion: the sign is the constant)
         coef, *_ = np.linalg.lstsq(x, y, rcond=None)
