@@ -86,3 +86,29 @@ def test_workers_exit_when_the_parent_is_killed(tmp_path: Path) -> None:
         for w in workers:
             if _alive(w):
                 os.kill(w, signal.SIGKILL)
+
+
+def _where(catalog: object, item: str) -> tuple[str, str | None, str]:
+    """What a worker sees: its working folder, the variable RIK_TEST_WORKER_MARK and ``item``."""
+    return os.getcwd(), os.environ.get("RIK_TEST_WORKER_MARK"), item
+
+
+def test_workers_take_the_owners_folder_and_environment_at_each_pools_start(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each pool's workers run in the folder and with the environment their owner has when the pool starts: a
+    relative output path lands in the command's folder, and a cache setting is the current one, also for a second
+    pool in the same process (a forkserver, tried on 2026-11-29, holds the folder and environment of its own start:
+    workers forked from it needed both passed in; docs/benchmarks.md)."""
+    from rik.registry import load_catalog
+    from rik.workers import map_ids
+
+    catalog = load_catalog()
+    for mark in ("one", "two"):
+        folder = tmp_path / mark
+        folder.mkdir()
+        monkeypatch.chdir(folder)
+        monkeypatch.setenv("RIK_TEST_WORKER_MARK", mark)
+        seen = sorted(r for _, r in map_ids(_where, catalog, ["a", "b", "c"], workers=2))
+        assert seen == [(str(folder), mark, i) for i in "abc"]
+    monkeypatch.delenv("RIK_TEST_WORKER_MARK")
+    assert [r[1] for _, r in map_ids(_where, catalog, ["a", "b"], workers=2)] == [None, None]  # unset is unset
