@@ -37,9 +37,10 @@ fi
 # fails too (no access to github.com), one line says what to do instead of uv's chain of causes.
 cd "$root"
 if ! uv python find >/dev/null 2>&1 && ! uv python install --quiet >/dev/null 2>&1; then
-  echo "setup: error: no Python $(cat .python-version) on this machine, and uv could not download one (is github.com" \
-    "reachable?): install Python $(cat .python-version) (pyenv, or your distribution's python$(cat .python-version))" \
-    "so that it is on PATH, and run this again" >&2
+  version="$(cat .python-version)"
+  echo "setup: error: no Python $version on this machine, and uv could not download one (is github.com reachable?):" \
+    "install Python $version (pyenv, or your distribution's python$version) so that it is on PATH, and run this" \
+    "again" >&2
   exit 1
 fi
 uv sync --locked --compile-bytecode --quiet
