@@ -10,6 +10,17 @@
   let replaySent = false;
   const $ = (id) => document.getElementById(id);
   const root = $("station");
+  // The status arrives about 20 times a second and the input is read every animation frame: these write to the page
+  // only what changed, so that a station nobody moves does not restyle and repaint its page 20-60 times a second
+  // (a fifth of a core in Chromium; a change of the same value is still a change to the browser).
+  function setText(el, text) { if (el.textContent !== text) el.textContent = text; }
+  function setProp(el, name, value) { if (el[name] !== value) el[name] = value; }
+  function setData(values) {
+    for (const [name, value] of Object.entries(values)) {
+      const text = String(value);
+      if (root.dataset[name] !== text) root.dataset[name] = text;
+    }
+  }
   const DEADZONE = 0.15;
   const SEND_PERIOD = 33; // ms: inputs ~30 Hz while anything is held
   const PAD = [ // what the standard-mapping gamepad does (shown on the page)
@@ -135,62 +146,62 @@
     if (replayParam && !replaySent && st.ready && st.role === "controller") {
       replaySent = send({type: "command", name: "replay", episode: replayParam});
     }
-    const d = root.dataset;
-    d.ready = String(!!st.ready);
-    d.role = st.role || "";
-    d.paused = String(!!st.paused);
-    d.draft = st.draft || "";
-    d.seq = st.seq;
-    d.replaying = String(!!st.replay);
-    if (st.view) { d.viewAzimuth = st.view.azimuth; d.viewElevation = st.view.elevation; }
-    if (st.robot) { d.robot = st.robot; $("robot").textContent = "with " + st.robot; $("st-robot").textContent = st.robot; }
+    setData({ready: !!st.ready, role: st.role || "", paused: !!st.paused, draft: st.draft || "", seq: st.seq,
+      replaying: !!st.replay});
+    if (st.view) setData({viewAzimuth: st.view.azimuth, viewElevation: st.view.elevation});
+    if (st.robot) {
+      setData({robot: st.robot});
+      setText($("robot"), "with " + st.robot);
+      setText($("st-robot"), st.robot);
+    }
     const role = $("role");
-    role.textContent = st.role === "controller" ? "you control this session" : st.role === "watcher" ? "watching" : "";
-    role.className = "role " + (st.role || "");
-    $("btn-take").hidden = st.role === "controller";
+    setText(role, st.role === "controller" ? "you control this session" : st.role === "watcher" ? "watching" : "");
+    setProp(role, "className", "role " + (st.role || ""));
+    setProp($("btn-take"), "hidden", st.role === "controller");
     const s = st.session;
     if (s) {
-      d.episode = s.episode; d.state = s.state; d.steps = s.steps; d.opening = s.opening;
-      d.grip = s.grip; d.ahead = s.handle.ahead; d.left = s.handle.left; d.up = s.handle.up;
-      d.x = s.pose[0]; d.y = s.pose[1]; d.z = s.pose[2]; d.roll = s.pose[5]; d.lastSaved = s.last_saved || "";
-      $("st-episode").textContent = s.episode;
-      $("st-state").textContent = st.replay ? "replaying " + st.replay.episode + " (" + st.replay.row + "/" +
-        st.replay.rows + ")" : st.paused ? "paused (draft kept)" : s.state;
-      $("st-time").textContent = s.time.toFixed(1);
-      $("st-time-left").textContent = s.time_left === null ? "no limit" : s.time_left.toFixed(1) + " s left";
+      setData({episode: s.episode, state: s.state, steps: s.steps, opening: s.opening, grip: s.grip,
+        ahead: s.handle.ahead, left: s.handle.left, up: s.handle.up, x: s.pose[0], y: s.pose[1], z: s.pose[2],
+        roll: s.pose[5], lastSaved: s.last_saved || ""});
+      setText($("st-episode"), s.episode);
+      setText($("st-state"), st.replay ? "replaying " + st.replay.episode + " (" + st.replay.row + "/" +
+        st.replay.rows + ")" : st.paused ? "paused (draft kept)" : s.state);
+      setText($("st-time"), s.time.toFixed(1));
+      setText($("st-time-left"), s.time_left === null ? "no limit" : s.time_left.toFixed(1) + " s left");
       const opening = st.replay ? st.replay.opening : s.opening;  // a replay shows the replayed episode's opening
-      d.shownOpening = opening;
-      $("st-opening").textContent = st.replay ? pct(opening) + " (replayed)" :
-        pct(s.opening) + " (max " + pct(s.max_opening) + ")";
-      $("opening-bar").style.width = Math.max(0, Math.min(100, 100 * opening)).toFixed(1) + "%";
-      $("st-grip").textContent = s.grip + " (" + s.grip_command.toFixed(2) + ")";
-      d.grasp = s.grasp; d.blocked = String(s.blocked); d.motion = s.motion.on_path ? "path" : "frame";
-      d.motionMode = s.motion.mode;
+      setData({shownOpening: opening});
+      setText($("st-opening"), st.replay ? pct(opening) + " (replayed)" :
+        pct(s.opening) + " (max " + pct(s.max_opening) + ")");
+      const bar = $("opening-bar"), width = Math.max(0, Math.min(100, 100 * opening)).toFixed(1);
+      if (parseFloat(bar.style.width) !== Number(width)) bar.style.width = width + "%";  // the browser writes 12%
+      setText($("st-grip"), s.grip + " (" + s.grip_command.toFixed(2) + ")");
+      setData({grasp: s.grasp, blocked: s.blocked, motion: s.motion.on_path ? "path" : "frame",
+        motionMode: s.motion.mode});
       const grasp = $("st-grasp");
-      grasp.textContent = s.grasp === "slipped" ? "slipped: open (Space) and grasp again" : s.grasp;
-      grasp.className = "grasp " + s.grasp;
-      $("st-blocked").hidden = !s.blocked;
+      setText(grasp, s.grasp === "slipped" ? "slipped: open (Space) and grasp again" : s.grasp);
+      setProp(grasp, "className", "grasp " + s.grasp);
+      setProp($("st-blocked"), "hidden", !s.blocked);
       const f = s.front_position;
-      d.frontAngle = f.angle_deg === undefined ? "" : f.angle_deg;
-      $("st-front").textContent = f.angle_deg === undefined ? f.kind + " out " + f.travel_mm.toFixed(0) + " mm" :
-        f.kind + " at " + f.angle_deg.toFixed(0) + " deg";
-      $("st-yaw").textContent = s.yaw_deg.toFixed(0) + " deg";
-      $("st-motion").textContent = s.motion.mode === "frame" ? "frame-fixed" : s.motion.on_path ||
-        s.grasp === "holding" ? "along the front's path (W / S)" : "frame-fixed until the handle is held";
+      setData({frontAngle: f.angle_deg === undefined ? "" : f.angle_deg});
+      setText($("st-front"), f.angle_deg === undefined ? f.kind + " out " + f.travel_mm.toFixed(0) + " mm" :
+        f.kind + " at " + f.angle_deg.toFixed(0) + " deg");
+      setText($("st-yaw"), s.yaw_deg.toFixed(0) + " deg");
+      setText($("st-motion"), s.motion.mode === "frame" ? "frame-fixed" : s.motion.on_path ||
+        s.grasp === "holding" ? "along the front's path (W / S)" : "frame-fixed until the handle is held");
       const hint = $("hint");
-      hint.hidden = !s.hint || s.steps > 0;
-      hint.textContent = s.hint ? "How to grasp this handle: " + s.hint : "";
+      setProp(hint, "hidden", !s.hint || s.steps > 0);
+      setText(hint, s.hint ? "How to grasp this handle: " + s.hint : "");
       const h = s.handle;
-      $("st-handle").textContent = h.ahead.toFixed(3) + " m ahead, " + h.left.toFixed(3) + " m left, " +
-        h.up.toFixed(3) + " m up";
-      $("st-roll").textContent = s.roll_deg.toFixed(0) + " deg";
-      $("st-last-saved").textContent = s.last_saved || "-";
+      setText($("st-handle"), h.ahead.toFixed(3) + " m ahead, " + h.left.toFixed(3) + " m left, " +
+        h.up.toFixed(3) + " m up");
+      setText($("st-roll"), s.roll_deg.toFixed(0) + " deg");
+      setText($("st-last-saved"), s.last_saved || "-");
     } else {
-      d.state = st.error ? "error" : "building";
-      $("st-state").textContent = st.error ? "error" : "building the variant...";
+      setData({state: st.error ? "error" : "building"});
+      setText($("st-state"), st.error ? "error" : "building the variant...");
     }
-    $("st-fps").textContent = st.fps ? st.fps + " frames/s" : "still (a frame is sent when the scene changes)";
-    if (st.size) $("st-size").textContent = st.size[0] + "x" + st.size[1];
+    setText($("st-fps"), st.fps ? st.fps + " frames/s" : "still (a frame is sent when the scene changes)");
+    if (st.size) setText($("st-size"), st.size[0] + "x" + st.size[1]);
     // banner: an error, then this tab's notice, then the station's and the session's last message
     let text = "", level = "info";
     if (st.error) { text = st.error; level = "error"; }
@@ -200,14 +211,13 @@
     else if (s && s.state === "time up") { text = "time is up: save (Enter) or discard (Backspace)"; level = "warn"; }
     else if (s && s.message) { text = s.message; }
     const banner = $("banner");
-    banner.hidden = !text;
-    banner.textContent = text;
-    banner.className = "banner " + level;
-    banner.dataset.level = level;
-    const offer = $("draft-offer");
-    offer.hidden = !(st.paused && st.role === "controller");
-    if (st.draft) $("draft-text").textContent = "The connection was lost mid-episode; the episode was kept as a " +
-      "draft (" + st.draft + "). Continue it, save it or discard it.";
+    setProp(banner, "hidden", !text);
+    setText(banner, text);
+    setProp(banner, "className", "banner " + level);
+    if (banner.dataset.level !== level) banner.dataset.level = level;
+    setProp($("draft-offer"), "hidden", !(st.paused && st.role === "controller"));
+    if (st.draft) setText($("draft-text"), "The connection was lost mid-episode; the episode was kept as a " +
+      "draft (" + st.draft + "). Continue it, save it or discard it.");
   }
 
   function sendSize() {
@@ -303,9 +313,9 @@
         if (now && !padPrev[i]) command(name);
         padPrev[i] = now;
       }
-      $("pad-state").textContent = "gamepad: " + (pad.id || "connected");
+      setText($("pad-state"), "gamepad: " + (pad.id || "connected"));
     } else {
-      $("pad-state").textContent = "no gamepad (press a button on it to connect)";
+      setText($("pad-state"), "no gamepad (press a button on it to connect)");
     }
     return {axes: axes.map((v) => Math.round(Math.max(-1, Math.min(1, v)) * 1000) / 1000), grip: grip, fine: fine};
   }
