@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rik.lerobot.arrow_cache import scratch_arrow_cache
 from rik.outputs import MadeFolder, check_replaceable, holds_only, remove_directory, staged_directory
 
 if TYPE_CHECKING:
@@ -169,6 +170,7 @@ class DemoDataset:
     """rik's metadata of the dataset's first episode (``rik/variant``, ``rik/preset``, ...)."""
 
 
+@scratch_arrow_cache()
 def export_dataset(overlay_paths: Sequence[Path], episodes: Sequence[Path], out: Path, renders: Path, variants: Path,
                    res: int) -> DemoDataset:
     """Export the episodes (both streams, ``res`` x ``res`` px as rendered) to a LeRobot dataset at ``out`` and load

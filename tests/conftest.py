@@ -133,7 +133,10 @@ def _normal_scheduling() -> None:
 
 @pytest.fixture(autouse=True, scope="session")
 def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
-    """Keep the catalog index cache out of the user's home and free of other runs' state."""
+    """Keep rik's cache out of the user's home and free of other runs' state; and the Arrow copies that Hugging Face
+    ``datasets`` makes of every LeRobot dataset a test or a command it starts loads (``lerobot-train``, a test's own
+    ``LeRobotDataset``; rik's own loads use :func:`rik.lerobot.arrow_cache.scratch_arrow_cache`): in the run's
+    temporary folder, not ``~/.cache/huggingface``."""
     mp = pytest.MonkeyPatch()
     if os.environ.get("PYTEST_XDIST_WORKER"):  # one cache for all of a run's workers: assets are built once
         shared = tmp_path_factory.getbasetemp().parent / "rik-cache"  # (content-addressed, written by rename)
@@ -142,6 +145,10 @@ def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     else:
         mp.setenv("RIK_CACHE", str(tmp_path_factory.mktemp("rik-cache")))
     mp.delenv("RIK_CATALOG", raising=False)
+    arrow = tmp_path_factory.getbasetemp() / "hf-datasets"
+    mp.setenv("HF_DATASETS_CACHE", str(arrow))  # read when datasets is first imported, here and in child processes
+    if "datasets.config" in sys.modules:  # imported already (while collecting a test module)
+        mp.setattr(sys.modules["datasets.config"], "HF_DATASETS_CACHE", arrow)
     yield
     mp.undo()
 

@@ -10,6 +10,7 @@ from typing import Any
 from rik.dataset.engines import error_line
 from rik.dataset.meta import DATASET_META, read_dataset_meta
 from rik.errors import RikError
+from rik.lerobot.arrow_cache import scratch_arrow_cache
 
 
 @dataclass
@@ -51,6 +52,7 @@ def verify_dataset(root: Path) -> VerifyResult:
     return VerifyResult(root, len(now), episodes, frames, problems)
 
 
+@scratch_arrow_cache()
 def _load(root: Path, meta: dict[str, Any], counts: dict[str, Any]) -> tuple[int, int]:
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 

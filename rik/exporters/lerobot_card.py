@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rik.exporters.layout import MERGED_FILE, MERGING
+from rik.lerobot.arrow_cache import scratch_arrow_cache
 from rik.outputs import Replaces, write_text
 
 if TYPE_CHECKING:
@@ -301,6 +302,7 @@ def card_fields(root: Path) -> dict[str, str]:
     return json.loads((Path(root) / "meta" / CARD_FIELDS).read_text(encoding="utf-8"))
 
 
+@scratch_arrow_cache()
 def write_card(catalog: Catalog, root: Path, spec: ExportSpec, fps: int, checks: dict[str, Any],
                extra: str = "", robot: str = "hand-e", joint_driven: int = 0) -> Path:
     """Write ``README.md`` (lerobot's dataset card, filled in) and the card's fields into the dataset; ``extra``

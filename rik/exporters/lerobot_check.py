@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from rik.errors import RikError
 from rik.exporters.lerobot_frames import LAYOUT, LAYOUT_1_STATE_NAMES
+from rik.lerobot.arrow_cache import scratch_arrow_cache
 from rik.lerobot.features import ACTION, EE_POSE, OBS_ENV_STATE, OBS_STATE
 
 if TYPE_CHECKING:
@@ -155,6 +156,7 @@ def check_robot(root: Path, robot_type: str | None, feats: dict[str, Any], robot
                        + (f" ({', '.join(EE_NAMES)})" if robot.ee_pose else ""))
 
 
+@scratch_arrow_cache()
 def check_dataset(root: Path, repo_id: str, episodes: int, robot: RobotLayout | None = None) -> dict[str, Any]:
     """Load the dataset offline with ``LeRobotDataset``, check its episode count, rik's metadata columns, its
     robot's layout (``robot``; None: the Hand-E's) and its frame counts; returns a summary."""

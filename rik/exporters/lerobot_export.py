@@ -38,6 +38,7 @@ from rik.exporters.lerobot_frames import (
     load_episode,
 )
 from rik.exporters.spec import ENCODER_OPTIONS, ExportSpec, check_codec_size, check_spec, keep_outcomes
+from rik.lerobot.arrow_cache import scratch_arrow_cache
 from rik.lerobot.features import TASK, dataset_features
 from rik.lerobot.policy_io import POLICY_IO_FILE, PolicyIO, io_of_info
 from rik.outputs import (
@@ -442,6 +443,7 @@ def _shard_by_name(jobs: dict[str, tuple], catalog: Catalog, name: str) -> int:
     return write_shard(catalog, *jobs[name])
 
 
+@scratch_arrow_cache()
 def aggregate_shards(repo_id: str, roots: list[Path], out: Path) -> None:
     """Merge the finished shard datasets at ``roots`` (in that order) into one dataset ``repo_id`` at ``out``, with
     lerobot's ``aggregate_datasets``; :func:`order_stats` then makes its ``stats.json`` repeatable."""
@@ -450,6 +452,7 @@ def aggregate_shards(repo_id: str, roots: list[Path], out: Path) -> None:
     aggregate_datasets([f"{repo_id}-part-{i}" for i in range(len(roots))], repo_id, roots=roots, aggr_root=out)
 
 
+@scratch_arrow_cache()
 def push(root: Path, repo_id: str, *, private: bool = False) -> str:
     """Upload a finished export through lerobot's ``push_to_hub`` (files, then lerobot's card with rik's
     description, then the ``v3.0`` tag); returns the dataset's URL. Offline or unauthorised: a RikError."""
