@@ -29,9 +29,9 @@ from pathlib import Path
 
 from teleop_latency import VARIANT, start_station
 
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage", "--num-raster-threads=1"]
-"""As tests/web_fixtures.py launches it (a root, headless, offline machine)."""
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from web_fixtures import browser  # noqa: E402  (the suite's Chromium and flags, one definition)
+
 HZ = os.sysconf("SC_CLK_TCK")
 
 
@@ -87,11 +87,8 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=15.0, help="wall seconds of each phase")
     parser.add_argument("--size", default="320x240", choices=("320x240", "640x480"), help="the stream's size")
     args = parser.parse_args()
-    chromium = shutil.which("chromium")
-    if chromium is None:
+    if shutil.which("chromium") is None:
         raise SystemExit("Debian's chromium is not installed (bash scripts/setup.sh installs it)")
-    from playwright.sync_api import sync_playwright
-
     print(f"machine: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}; {VARIANT}, stream {args.size}, "
           f"{args.seconds:.0f} s a phase")
     work = Path(tempfile.mkdtemp(prefix="rik-page-cpu-"))
@@ -99,8 +96,7 @@ def main() -> None:
     marker = f"--rik-benchmark={uuid.uuid4().hex}"
     rows = []
     try:
-        with sync_playwright() as p:
-            b = p.chromium.launch(executable_path=chromium, args=[*CHROMIUM_ARGS, marker])
+        with browser(marker) as b:
             pid = browser_pid(marker)
             page = b.new_page(viewport={"width": 1400, "height": 1000})
             page.goto("about:blank")
@@ -127,7 +123,6 @@ def main() -> None:
             if held["key"]:
                 page.keyboard.up(held["key"])
             fps = (page.evaluate("window.rikTest.frames.front") - before) / args.seconds
-            b.close()
     finally:
         proc.terminate()
         proc.wait(timeout=60)
