@@ -136,14 +136,24 @@ def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     """Keep rik's cache out of the user's home and free of other runs' state; and the Arrow copies that Hugging Face
     ``datasets`` makes of every LeRobot dataset a test or a command it starts loads (``lerobot-train``, a test's own
     ``LeRobotDataset``; rik's own loads use :func:`rik.lerobot.arrow_cache.scratch_arrow_cache`): in the run's
-    temporary folder, not ``~/.cache/huggingface``."""
+    temporary folder, not ``~/.cache/huggingface``. The machine's temporary folder too (``TMPDIR``, and ``tempfile``'s
+    own in this process): what the libraries under test leave there (LeRobot's ``lerobot-eval`` and
+    ``lerobot-train`` a copy of each policy config they load, multiprocessing a ``pymp-*`` folder where a test kills
+    its owner) stays inside the run's folder, not ``/tmp``."""
+    import tempfile
+
     mp = pytest.MonkeyPatch()
     if os.environ.get("PYTEST_XDIST_WORKER"):  # one cache for all of a run's workers: assets are built once
         shared = tmp_path_factory.getbasetemp().parent / "rik-cache"  # (content-addressed, written by rename)
         shared.mkdir(exist_ok=True)
         mp.setenv("RIK_CACHE", str(shared))
+        scratch = tmp_path_factory.getbasetemp().parent / "tmp"
     else:
         mp.setenv("RIK_CACHE", str(tmp_path_factory.mktemp("rik-cache")))
+        scratch = tmp_path_factory.getbasetemp() / "tmp"
+    scratch.mkdir(exist_ok=True)
+    mp.setenv("TMPDIR", str(scratch))
+    mp.setattr(tempfile, "tempdir", str(scratch))
     mp.delenv("RIK_CATALOG", raising=False)
     arrow = tmp_path_factory.getbasetemp() / "hf-datasets"
     mp.setenv("HF_DATASETS_CACHE", str(arrow))  # read when datasets is first imported, here and in child processes

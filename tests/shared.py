@@ -91,6 +91,23 @@ def save_untrained(policy: Any, folder: Path, contract: str | None = None) -> Pa
     return folder
 
 
+def tiny_act(folder: Path) -> Path:
+    """A tiny state-only ACT policy for the Hand-E (11 state numbers, the front's 13, 7 actions; untrained), saved
+    by LeRobot into the new ``folder`` with its processors."""
+    from lerobot.configs.types import FeatureType, PolicyFeature
+    from lerobot.policies.act.configuration_act import ACTConfig
+    from lerobot.policies.act.modeling_act import ACTPolicy
+
+    config = ACTConfig(
+        device="cpu", push_to_hub=False, pretrained_backbone_weights=None, dim_model=8, dim_feedforward=16,
+        n_heads=2, n_encoder_layers=1, n_decoder_layers=1, chunk_size=2, n_action_steps=2, latent_dim=4,
+        use_vae=False,
+        input_features={"observation.state": PolicyFeature(FeatureType.STATE, (11,)),
+                        "observation.environment_state": PolicyFeature(FeatureType.ENV, (13,))},
+        output_features={"action": PolicyFeature(FeatureType.ACTION, (7,))})
+    return save_untrained(ACTPolicy(config), folder)
+
+
 def cli(*args: str, cwd: Path | None = None) -> None:
     """Run ``rik ARGS...`` in this process (as the ``rik`` fixture does, for module fixtures; from ``cwd`` where
     given); it must succeed."""

@@ -58,8 +58,16 @@ def cluster():
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")
     for name, value in HEALTH_CHECKS.items():  # read by the cluster's processes, which inherit them
         os.environ.setdefault(name, value)
+    import shutil
+    import tempfile
+
     from ray.cluster_utils import Cluster
 
+    # Ray's session folder (its sockets, whose paths may be 107 bytes at most, and its logs, which Ray keeps): a short
+    # folder of this test's own, not /tmp/ray nor the run's longer TMPDIR, removed at the end
+    sessions = tempfile.mkdtemp(prefix="rik-ray-", dir="/tmp")
+    mp = pytest.MonkeyPatch()
+    mp.setenv("RAY_TMPDIR", sessions)
     before = _ray_processes()
     c = Cluster(initialize_head=True, head_node_args={"num_cpus": 0, "include_dashboard": False})
     nodes = [c.add_node(num_cpus=1) for _ in range(2)]
@@ -73,6 +81,8 @@ def cluster():
     deadline = time.monotonic() + 30
     while (left := _ray_processes() - before) and time.monotonic() < deadline:
         time.sleep(0.5)
+    mp.undo()
+    shutil.rmtree(sessions, ignore_errors=True)
     assert not left, f"Ray processes left behind after the cluster's shutdown: {sorted(left)}"
 
 

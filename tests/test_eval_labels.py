@@ -58,19 +58,9 @@ def test_labels_that_differ_in_case_are_two_folders() -> None:
 @pytest.fixture(scope="module")
 def tiny_policy(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A tiny state-only ACT policy for the Hand-E, saved by LeRobot with its processors."""
-    from lerobot.configs.types import FeatureType, PolicyFeature
-    from lerobot.policies.act.configuration_act import ACTConfig
-    from lerobot.policies.act.modeling_act import ACTPolicy
-    from shared import save_untrained
+    from shared import tiny_act
 
-    config = ACTConfig(
-        device="cpu", push_to_hub=False, pretrained_backbone_weights=None, dim_model=8, dim_feedforward=16,
-        n_heads=2, n_encoder_layers=1, n_decoder_layers=1, chunk_size=2, n_action_steps=2, latent_dim=4,
-        use_vae=False,
-        input_features={"observation.state": PolicyFeature(FeatureType.STATE, (11,)),
-                        "observation.environment_state": PolicyFeature(FeatureType.ENV, (13,))},
-        output_features={"action": PolicyFeature(FeatureType.ACTION, (7,))})
-    return save_untrained(ACTPolicy(config), tmp_path_factory.mktemp("tiny") / "policy")
+    return tiny_act(tmp_path_factory.mktemp("tiny") / "policy")
 
 
 def test_default_labels_of_two_policies_that_make_one_folder_are_refused(rik, tiny_policy: Path,

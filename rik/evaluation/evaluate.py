@@ -282,12 +282,11 @@ def _context(spec: EvalSpec) -> dict[str, Any]:
     cfg = env_config(spec)
     ctx: dict[str, Any] = {"key": key, "cfg": cfg}
     if spec.strategy is None:
-        from lerobot.configs.policies import PreTrainedConfig
         from lerobot.envs.factory import make_env_pre_post_processors
         from lerobot.policies.factory import make_policy, make_pre_post_processors
 
-        check_policy_folder(Path(spec.operator))  # LeRobot imports and calls what the folder names: check it first
-        policy_cfg = PreTrainedConfig.from_pretrained(spec.operator)
+        # LeRobot imports and calls what the folder names: check it first; its config as LeRobot parses it
+        policy_cfg = check_policy_folder(Path(spec.operator))
         policy_cfg.pretrained_path = Path(spec.operator)
         if getattr(policy_cfg, "pretrained_backbone_weights", None) is not None:
             # ACT's and diffusion's image backbone would first load torchvision's ImageNet weights (a download, read

@@ -660,9 +660,11 @@ def check_processors(policy_dir: Path, policy: dict[str, Any] | None = None) -> 
             raise RikError(f"{file}: LeRobot cannot load it ({type(e).__name__}: {_first_line(e)})") from None
 
 
-def check_policy_folder(policy_dir: Path) -> None:
+def check_policy_folder(policy_dir: Path) -> Any:
     """The whole folder, as the module docstring says: ``config.json``, both processor files with their state
-    files, and ``model.safetensors``. Call before handing the folder to LeRobot."""
+    files, and ``model.safetensors``. Call before handing the folder to LeRobot. Returns the policy's config as
+    LeRobot's ``PreTrainedConfig.from_pretrained`` parses it, to use instead of that: LeRobot 0.6.1 copies the
+    config into a named temporary file for draccus there and never removes it (one file in ``/tmp`` per load)."""
     root = Path(policy_dir)
     data = read_json(root, CONFIG)
     if not isinstance(data, dict):
@@ -670,3 +672,4 @@ def check_policy_folder(policy_dir: Path) -> None:
     config = parsed_config(root, data)
     check_processors(root, data)
     check_weights(root, config)
+    return config
