@@ -6,7 +6,10 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
+import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -49,7 +52,21 @@ def _ray_processes() -> set[int]:
 
 
 @pytest.fixture(scope="module")
-def cluster():
+def ray_sessions() -> Iterator[Path]:
+    """Where Ray keeps its session folders (``RAY_TMPDIR``: its sockets, whose paths may be 107 bytes at most, and its
+    logs, which Ray never removes): a short folder of this module's own, not ``/tmp/ray`` nor the run's longer
+    ``TMPDIR``, removed at the end (after the cluster's teardown, also when the cluster failed to start)."""
+    folder = tempfile.mkdtemp(prefix="rik-ray-", dir="/tmp")
+    try:
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("RAY_TMPDIR", folder)
+            yield Path(folder)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def cluster(ray_sessions: Path):
     """A head without CPUs and two worker nodes of one CPU each; shut down, and checked gone, at the end. The
     cluster's health checks run every 0.5 s and give a node up after 3 missed (Ray's defaults: 3 s and 5, after a
     5 s delay), so that a killed node is found in about 2 s rather than 15-20 (the lost-node test's call took 30 s
@@ -58,20 +75,13 @@ def cluster():
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")
     for name, value in HEALTH_CHECKS.items():  # read by the cluster's processes, which inherit them
         os.environ.setdefault(name, value)
-    import shutil
-    import tempfile
-
     from ray.cluster_utils import Cluster
 
-    # Ray's session folder (its sockets, whose paths may be 107 bytes at most, and its logs, which Ray keeps): a short
-    # folder of this test's own, not /tmp/ray nor the run's longer TMPDIR, removed at the end
-    sessions = tempfile.mkdtemp(prefix="rik-ray-", dir="/tmp")
-    mp = pytest.MonkeyPatch()
-    mp.setenv("RAY_TMPDIR", sessions)
     before = _ray_processes()
     c = Cluster(initialize_head=True, head_node_args={"num_cpus": 0, "include_dashboard": False})
     nodes = [c.add_node(num_cpus=1) for _ in range(2)]
     c.wait_for_nodes()
+    assert list(ray_sessions.glob("ray/session_*")), f"Ray kept its session elsewhere than {ray_sessions}"
     yield c, nodes
     import ray
 
@@ -81,8 +91,6 @@ def cluster():
     deadline = time.monotonic() + 30
     while (left := _ray_processes() - before) and time.monotonic() < deadline:
         time.sleep(0.5)
-    mp.undo()
-    shutil.rmtree(sessions, ignore_errors=True)
     assert not left, f"Ray processes left behind after the cluster's shutdown: {sorted(left)}"
 
 
