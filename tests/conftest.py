@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import faulthandler
+import gc
 import os
 import sys
 from collections.abc import Callable
@@ -29,6 +30,23 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("LP_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
+GC_THRESHOLDS = (5000, 20, 100)
+"""The cyclic garbage collector's thresholds in the test processes (``gc.set_threshold``; Python's are 700, 10, 10;
+``RIK_TEST_GC=A,B,C`` sets others). A worker holds torch, LeRobot, MuJoCo, Mitsuba and its tests' fixtures (2.7-4 GB
+at its peak), and every full collection walks all of it: with Python's thresholds each worker made 15-18 of them in a
+run, 0.4-0.8 s each, and the collector took 8 % of the everyday tier's worker CPU. These look at the oldest generation
+ten times less often (Python still skips a full collection until a quarter of the long-lived objects are new), so
+cyclic garbage is still collected, later: 2 full collections a worker (benchmarks/suite_gc.py; docs/benchmarks.md,
+"The test suite's CPU")."""
+
+
+def _gc_thresholds() -> tuple[int, ...]:
+    given = os.environ.get("RIK_TEST_GC")
+    return tuple(int(n) for n in given.split(",")) if given else GC_THRESHOLDS
+
+
+gc.set_threshold(*_gc_thresholds())
+
 
 SESSION_LIMIT = 3600
 """Seconds after which a test session prints every thread's stack and exits with an error: a suite that hangs
@@ -42,12 +60,47 @@ def pytest_sessionstart(session: pytest.Session) -> None:
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     faulthandler.cancel_dump_traceback_later()
+    if CPU_LOG:
+        _write_gc_log()
 
 
 CPU_LOG = os.environ.get("RIK_TEST_CPU_LOG")
 """A folder (optional) where each test process appends a line per test: its node id, the CPU-s of the test process
 itself (every thread) and of the child processes it waited for, and the wall-clock s; one file per process. Where
 the suite's CPU goes (docs/benchmarks.md, "The test suite's CPU"): ``RIK_TEST_CPU_LOG=/tmp/cpu bash scripts/test.sh``."""
+
+
+_GC_CLOCK = [0.0, 0.0]
+"""This process's CPU clock at the collection under way, and its CPU-s in the cyclic garbage collector so far (with
+the CPU log on)."""
+_GC_COLLECTIONS = [0, 0, 0]
+"""This process's collections so far, per generation."""
+
+
+def _time_gc(phase: str, info: dict[str, int]) -> None:
+    import time
+
+    if phase == "start":
+        _GC_CLOCK[0] = time.process_time()
+    else:
+        _GC_CLOCK[1] += time.process_time() - _GC_CLOCK[0]
+        _GC_COLLECTIONS[info["generation"]] += 1
+
+
+def _write_gc_log() -> None:
+    """``<pid>.gc`` in the CPU log: the collector's CPU-s, its collections per generation, this process's CPU-s and
+    its peak resident memory (MB)."""
+    import resource
+
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    Path(CPU_LOG).mkdir(parents=True, exist_ok=True)
+    (Path(CPU_LOG) / f"{os.getpid()}.gc").write_text(
+        f"{_GC_CLOCK[1]:.2f}\t{','.join(map(str, _GC_COLLECTIONS))}\t{own.ru_utime + own.ru_stime:.2f}\t"
+        f"{own.ru_maxrss / 1024:.0f}\n")
+
+
+if CPU_LOG:
+    gc.callbacks.append(_time_gc)
 
 
 @pytest.hookimpl(hookwrapper=True)
